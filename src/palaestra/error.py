@@ -1,0 +1,110 @@
+"""Exceptions raised by palaestra.
+
+The hierarchy and names follow Gymnasium 1.x so that code catching ``gymnasium.error.X`` keeps
+working with ``palaestra.error.X``.
+"""
+
+from __future__ import annotations
+
+
+class Error(Exception):
+    """Base class of palaestra's errors."""
+
+
+# Registration
+class UnregisteredEnv(Error):
+    """An environment id that is not in the registry was requested."""
+
+
+class NamespaceNotFound(UnregisteredEnv):
+    """The namespace of the requested id does not exist."""
+
+
+class NameNotFound(UnregisteredEnv):
+    """The name of the requested id does not exist (in its namespace)."""
+
+
+class VersionNotFound(UnregisteredEnv):
+    """The version of the requested id does not exist."""
+
+
+class DeprecatedEnv(Error):
+    """An older version than the latest registered one was requested."""
+
+
+class RegistrationError(Error):
+    """An invalid registration, e.g. an unversioned id next to versioned ones."""
+
+
+# Environment
+class DependencyNotInstalled(Error):
+    """An optional dependency is missing; the message names the ``pip install`` that fixes it."""
+
+
+class UnsupportedMode(Error):
+    """A render mode the environment does not support was requested."""
+
+
+class InvalidMetadata(Error):
+    """The environment's ``metadata`` is malformed."""
+
+
+class ResetNeeded(Error):
+    """``step`` or ``render`` was called before ``reset``."""
+
+
+class InvalidAction(Error):
+    """An action outside the action space was given."""
+
+
+class MissingArgument(Error):
+    """A required constructor argument is missing."""
+
+
+class InvalidProbability(Error):
+    """A probability mask is not a valid distribution."""
+
+
+class InvalidBound(Error):
+    """Clipping bounds are invalid (e.g. ``low > high``)."""
+
+
+# Wrappers
+class DeprecatedWrapper(ImportError):
+    """An old wrapper name was imported."""
+
+
+# Vector environments
+class AlreadyPendingCallError(Exception):
+    """An async call was started while the previous one is still pending."""
+
+    def __init__(self, message: str, name: str) -> None:
+        super().__init__(message)
+        self.name = name
+
+
+class NoAsyncCallError(Exception):
+    """``*_wait`` was called with no matching ``*_async`` call pending."""
+
+    def __init__(self, message: str, name: str) -> None:
+        super().__init__(message)
+        self.name = name
+
+
+class ClosedEnvironmentError(Exception):
+    """The vector environment was used after ``close()``."""
+
+
+class CustomSpaceError(Exception):
+    """A custom space cannot be placed in shared memory."""
+
+
+def dependency_not_installed(package: str, extra: str, purpose: str) -> DependencyNotInstalled:
+    """Build the standard error for a missing optional dependency.
+
+    >>> str(dependency_not_installed("torch", "train", "training agents"))
+    'torch is not installed, run `pip install "palaestra[train]"` (needed for training agents)'
+    """
+    return DependencyNotInstalled(
+        f'{package} is not installed, run `pip install "palaestra[{extra}]"` (needed for {purpose})'
+    )

@@ -1,0 +1,28 @@
+"""Random number generators seeded the way Gymnasium seeds them (PCG64 on a SeedSequence)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from palaestra import error
+
+RNG = RandomNumberGenerator = np.random.Generator
+
+
+def np_random(seed: int | None = None) -> tuple[np.random.Generator, int]:
+    """Return a generator and the seed it came from; ``seed=None`` draws fresh entropy.
+
+    The same integer seed gives the same stream as ``gymnasium.utils.seeding.np_random``.
+
+    >>> rng, seed = np_random(42)
+    >>> seed, int(rng.integers(100))
+    (42, 8)
+    """
+    # bool is an int subclass, but seeding with True is almost always a bug; Gymnasium accepts
+    # it, and so do we, to draw the same streams.
+    if seed is not None and not (isinstance(seed, int) and seed >= 0):
+        if not isinstance(seed, int):
+            raise error.Error(f"Seed must be a python integer, actual type: {type(seed)}")
+        raise error.Error(f"Seed must be greater or equal to zero, actual value: {seed}")
+    seed_seq = np.random.SeedSequence(seed)
+    return np.random.Generator(np.random.PCG64(seed_seq)), int(seed_seq.entropy)  # type: ignore[arg-type]
