@@ -1,0 +1,114 @@
+"""The `Space` base class: shape, dtype, a lazily seeded generator, and the sampling contract."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any, Generic, TypeVar
+
+import numpy as np
+import numpy.typing as npt
+
+from palaestra import error
+from palaestra.utils import seeding
+
+T_co = TypeVar("T_co", covariant=True)
+
+MaskNDArray = npt.NDArray[np.int8]
+
+
+class Space(Generic[T_co]):
+    """The set of valid actions or observations of an environment.
+
+    Subclasses define ``sample``, ``contains`` and ``is_np_flattenable``; composite spaces also
+    override ``seed`` so that one integer seeds every subspace the way Gymnasium does.
+    """
+
+    dtype: np.dtype | None
+    _shape: tuple[int, ...] | None
+    _np_random: np.random.Generator | None
+
+    def __init__(
+        self,
+        shape: Sequence[int] | None = None,
+        dtype: npt.DTypeLike | None = None,
+        seed: int | np.random.Generator | None = None,
+    ) -> None:
+        """Store shape and dtype; ``seed`` is an int or a ready ``np.random.Generator``."""
+        self._shape = None if shape is None else tuple(shape)
+        self.dtype = None if dtype is None else np.dtype(dtype)
+        self._np_random = None
+        if seed is not None:
+            if isinstance(seed, np.random.Generator):
+                self._np_random = seed
+            else:
+                self.seed(seed)
+
+    @property
+    def np_random(self) -> np.random.Generator:
+        """The space's generator, created from fresh entropy on first use (seeding is costly)."""
+        if self._np_random is None:
+            self.seed()
+            # Composite spaces seed only their children, so fall back to a fresh generator.
+            if self._np_random is None:
+                self._np_random, _ = seeding.np_random()
+        return self._np_random
+
+    @np_random.setter
+    def np_random(self, value: np.random.Generator) -> None:
+        self._np_random = value
+
+    @property
+    def shape(self) -> tuple[int, ...] | None:
+        """The shape of the space's elements, or ``None`` if they are not fixed-shape arrays."""
+        return self._shape
+
+    @property
+    def is_np_flattenable(self) -> bool:
+        """Whether elements can be flattened into a fixed-size ``Box``."""
+        raise NotImplementedError
+
+    def sample(self, mask: Any | None = None, probability: Any | None = None) -> T_co:
+        """Draw a random element, restricted by ``mask`` or weighted by ``probability``."""
+        raise NotImplementedError
+
+    def seed(self, seed: Any | None = None) -> Any:
+        """Seed this space's generator (and its subspaces'); return the seed(s) used."""
+        self._np_random, np_random_seed = seeding.np_random(seed)
+        return np_random_seed
+
+    def contains(self, x: Any) -> bool:
+        """Whether ``x`` is an element of this space (same as ``x in space``)."""
+        raise NotImplementedError
+
+    def __contains__(self, x: Any) -> bool:
+        return self.contains(x)
+
+    def __setstate__(self, state: Iterable[tuple[str, Any]] | Mapping[str, Any]) -> None:
+        """Restore a pickled space, accepting the attribute names of old gym pickles."""
+        state = dict(state)  # never mutate the caller's state
+        # openai/gym#2397 renamed `shape` to `_shape`; openai/gym#1913 `np_random` to `_np_random`.
+        if "shape" in state:
+            state["_shape"] = state.pop("shape")
+        if "np_random" in state:
+            state["_np_random"] = state.pop("np_random")
+        self.__dict__.update(state)
+
+    def to_jsonable(self, sample_n: Iterable[Any]) -> list[Any] | Any:
+        """Convert a batch of samples to JSON-serialisable data (identity by default)."""
+        return list(sample_n)
+
+    def from_jsonable(self, sample_n: Any) -> list[Any]:
+        """Convert JSON data from ``to_jsonable`` back to a batch of samples."""
+        return sample_n
+
+
+class InvalidMask(error.Error, AssertionError):
+    """A ``sample(mask=...)`` argument has the wrong type, shape, dtype or values.
+
+    Gymnasium checks masks with ``assert``; subclassing ``AssertionError`` keeps code that
+    catches that working, while the check itself survives ``python -O``.
+    """
+
+
+class InvalidProbabilityMask(error.InvalidProbability, AssertionError):
+    """A ``sample(probability=...)`` argument is not a valid distribution for the space."""
