@@ -1,6 +1,46 @@
-"""palaestra: Gymnasium's environment API, classic-control and Atari envs, and SB3-style agents."""
+"""palaestra: Gymnasium's environment API, classic-control and Atari envs, and SB3-style agents.
 
+``import palaestra as gym`` is a drop-in for ``import gymnasium as gym``. Importing it loads numpy
+only: torch, ale-py and the rendering libraries are imported where they are used.
+"""
+
+# isort: skip_file
 from palaestra.core import ActionWrapper, Env, ObservationWrapper, RewardWrapper, Wrapper
+from palaestra.spaces import Space
+from palaestra.envs.registration import (
+    VectorizeMode,
+    make,
+    make_vec,
+    pprint_registry,
+    register,
+    register_envs,
+    registry,
+    spec,
+)
+from palaestra import error, logger, spaces, utils, wrappers
+from palaestra import envs  # registers the built-in environments
 
 __version__ = "0.1.0"
-__all__ = ["ActionWrapper", "Env", "ObservationWrapper", "RewardWrapper", "Wrapper"]
+
+__all__ = [
+    "ActionWrapper",
+    "Env",
+    "ObservationWrapper",
+    "RewardWrapper",
+    "Space",
+    "VectorizeMode",
+    "Wrapper",
+    "envs",
+    "error",
+    "logger",
+    "make",
+    "make_vec",
+    "pprint_registry",
+    "register",
+    "register_envs",
+    "registry",
+    "spaces",
+    "spec",
+    "utils",
+    "wrappers",
+]
