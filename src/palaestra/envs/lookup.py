@@ -215,7 +215,8 @@ def resolve_id(env_id: str) -> EnvSpec:
 def load_env_creator(name: str) -> Callable[..., Any]:
     """Import ``"package.module:Attr"`` and return ``Attr`` (usually an env class)."""
     mod_name, attr_name = name.split(":")
-    return getattr(importlib.import_module(mod_name), attr_name)  # type: ignore[no-any-return]
+    creator: Callable[..., Any] = getattr(importlib.import_module(mod_name), attr_name)
+    return creator
 
 
 def _display_namespace(env_spec: EnvSpec) -> str:

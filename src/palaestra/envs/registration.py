@@ -58,7 +58,7 @@ __all__ = [
 ]
 
 
-def _render_modes_of(env_creator: Any) -> list[str] | None:
+def _render_modes_of(env_creator: Any) -> Iterable[str] | None:
     """The creator's declared render modes, if its class-level metadata says."""
     metadata = getattr(env_creator, "metadata", None)
     if metadata is None or isinstance(metadata, property):  # a Wrapper class: instance property
