@@ -6,7 +6,30 @@
 """
 
 from palaestra.spaces.box import Box
+from palaestra.spaces.dict import Dict
 from palaestra.spaces.discrete import Discrete
+from palaestra.spaces.graph import Graph, GraphInstance
+from palaestra.spaces.multi_binary import MultiBinary
+from palaestra.spaces.multi_discrete import MultiDiscrete
+from palaestra.spaces.oneof import OneOf
+from palaestra.spaces.sequence import Sequence
 from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space
+from palaestra.spaces.text import Text
+from palaestra.spaces.tuple import Tuple
 
-__all__ = ["Box", "Discrete", "InvalidMask", "InvalidProbabilityMask", "Space"]
+__all__ = [
+    "Box",
+    "Dict",
+    "Discrete",
+    "Graph",
+    "GraphInstance",
+    "InvalidMask",
+    "InvalidProbabilityMask",
+    "MultiBinary",
+    "MultiDiscrete",
+    "OneOf",
+    "Sequence",
+    "Space",
+    "Text",
+    "Tuple",
+]

@@ -37,7 +37,7 @@ class Box(Space[npt.NDArray[Any]]):
 
     >>> Box(low=-1.0, high=2.0, shape=(3, 4), dtype=np.float32)
     Box(-1.0, 2.0, (3, 4), float32)
-    >>> Box(np.array([-1.2, -0.07]), np.array([0.6, 0.07]), dtype=np.float32)
+    >>> Box(np.array([-1.2, -0.07], np.float32), np.array([0.6, 0.07], np.float32))
     Box([-1.2  -0.07], [0.6  0.07], (2,), float32)
     >>> Box(0, 255, (210, 160, 3), np.uint8)
     Box(0, 255, (210, 160, 3), uint8)

@@ -1,0 +1,388 @@
+"""Batched spaces and batched samples for vector environments.
+
+``batch_space`` turns the space of one env into the space of ``n`` stacked envs;
+``concatenate`` stacks ``n`` samples into one batch (into ``create_empty_array``'s buffer) and
+``iterate`` walks a batch back out. Semantics (and seeding of batched spaces) are those of
+``gymnasium.vector.utils``; every function dispatches on the space type with
+``functools.singledispatch``, so a custom space can register its own implementation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Sequence as PySequence
+from copy import deepcopy
+from functools import singledispatch
+from typing import Any
+
+import numpy as np
+
+from palaestra.error import CustomSpaceError
+from palaestra.spaces.box import Box
+from palaestra.spaces.dict import Dict
+from palaestra.spaces.discrete import Discrete
+from palaestra.spaces.graph import Graph, GraphInstance
+from palaestra.spaces.multi_binary import MultiBinary
+from palaestra.spaces.multi_discrete import MultiDiscrete
+from palaestra.spaces.oneof import OneOf
+from palaestra.spaces.sequence import Sequence
+from palaestra.spaces.space import Space
+from palaestra.spaces.text import Text
+from palaestra.spaces.tuple import Tuple
+
+__all__ = ["batch_differing_spaces", "batch_space", "concatenate", "create_empty_array", "iterate"]
+
+
+@singledispatch
+def batch_space(space: Space[Any], n: int = 1) -> Space[Any]:
+    """The space of ``n`` stacked elements of ``space``; it continues ``space``'s random stream.
+
+    >>> batch_space(Box(0, 1, shape=(3,)), n=5)
+    Box(0.0, 1.0, (5, 3), float32)
+    >>> batch_space(Discrete(3), n=2)
+    MultiDiscrete([3 3])
+    """
+    raise TypeError(
+        "The space provided to `batch_space` is not a palaestra Space instance, "
+        f"type: {type(space)}, {space}"
+    )
+
+
+@batch_space.register(Box)
+def _batch_box(space: Box, n: int = 1) -> Box:
+    repeats = (n,) + (1,) * space.low.ndim
+    low, high = np.tile(space.low, repeats), np.tile(space.high, repeats)
+    return Box(low=low, high=high, dtype=space.dtype, seed=deepcopy(space.np_random))
+
+
+@batch_space.register(Discrete)
+def _batch_discrete(space: Discrete, n: int = 1) -> MultiDiscrete:
+    return MultiDiscrete(
+        np.full((n,), space.n, dtype=space.dtype),
+        dtype=space.dtype,
+        seed=deepcopy(space.np_random),
+        start=np.full((n,), space.start, dtype=space.dtype),
+    )
+
+
+@batch_space.register(MultiDiscrete)
+def _batch_multi_discrete(space: MultiDiscrete, n: int = 1) -> Box:
+    repeats = (n,) + (1,) * space.nvec.ndim
+    low = np.tile(space.start, repeats)
+    high = low + np.tile(space.nvec, repeats) - 1
+    return Box(low=low, high=high, dtype=space.dtype, seed=deepcopy(space.np_random))
+
+
+@batch_space.register(MultiBinary)
+def _batch_multi_binary(space: MultiBinary, n: int = 1) -> Box:
+    shape = (n, *space.shape)
+    return Box(low=0, high=1, shape=shape, dtype=space.dtype, seed=deepcopy(space.np_random))
+
+
+@batch_space.register(Tuple)
+def _batch_tuple(space: Tuple, n: int = 1) -> Tuple:
+    subspaces = tuple(batch_space(subspace, n=n) for subspace in space.spaces)
+    return Tuple(subspaces, seed=deepcopy(space.np_random))
+
+
+@batch_space.register(Dict)
+def _batch_dict(space: Dict, n: int = 1) -> Dict:
+    return Dict(
+        {key: batch_space(subspace, n=n) for key, subspace in space.items()},
+        seed=deepcopy(space.np_random),
+        sort_keys=space.sort_keys,
+    )
+
+
+@batch_space.register(Space)
+def _batch_as_tuple(space: Space[Any], n: int = 1) -> Tuple:
+    # Variable-size spaces (Text, Sequence, Graph, OneOf, custom) cannot be stacked into one
+    # array, so the batch is a Tuple of copies, each re-seeded from the space's stream.
+    batched = Tuple(tuple(deepcopy(space) for _ in range(n)), seed=deepcopy(space.np_random))
+    new_seeds = [int(s) for s in deepcopy(space.np_random).integers(0, int(1e8), n)]
+    batched.seed(new_seeds)
+    return batched
+
+
+@singledispatch
+def batch_differing_spaces(spaces: Any) -> Space[Any]:
+    """Batch spaces of one type whose parameters differ (e.g. bounds), sharing shape and dtype.
+
+    >>> batch_differing_spaces([Discrete(3), Discrete(5), Discrete(4)])
+    MultiDiscrete([3 5 4])
+    """
+    if len(spaces) == 0:
+        raise ValueError("Expects a non-empty list of spaces")
+    first_type = type(spaces[0])
+    if not all(isinstance(space, first_type) for space in spaces):
+        raise TypeError(
+            "Expects all spaces to be of the same type, "
+            f"actual types: {[type(space) for space in spaces]}"
+        )
+    if first_type not in batch_differing_spaces.registry:
+        raise TypeError(
+            "Requires the Space type to have a registered `batch_differing_space`, "
+            f"current list: {batch_differing_spaces.registry}"
+        )
+    return batch_differing_spaces.dispatch(first_type)(spaces)
+
+
+def _require_same(spaces: PySequence[Any], attr: Callable[[Any], Any], message: str) -> None:
+    values = [attr(space) for space in spaces]
+    if not all(value == values[0] for value in values):
+        raise ValueError(f"{message}, actually {values}")
+
+
+@batch_differing_spaces.register(Box)
+def _differing_box(spaces: PySequence[Box]) -> Box:
+    _require_same(spaces, lambda s: s.dtype, "Expected all dtypes to be equal")
+    _require_same(spaces, lambda s: s.low.shape, "Expected all Box.low shape to be equal")
+    _require_same(spaces, lambda s: s.high.shape, "Expected all Box.high shape to be equal")
+    return Box(
+        low=np.array([space.low for space in spaces]),
+        high=np.array([space.high for space in spaces]),
+        dtype=spaces[0].dtype,
+        seed=deepcopy(spaces[0].np_random),
+    )
+
+
+@batch_differing_spaces.register(Discrete)
+def _differing_discrete(spaces: PySequence[Discrete]) -> MultiDiscrete:
+    largest = max((space.dtype for space in spaces), key=lambda dtype: dtype.itemsize)
+    return MultiDiscrete(
+        nvec=np.array([space.n for space in spaces]),
+        dtype=largest,
+        start=np.array([space.start for space in spaces]),
+        seed=deepcopy(spaces[0].np_random),
+    )
+
+
+@batch_differing_spaces.register(MultiDiscrete)
+def _differing_multi_discrete(spaces: PySequence[MultiDiscrete]) -> Box:
+    _require_same(spaces, lambda s: s.dtype, "Expected all dtypes to be equal")
+    _require_same(spaces, lambda s: s.nvec.shape, "Expects all MultiDiscrete.nvec shape")
+    _require_same(spaces, lambda s: s.start.shape, "Expects all MultiDiscrete.start shape")
+    return Box(
+        low=np.array([space.start for space in spaces]),
+        high=np.array([space.start + space.nvec for space in spaces]) - 1,
+        dtype=spaces[0].dtype,
+        seed=deepcopy(spaces[0].np_random),
+    )
+
+
+@batch_differing_spaces.register(MultiBinary)
+def _differing_multi_binary(spaces: PySequence[MultiBinary]) -> Box:
+    _require_same(spaces, lambda s: s.shape, "Expected all MultiBinary shapes to be equal")
+    return Box(
+        low=0,
+        high=1,
+        shape=(len(spaces), *spaces[0].shape),
+        dtype=spaces[0].dtype,
+        seed=deepcopy(spaces[0].np_random),
+    )
+
+
+@batch_differing_spaces.register(Tuple)
+def _differing_tuple(spaces: PySequence[Tuple]) -> Tuple:
+    columns = zip(*[space.spaces for space in spaces], strict=True)
+    return Tuple(
+        tuple(batch_differing_spaces(column) for column in columns),
+        seed=deepcopy(spaces[0].np_random),
+    )
+
+
+@batch_differing_spaces.register(Dict)
+def _differing_dict(spaces: PySequence[Dict]) -> Dict:
+    if not all(spaces[0].keys() == space.keys() for space in spaces):
+        raise ValueError(
+            "Expected all Dict spaces to have the same keys, "
+            f"actually {[list(space.keys()) for space in spaces]}"
+        )
+    return Dict(
+        {key: batch_differing_spaces([space[key] for space in spaces]) for key in spaces[0]},
+        seed=deepcopy(spaces[0].np_random),
+        sort_keys=spaces[0].sort_keys,
+    )
+
+
+@batch_differing_spaces.register(Graph)
+@batch_differing_spaces.register(Text)
+@batch_differing_spaces.register(Sequence)
+@batch_differing_spaces.register(OneOf)
+def _differing_as_tuple(spaces: PySequence[Space[Any]]) -> Tuple:
+    return Tuple([deepcopy(space) for space in spaces], seed=deepcopy(spaces[0].np_random))
+
+
+@singledispatch
+def iterate(space: Space[Any], items: Any) -> Iterator[Any]:
+    """Iterate over the elements of a batch from the batched ``space``.
+
+    >>> space = batch_space(Discrete(3), n=2)
+    >>> [int(x) for x in iterate(space, np.array([2, 0]))]
+    [2, 0]
+    """
+    if isinstance(space, Space):
+        raise CustomSpaceError(
+            f"Space of type `{type(space)}` doesn't have an registered `iterate` function. "
+            f"Register `{type(space)}` for `iterate` to support it."
+        )
+    raise TypeError(
+        "The space provided to `iterate` is not a palaestra Space instance, "
+        f"type: {type(space)}, {space}"
+    )
+
+
+@iterate.register(Discrete)
+def _iterate_discrete(space: Discrete, items: Any) -> Iterator[Any]:
+    raise TypeError("Unable to iterate over a space of type `Discrete`.")
+
+
+@iterate.register(Box)
+@iterate.register(MultiDiscrete)
+@iterate.register(MultiBinary)
+def _iterate_array(space: Space[Any], items: np.ndarray) -> Iterator[Any]:
+    try:
+        return iter(items)
+    except TypeError as e:
+        raise TypeError(f"Unable to iterate over the following elements: {items}") from e
+
+
+@iterate.register(Tuple)
+def _iterate_tuple(space: Tuple, items: tuple[Any, ...]) -> Iterator[Any]:
+    if all(type(subspace) in iterate.registry for subspace in space):
+        return zip(*[iterate(sub, items[i]) for i, sub in enumerate(space)], strict=True)
+    # A batch of variable-size spaces is already a tuple of elements.
+    try:
+        return iter(items)
+    except Exception as e:
+        unregistered = [type(sub) for sub in space if type(sub) not in iterate.registry]
+        raise CustomSpaceError(
+            f"Could not iterate through {space} as no custom iterate function is registered "
+            f"for {unregistered} and `iter(items)` raised the following error: {e}."
+        ) from e
+
+
+@iterate.register(Dict)
+def _iterate_dict(space: Dict, items: Mapping[str, Any]) -> Iterator[dict[str, Any]]:
+    keys = list(space.spaces)
+    columns = [iterate(space.spaces[key], items[key]) for key in keys]
+    for values in zip(*columns, strict=True):
+        yield dict(zip(keys, values))
+
+
+@singledispatch
+def concatenate(space: Space[Any], items: Iterable[Any], out: Any) -> Any:
+    """Stack ``items`` (elements of ``space``) into ``out``, usually from ``create_empty_array``.
+
+    >>> space = Box(0, 1, shape=(2,))
+    >>> out = create_empty_array(space, n=2)
+    >>> concatenate(space, [np.zeros(2, np.float32), np.ones(2, np.float32)], out)
+    array([[0., 0.],
+           [1., 1.]], dtype=float32)
+    """
+    raise TypeError(
+        "The space provided to `concatenate` is not a palaestra Space instance, "
+        f"type: {type(space)}, {space}"
+    )
+
+
+@concatenate.register(Box)
+@concatenate.register(Discrete)
+@concatenate.register(MultiDiscrete)
+@concatenate.register(MultiBinary)
+def _concatenate_array(space: Space[Any], items: Iterable[Any], out: np.ndarray) -> np.ndarray:
+    return np.stack(list(items), axis=0, out=out)
+
+
+@concatenate.register(Tuple)
+def _concatenate_tuple(space: Tuple, items: Iterable[Any], out: tuple[Any, ...]) -> tuple[Any, ...]:
+    items = list(items)
+    return tuple(
+        concatenate(subspace, [item[i] for item in items], out[i])
+        for i, subspace in enumerate(space.spaces)
+    )
+
+
+@concatenate.register(Dict)
+def _concatenate_dict(space: Dict, items: Iterable[Any], out: Mapping[str, Any]) -> dict[str, Any]:
+    items = list(items)
+    return {
+        key: concatenate(subspace, [item[key] for item in items], out[key])
+        for key, subspace in space.items()
+    }
+
+
+@concatenate.register(Space)
+def _concatenate_as_tuple(space: Space[Any], items: Iterable[Any], out: Any) -> tuple[Any, ...]:
+    return tuple(items)
+
+
+@singledispatch
+def create_empty_array(space: Space[Any], n: int = 1, fn: Callable[..., Any] = np.zeros) -> Any:
+    """A buffer for ``n`` elements of ``space`` (nested like the space), made with ``fn``.
+
+    >>> create_empty_array(Dict(a=Discrete(2), b=Box(0, 1, (2,))), n=2)
+    {'a': array([0, 0]), 'b': array([[0., 0.],
+           [0., 0.]], dtype=float32)}
+    """
+    raise TypeError(
+        "The space provided to `create_empty_array` is not a palaestra Space instance, "
+        f"type: {type(space)}, {space}"
+    )
+
+
+@create_empty_array.register(Box)
+@create_empty_array.register(Discrete)
+@create_empty_array.register(MultiDiscrete)
+@create_empty_array.register(MultiBinary)
+def _empty_array(space: Space[Any], n: int = 1, fn: Callable[..., Any] = np.zeros) -> np.ndarray:
+    return fn((n, *space.shape), dtype=space.dtype)  # type: ignore[misc]
+
+
+@create_empty_array.register(Tuple)
+def _empty_tuple(space: Tuple, n: int = 1, fn: Callable[..., Any] = np.zeros) -> tuple[Any, ...]:
+    return tuple(create_empty_array(subspace, n=n, fn=fn) for subspace in space.spaces)
+
+
+@create_empty_array.register(Dict)
+def _empty_dict(space: Dict, n: int = 1, fn: Callable[..., Any] = np.zeros) -> dict[str, Any]:
+    return {key: create_empty_array(subspace, n=n, fn=fn) for key, subspace in space.items()}
+
+
+@create_empty_array.register(Graph)
+def _empty_graph(
+    space: Graph, n: int = 1, fn: Callable[..., Any] = np.zeros
+) -> tuple[GraphInstance, ...]:
+    edge_space = space.edge_space
+    return tuple(
+        GraphInstance(
+            nodes=create_empty_array(space.node_space, n=1, fn=fn),
+            edges=None if edge_space is None else create_empty_array(edge_space, n=1, fn=fn),
+            edge_links=None if edge_space is None else fn((1, 2), dtype=np.int64),
+        )
+        for _ in range(n)
+    )
+
+
+@create_empty_array.register(Text)
+def _empty_text(space: Text, n: int = 1, fn: Callable[..., Any] = np.zeros) -> tuple[str, ...]:
+    return tuple(space.characters[0] * space.min_length for _ in range(n))
+
+
+@create_empty_array.register(Sequence)
+def _empty_sequence(
+    space: Sequence, n: int = 1, fn: Callable[..., Any] = np.zeros
+) -> tuple[Any, ...]:
+    if space.stack:
+        return tuple(create_empty_array(space.feature_space, n=1, fn=fn) for _ in range(n))
+    return tuple(() for _ in range(n))
+
+
+@create_empty_array.register(OneOf)
+def _empty_oneof(space: OneOf, n: int = 1, fn: Callable[..., Any] = np.zeros) -> tuple[Any, ...]:
+    return tuple(() for _ in range(n))
+
+
+@create_empty_array.register(Space)
+def _empty_custom(space: Space[Any], n: int = 1, fn: Callable[..., Any] = np.zeros) -> None:
+    return None
