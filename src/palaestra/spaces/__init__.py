@@ -16,6 +16,7 @@ from palaestra.spaces.sequence import Sequence
 from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
+from palaestra.spaces.utils import flatdim, flatten, flatten_space, unflatten
 
 __all__ = [
     "Box",
@@ -32,4 +33,8 @@ __all__ = [
     "Space",
     "Text",
     "Tuple",
+    "flatdim",
+    "flatten",
+    "flatten_space",
+    "unflatten",
 ]
