@@ -225,6 +225,10 @@ def make(
     return env
 
 
+def _vector_available() -> bool:
+    return importlib.util.find_spec("palaestra.vector") is not None
+
+
 def make_vec(
     id: str | EnvSpec,
     num_envs: int = 1,
@@ -280,7 +284,7 @@ def make_vec(
                 f"Cannot create vectorized environment for {env_spec.id} because it doesn't have "
                 "an entry point defined."
             )
-        if importlib.util.find_spec("palaestra.vector") is None:
+        if not _vector_available():
             raise NotImplementedError("make_vec arrives with palaestra.vector")
         import palaestra.vector as vector
 
@@ -345,7 +349,7 @@ def _make_with_vector_entry_point(
 
 def _check_autoreset_metadata(env: Any) -> None:
     """Warn, as Gymnasium does, when a vector env does not declare its autoreset mode."""
-    if importlib.util.find_spec("palaestra.vector") is None:
+    if not _vector_available():
         return  # nothing to compare against until palaestra.vector exists
     from palaestra.vector import AutoresetMode
 
