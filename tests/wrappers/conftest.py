@@ -46,12 +46,14 @@ WRAPPER_MODULES: dict[str, str] = {
 }
 
 
-class _Wrappers:
+def _wrappers() -> SimpleNamespace:
     """``palaestra.wrappers`` as it will read once the lead adds the entries above."""
-
-    def __getattr__(self, name: str) -> Any:  # test helper only
-        module = importlib.import_module(f"palaestra.wrappers.{WRAPPER_MODULES[name]}")
-        return getattr(module, name)
+    return SimpleNamespace(
+        **{
+            name: getattr(importlib.import_module(f"palaestra.wrappers.{module}"), name)
+            for name, module in WRAPPER_MODULES.items()
+        }
+    )
 
 
 def _lib(name: str) -> SimpleNamespace:
@@ -67,7 +69,7 @@ def _lib(name: str) -> SimpleNamespace:
     from palaestra.envs.env_spec import EnvSpec
 
     return SimpleNamespace(
-        name=name, Env=palaestra.core.Env, spaces=palaestra.spaces, W=_Wrappers(), EnvSpec=EnvSpec
+        name=name, Env=palaestra.core.Env, spaces=palaestra.spaces, W=_wrappers(), EnvSpec=EnvSpec
     )
 
 

@@ -16,7 +16,7 @@ from palaestra.error import InvalidAction, InvalidBound
 from palaestra.spaces import Box, Discrete, MultiDiscrete, Space
 from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.wrappers.transform_observation import _bins_array
-from palaestra.wrappers.utils import rescale_box
+from palaestra.wrappers.utils import _as_bound, rescale_box
 
 __all__ = ["ClipAction", "DiscretizeAction", "RescaleAction", "TransformAction"]
 
@@ -73,7 +73,8 @@ class RescaleAction(TransformAction[ObsType, WrapperActType, ActType], RecordCon
     def __init__(self, env: Env[ObsType, ActType], min_action: Any, max_action: Any) -> None:
         space = _require_box(env, "RescaleAction")
         RecordConstructorArgs.__init__(self, min_action=min_action, max_action=max_action)
-        if np.any(np.asarray(min_action) > np.asarray(max_action)):
+        low = _as_bound(min_action, space.shape, "new_min")
+        if np.any(low > _as_bound(max_action, space.shape, "new_max")):
             raise ValueError(
                 f"Min action ({min_action}) must be smaller than max action ({max_action})"
             )
