@@ -24,6 +24,12 @@ class GraphInstance(NamedTuple):
     edge_links: npt.NDArray[Any] | None
 
 
+def _is_graph_instance(x: Any) -> bool:
+    return isinstance(x, GraphInstance) or (
+        isinstance(x, tuple) and getattr(x, "_fields", None) == GraphInstance._fields
+    )
+
+
 class Graph(Space[GraphInstance]):
     """Graphs whose node (and edge) features are elements of ``node_space`` (``edge_space``).
 
@@ -147,7 +153,8 @@ class Graph(Space[GraphInstance]):
         """Whether ``x`` is a GraphInstance with valid nodes, edges and in-range integer links."""
         from palaestra.spaces.batching import iterate
 
-        if not isinstance(x, GraphInstance) or x.nodes is None:
+        # Any GraphInstance-shaped namedtuple (e.g. gymnasium's) is accepted, for interop.
+        if not _is_graph_instance(x) or x.nodes is None:
             return False
         nodes = list(iterate(self.batch_node_space, x.nodes))
         if not all(node in self.node_space for node in nodes):

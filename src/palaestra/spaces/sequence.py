@@ -141,9 +141,12 @@ class Sequence(Space[Any]):
         if self.stack:
             from palaestra.spaces.batching import iterate
 
-            return all(
-                item in self.feature_space for item in iterate(self.stacked_feature_space, x)
-            )
+            # Gymnasium raises TypeError for non-iterables; "not a member" is the useful answer.
+            try:
+                items = iterate(self.stacked_feature_space, x)
+            except TypeError:
+                return False
+            return all(item in self.feature_space for item in items)
         return isinstance(x, tuple) and all(self.feature_space.contains(item) for item in x)
 
     def __repr__(self) -> str:
