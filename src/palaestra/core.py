@@ -136,7 +136,9 @@ class Env(Generic[ObsType, ActType]):
         return False
 
 
-class Wrapper(Env[WrapperObsType, WrapperActType], Generic[WrapperObsType, WrapperActType, ObsType, ActType]):
+class Wrapper(
+    Env[WrapperObsType, WrapperActType], Generic[WrapperObsType, WrapperActType, ObsType, ActType]
+):
     """Base of all wrappers: by default every call goes straight to ``self.env``.
 
     Spaces and metadata fall through to the inner env until the wrapper assigns its own.
@@ -247,7 +249,9 @@ class Wrapper(Env[WrapperObsType, WrapperActType], Generic[WrapperObsType, Wrapp
                 env_spec = deepcopy(env_spec)
                 env_spec.additional_wrappers += (self.wrapper_spec_with(kwargs),)
             except Exception as e:  # a kwarg that cannot be copied: spec is unknown, not wrong
-                logger.warn(f"An exception occurred ({e}) while copying the environment spec={env_spec}")
+                logger.warn(
+                    f"An exception occurred ({e}) while copying the environment spec={env_spec}"
+                )
                 return None
         self._cached_spec = env_spec
         return env_spec

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from tests.core.test_env import Counter
 
 from palaestra.core import ActionWrapper, ObservationWrapper, RewardWrapper, Wrapper
 from palaestra.spaces import Discrete
-
-from tests.core.test_env import Counter
 
 
 class Plus(ObservationWrapper):
@@ -91,7 +90,9 @@ def test_str_and_repr_nest() -> None:
 
 
 def test_wrapping_a_non_env_is_a_type_error() -> None:
-    with pytest.raises(TypeError, match="Expected env to be a `palaestra.Env` but got <class 'int'>"):
+    with pytest.raises(
+        TypeError, match=r"Expected env to be a `palaestra\.Env` but got <class 'int'>"
+    ):
         Wrapper(3)  # type: ignore[arg-type]
 
 

@@ -1,0 +1,25 @@
+"""`import palaestra` loads numpy only; heavy optional libraries wait until they are used."""
+
+import subprocess
+import sys
+
+HEAVY = ["torch", "pygame", "matplotlib", "PIL", "imageio", "ale_py", "gymnasium", "scipy"]
+
+
+def test_import_loads_no_heavy_dependency() -> None:
+    code = (
+        "import sys, palaestra as gym\n"
+        "gym.spaces.Box; gym.wrappers.TimeLimit; gym.make\n"
+        f"print([m for m in {HEAVY!r} if m in sys.modules])\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
+def test_tutorial_names_exist() -> None:
+    import palaestra as gym
+
+    names = ["Env", "Wrapper", "ObservationWrapper", "RewardWrapper", "ActionWrapper", "make"]
+    for name in [*names, "make_vec", "register", "registry", "spec", "pprint_registry"]:
+        assert hasattr(gym, name), name
+    assert gym.spaces.Discrete(3) == gym.spaces.Discrete(3)
