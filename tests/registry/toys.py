@@ -59,6 +59,8 @@ def toy_class(lib: ModuleType) -> type:
 
 PalToy = toy_class(palaestra)
 GymToy = toy_class(gymnasium)
+# Let pickle find the classes by name.
+PalToy.__qualname__, GymToy.__qualname__ = "PalToy", "GymToy"
 
 
 class ScaleReward(palaestra.Wrapper, palaestra.utils.RecordConstructorArgs):  # type: ignore[misc]
