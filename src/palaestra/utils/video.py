@@ -7,15 +7,17 @@ kind is written.
 
 from __future__ import annotations
 
+import io
 import os
 from collections.abc import Iterable
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 
 from palaestra.error import dependency_not_installed
 
-__all__ = ["mp4_available", "save_video", "validate_frames"]
+__all__ = ["encode_gif", "mp4_available", "save_video", "validate_frames"]
 
 SUPPORTED_SUFFIXES = (".gif", ".mp4")
 
@@ -94,7 +96,14 @@ def save_video(frames: Iterable[np.ndarray], path: str | os.PathLike[str], fps: 
     return path
 
 
-def _write_gif(frames: list[np.ndarray], path: Path, fps: float) -> None:
+def encode_gif(frames: Iterable[np.ndarray], fps: float = 30) -> bytes:
+    """The bytes of a looping GIF of ``frames`` (for inline display), as written by save_video."""
+    buffer = io.BytesIO()
+    _write_gif(validate_frames(frames), buffer, fps)
+    return buffer.getvalue()
+
+
+def _write_gif(frames: list[np.ndarray], path: Path | BinaryIO, fps: float) -> None:
     try:
         from PIL import Image
     except ImportError as e:
