@@ -1,0 +1,184 @@
+"""What every classic-control env shares: reset-bound parsing, action checks, rendering."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from palaestra import error, logger
+from palaestra.core import Env
+from palaestra.spaces import Box, Discrete
+
+RENDER_MODES = ["human", "rgb_array"]
+
+
+def parse_number(name: str, value: Any) -> float:
+    """A finite float from a reset option, or ``ValueError`` naming the option and value."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as e:  # Gymnasium's message, plus the option's name
+        raise ValueError(f"An option ({name}={value!r}) could not be converted to a float.") from e
+    if not math.isfinite(number):
+        # Gymnasium lets NaN through to a NaN state and inf to numpy's OverflowError.
+        raise ValueError(f"Reset option {name}={value!r} must be finite.")
+    return number
+
+
+def parse_reset_bounds(
+    options: dict[str, Any] | None, default_low: float, default_high: float
+) -> tuple[float, float]:
+    """``options["low"]``/``["high"]`` or the defaults, checked (Gymnasium's reset options)."""
+    if options is None:
+        return default_low, default_high
+    low = parse_number("low", options["low"]) if "low" in options else default_low
+    high = parse_number("high", options["high"]) if "high" in options else default_high
+    if low > high:
+        raise ValueError(f"Lower bound ({low}) must be lower than higher bound ({high}).")
+    return low, high
+
+
+def invalid_action(action: Any, space: Any, why: str = "") -> error.InvalidAction:
+    """The exception for an action outside ``space``, naming both."""
+    detail = f": {why}" if why else ""
+    return error.InvalidAction(
+        f"Invalid action {action!r} ({type(action).__name__}) for action space {space}{detail}"
+    )
+
+
+def check_discrete_action(action: Any, space: Any) -> int:
+    """The slow path of a discrete step: any accepted action as an ``int``, else InvalidAction.
+
+    Accepts what ``Discrete.contains`` accepts (ints, bools, 0-d integer numpy values).
+    """
+    if not space.contains(action):
+        raise invalid_action(action, space)
+    return int(action)
+
+
+def check_box_action(action: Any, space: Any) -> float:
+    """The one component of a ``(1,)`` float action as a float32 value, else InvalidAction.
+
+    Finite values outside the bounds are accepted: Gymnasium clips them inside the dynamics,
+    and so do we. The value is rounded to float32, the space's dtype (Gymnasium would compute
+    with a float64 action's full precision).
+    """
+    try:
+        arr = np.asarray(action, dtype=np.float32)
+    except (TypeError, ValueError) as e:
+        raise invalid_action(action, space, "not a numeric array") from e
+    if arr.shape != space.shape:
+        raise invalid_action(action, space, f"expected shape {space.shape}, got {arr.shape}")
+    value = float(arr[0])
+    if not math.isfinite(value):
+        raise invalid_action(action, space, "actions must be finite (no NaN or inf)")
+    return value
+
+
+def check_discrete_batch(actions: Any, space: Discrete, num_envs: int) -> np.ndarray:
+    """Validate N discrete actions at once: an int64 array ``[N]`` or InvalidAction."""
+    arr = np.asarray(actions)
+    if arr.shape != (num_envs,) or arr.dtype.kind not in "iu":
+        raise error.InvalidAction(
+            f"Invalid actions {actions!r}: expected {num_envs} integers of {space}, "
+            f"got shape {arr.shape} dtype {arr.dtype}"
+        )
+    lo, hi = int(space.start), int(space.start) + int(space.n)
+    if num_envs and (arr.min() < lo or arr.max() >= hi):
+        bad = np.flatnonzero((arr < lo) | (arr >= hi))
+        raise error.InvalidAction(
+            f"Invalid actions at rows {bad[:10].tolist()}: {arr[bad[:10]].tolist()} "
+            f"not in action space {space}"
+        )
+    return arr.astype(np.int64, copy=False)
+
+
+def check_box_batch(actions: Any, space: Box, num_envs: int) -> np.ndarray:
+    """Validate N ``(1,)`` float actions: float32 values as float64 ``[N]``, else InvalidAction."""
+    try:
+        arr = np.asarray(actions, dtype=np.float32)
+    except (TypeError, ValueError) as e:
+        raise error.InvalidAction(f"Invalid actions {actions!r}: not numeric") from e
+    if arr.shape != (num_envs, *space.shape):
+        raise error.InvalidAction(
+            f"Invalid actions: expected shape {(num_envs, *space.shape)} for {num_envs} envs "
+            f"of {space}, got {arr.shape}"
+        )
+    flat = arr[:, 0].astype(np.float64)  # [N]
+    finite = np.isfinite(flat)
+    if not finite.all():
+        bad = np.flatnonzero(~finite)
+        raise error.InvalidAction(
+            f"Invalid actions at rows {bad[:10].tolist()}: {flat[bad[:10]].tolist()} "
+            f"are not finite (NaN/inf) for action space {space}"
+        )
+    return flat
+
+
+class ClassicControlEnv(Env[np.ndarray, Any]):
+    """Rendering and render-mode handling shared by the single classic-control envs.
+
+    Subclasses implement ``_frame()`` (the scene from ``palaestra.rendering.scenes``).
+    """
+
+    _window: Any = None
+
+    def _init_render(self, render_mode: str | None) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise error.UnsupportedMode(
+                f"render_mode={render_mode!r} is not one of {self.metadata['render_modes']}"
+            )
+        self.render_mode = render_mode
+
+    def _frame(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def render(self) -> np.ndarray | None:
+        """The current frame (``"rgb_array"``) or show it in a window (``"human"``)."""
+        if self.render_mode is None:
+            name = self.spec.id if self.spec is not None else type(self).__name__
+            logger.warn(
+                "You are calling render method without specifying any render mode. "
+                "You can specify the render_mode at initialization, "
+                f'e.g. gym.make("{name}", render_mode="rgb_array")'
+            )
+            return None
+        frame = self._frame()
+        if self.render_mode == "rgb_array":
+            return frame
+        if self._window is None:  # created lazily: rgb_array users never need a display
+            from palaestra.rendering.window import HumanWindow
+
+            title = self.spec.id if self.spec is not None else type(self).__name__
+            self._window = HumanWindow(title, self.metadata["render_fps"])
+        self._window.show(frame)
+        return None
+
+    def close(self) -> None:
+        """Close the human-mode window if one was opened."""
+        if self._window is not None:
+            self._window.close()
+            self._window = None
+
+
+def expose_params(cls: type, names: Sequence[str]) -> None:
+    """Give ``cls`` Gymnasium's attribute names for its params (``env.unwrapped.dt = 0.05``).
+
+    Reading returns the field of ``self.params``; assigning replaces ``self.params`` with a
+    copy holding the new value, so the physics sees it on the next step.
+    """
+
+    def make(name: str) -> property:
+        def get(self: Any) -> Any:
+            return getattr(self.params, name)
+
+        def set_(self: Any, value: Any) -> None:
+            self.params = dataclasses.replace(self.params, **{name: value})
+
+        return property(get, set_, doc=f"``params.{name}`` (settable).")
+
+    for name in names:
+        setattr(cls, name, make(name))

@@ -1,0 +1,119 @@
+"""Two interchangeable math namespaces so each env's physics is written once.
+
+``step_state`` functions take ``ops`` as their first argument and only use the operations
+below plus ``+ - * / < > == & |``. With :data:`SCALAR` they run on Python floats (the single
+env's fast path); with :data:`ARRAY` they run on float64 arrays of N envs (the batched engine).
+
+Why this is exact: on the machines we measured (x86-64, numpy 2.4), numpy's float64
+``np.cos``/``np.sin`` give bit-identical results to ``math.cos``/``math.sin`` (glibc libm) for
+scalars, contiguous arrays and strided arrays alike -- ``tests/envs/test_ops.py`` checks this on
+a million points, so a platform where numpy vectorises float64 trig differently fails loudly
+instead of drifting silently. Gymnasium itself mixes ``math.cos`` (MountainCar) and ``np.cos``
+on numpy scalars (CartPole, Pendulum, Acrobot); both are the same function here.
+
+Squares are the exception. Gymnasium writes ``x**2`` on numpy scalars, which calls libm
+``pow`` (``powf`` for float32), and glibc's pow is not correctly rounded: on a million random
+doubles ``pow(x, 2) != x*x`` about 900 times (powf: ~700 per million), while numpy's array
+``x**2`` is the exact square and its general ``np.power`` loop is SIMD and differs more often.
+So :meth:`ArrayOps.pow2` takes the exact square ``x*x``, finds the rows whose square lies
+within 0.02 ulp of a rounding midpoint (the only ones where a pow with glibc's documented
+< 0.52 ulp error can round the other way; measured: none beyond 0.007 ulp in 10^7 draws) and
+recomputes just those with Python's ``**`` (the same libm call), a few percent of rows.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+_f32 = np.float32
+_SPLIT = 134217729.0  # 2**27 + 1: Veltkamp's splitter for the exact error of x*x
+_POW_HARD = 0.48  # ulps from the exact square beyond which libm pow may round differently
+_POWF_HARD = 0.45  # the same for powf (measured mismatches all beyond 0.498)
+
+
+class ScalarOps:
+    """Operations on Python floats and bools."""
+
+    cos = staticmethod(math.cos)
+    sin = staticmethod(math.sin)
+
+    @staticmethod
+    def clip(x: float, lo: float, hi: float) -> float:
+        """``np.clip`` for one float (equal to it for every non-NaN value)."""
+        return lo if x < lo else (hi if x > hi else x)
+
+    @staticmethod
+    def where(cond: bool, a: Any, b: Any) -> Any:
+        """``a if cond else b`` (both already evaluated, as with ``np.where``)."""
+        return a if cond else b
+
+    @staticmethod
+    def f32(x: float) -> float:
+        """Round to the nearest float32, kept as a Python float."""
+        return float(_f32(x))
+
+    @staticmethod
+    def mod(x: float, m: float) -> float:
+        """Python's ``%``, which equals ``np.remainder`` on float64 (same fmod + sign fix)."""
+        return x % m
+
+    @staticmethod
+    def any(cond: bool) -> bool:
+        """Whether the condition holds (for loops that must run until no row needs them)."""
+        return bool(cond)
+
+    @staticmethod
+    def pow2(x: float) -> float:
+        """``x**2`` as numpy computes it on a float64 scalar (libm ``pow``)."""
+        return x**2
+
+    @staticmethod
+    def powf2(x: float) -> float:
+        """``u**2`` of a float32 scalar (libm ``powf``), as a Python float."""
+        return float(_f32(x) ** 2)
+
+
+class ArrayOps:
+    """The same operations on numpy float64/bool arrays of shape ``[N]``."""
+
+    cos = staticmethod(np.cos)
+    sin = staticmethod(np.sin)
+    clip = staticmethod(np.clip)
+    where = staticmethod(np.where)
+    mod = staticmethod(np.remainder)
+    any = staticmethod(np.any)
+
+    @staticmethod
+    def f32(x: np.ndarray) -> np.ndarray:
+        """Round each element to the nearest float32, kept as float64."""
+        return np.asarray(x, dtype=np.float32).astype(np.float64)
+
+    @staticmethod
+    def pow2(x: np.ndarray) -> np.ndarray:
+        """Elementwise libm ``pow(x, 2)``: the exact square, near-midpoint rows redone by pow."""
+        p = x * x
+        c = x * _SPLIT
+        hi = c - (c - x)
+        lo = x - hi
+        err = ((hi * hi - p) + 2 * hi * lo) + lo * lo  # exact rounding error of x*x (Dekker)
+        hard = np.flatnonzero(np.abs(err) > _POW_HARD * np.spacing(p))
+        if hard.size:
+            p[hard] = [v**2 for v in x[hard].tolist()]
+        return p
+
+    @staticmethod
+    def powf2(x: np.ndarray) -> np.ndarray:
+        """Elementwise ``np.float32(u)**2`` (libm ``powf``) of float32 values held as float64."""
+        d = x * x  # exact: a float32 squared needs 48 bits
+        f = d.astype(np.float32)
+        hard = np.flatnonzero(np.abs(d - f) > _POWF_HARD * np.spacing(f).astype(np.float64))
+        if hard.size:
+            f[hard] = [_f32(v) ** 2 for v in x[hard].tolist()]
+        return f.astype(np.float64)
+
+
+SCALAR = ScalarOps()
+ARRAY = ArrayOps()

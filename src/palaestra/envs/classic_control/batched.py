@@ -1,0 +1,143 @@
+"""The batched engine: N copies of one classic-control env stepped with array ops, in place.
+
+A subclass names its state components, its spaces, how one row is sampled on reset (with that
+row's own generator) and how the whole batch steps (its module's ``step_state`` with
+:data:`~palaestra.envs.classic_control._ops.ARRAY`). The base owns the buffers, the per-row
+generators and seeding. There is no autoreset, time limit or info here: the vector layer adds
+those on top.
+
+Row ``i`` reset with ``seed=s`` uses ``np.random.default_rng(s + i)`` and draws exactly what a
+single env reset with ``seed=s + i`` draws, so the two stay identical step by step.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from palaestra.spaces import Box, Discrete, Space
+from palaestra.utils.seeding import np_random
+
+
+class BatchedEnv:
+    """``num_envs`` envs of one kind, as arrays. Subclasses fill in the class variables."""
+
+    state_dim: ClassVar[int]
+    single_observation_space: Space[Any]
+    single_action_space: Space[Any]
+
+    def __init__(self, num_envs: int) -> None:
+        if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        self.num_envs = int(num_envs)
+        obs_dim = self.single_observation_space.shape[0]  # type: ignore[index]
+        # Components are rows so that every array op runs on contiguous memory.
+        self._state = np.zeros((self.state_dim, self.num_envs))  # [k, N] float64
+        self._obs = np.zeros((self.num_envs, obs_dim), dtype=np.float32)  # [N, obs_dim]
+        self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        self.seeds: list[int | None] = [None] * self.num_envs
+        self._needs_reset = np.ones(self.num_envs, dtype=bool)  # [N]
+
+    @property
+    def state(self) -> np.ndarray:
+        """The float64 state as a writable ``[N, k]`` view (row i is env i's Gymnasium state)."""
+        return self._state.T
+
+    @property
+    def observation_space(self) -> Box:
+        """The batched observation space ``[N, obs_dim]``."""
+        space = self.single_observation_space
+        assert isinstance(space, Box)
+        reps = (self.num_envs, 1)
+        return Box(np.tile(space.low, reps), np.tile(space.high, reps), dtype=space.dtype)
+
+    def _row_seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
+        if seed is None:
+            return [None] * self.num_envs
+        if isinstance(seed, (int, np.integer)):
+            return [int(seed) + i for i in range(self.num_envs)]
+        seeds = list(seed)
+        if len(seeds) != self.num_envs:
+            raise ValueError(f"Expected {self.num_envs} seeds, got {len(seeds)}")
+        return seeds
+
+    def reset(
+        self,
+        *,
+        seed: int | Sequence[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+        mask: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Re-sample the rows selected by ``mask`` (all by default); return obs ``[N, obs_dim]``.
+
+        ``seed`` is an int (row i gets ``seed + i``) or one seed per row; rows whose seed is
+        None keep their generator. The returned array is reused by the next call: copy it to
+        keep it.
+        """
+        rows = np.arange(self.num_envs) if mask is None else np.flatnonzero(mask)
+        bounds = self._parse_options(options)  # once for all rows, so bad options fail early
+        seeds = self._row_seeds(seed)
+        fresh = np.empty((len(rows), self.state_dim))  # [R, k]
+        # One draw per reset row with that row's own generator: this loop runs on reset only.
+        for j, i in enumerate(rows.tolist()):
+            rng = self._rngs[i]
+            if seeds[i] is not None or rng is None:
+                rng, self.seeds[i] = np_random(seeds[i])
+                self._rngs[i] = rng
+            fresh[j] = self._sample_row(rng, bounds)
+        self._state[:, rows] = fresh.T
+        self._needs_reset[rows] = False
+        self._after_reset(rows)
+        self._observe(rows)
+        return self._obs
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Step every row: ``(obs [N, obs_dim] float32, reward [N] float64, terminated [N])``.
+
+        Actions are validated for the whole batch first (InvalidAction names the bad rows).
+        The obs array is reused by the next call.
+        """
+        if self._needs_reset.any():
+            from palaestra.error import ResetNeeded
+
+            rows = np.flatnonzero(self._needs_reset)[:10].tolist()
+            raise ResetNeeded(f"Rows {rows} were never reset; call reset() before step().")
+        act = self.check_actions(actions)
+        reward, terminated = self._step(act)
+        self._observe(None)
+        return self._obs, reward, terminated
+
+    def check_actions(self, actions: Any) -> np.ndarray:
+        """Validate a batch of actions; return them as an ``[N]`` array ready for ``_step``."""
+        from palaestra.envs.classic_control._common import check_box_batch, check_discrete_batch
+
+        space = self.single_action_space
+        if isinstance(space, Discrete):
+            return check_discrete_batch(actions, space, self.num_envs)
+        assert isinstance(space, Box)
+        return check_box_batch(actions, space, self.num_envs)
+
+    # -- per-env parts ------------------------------------------------------------------
+    def _parse_options(self, options: dict[str, Any] | None) -> Any:
+        """Reset options checked once (Gymnasium's ``options={"low", "high"}`` by default)."""
+        raise NotImplementedError
+
+    def _sample_row(self, rng: np.random.Generator, bounds: Any) -> np.ndarray:
+        """One row's initial state ``[k]``, drawn exactly as the single env draws it."""
+        raise NotImplementedError
+
+    def _after_reset(self, rows: np.ndarray) -> None:
+        """Reset any per-row bookkeeping besides the state (nothing by default)."""
+
+    def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Advance ``self._state`` in place; return ``(reward [N], terminated [N])``."""
+        raise NotImplementedError
+
+    def _observe(self, rows: np.ndarray | None) -> None:
+        """Write observations of ``rows`` (all if None) into ``self._obs``."""
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(num_envs={self.num_envs})"

@@ -1,0 +1,211 @@
+"""CartPole-v0/v1: balance a pole on a cart by pushing it left or right.
+
+Physics equal to Gymnasium 1.x's ``CartPoleEnv`` (Barto, Sutton & Anderson 1983): explicit
+Euler with tau = 0.02, float64 state, the same operation order (Gymnasium's ``np.cos`` on a
+numpy scalar is the same libm call as ``math.cos``, see ``_ops``), reward 1 per step including
+the terminating one, 0 after it (with Gymnasium's warning), or the Sutton-Barto 0/-1 variant.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from palaestra import error, logger
+from palaestra.envs.classic_control._common import (
+    RENDER_MODES,
+    ClassicControlEnv,
+    check_discrete_action,
+    expose_params,
+    parse_reset_bounds,
+)
+from palaestra.envs.classic_control._ops import ARRAY, SCALAR
+from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.spaces import Box, Discrete
+
+
+@dataclass(frozen=True)
+class CartPoleParams:
+    """Gymnasium's CartPole constants (derived ones computed in the same order)."""
+
+    gravity: float = 9.8
+    masscart: float = 1.0
+    masspole: float = 0.1
+    total_mass: float = 0.1 + 1.0  # masspole + masscart
+    length: float = 0.5  # half the pole's length
+    polemass_length: float = 0.1 * 0.5  # masspole * length
+    force_mag: float = 10.0
+    tau: float = 0.02
+    theta_threshold_radians: float = 12 * 2 * math.pi / 360
+    x_threshold: float = 2.4
+
+
+def step_state(
+    ops: Any, p: CartPoleParams, x: Any, x_dot: Any, theta: Any, theta_dot: Any, action: Any
+) -> Any:
+    """One Euler step (scalars or ``[N]`` arrays): ``(x, x_dot, theta, theta_dot, terminated)``."""
+    force = ops.where(action == 1, p.force_mag, -p.force_mag)
+    costheta = ops.cos(theta)
+    sintheta = ops.sin(theta)
+    # Association exactly as Gymnasium writes it; float addition is not associative.
+    temp = (force + p.polemass_length * (theta_dot * theta_dot) * sintheta) / p.total_mass
+    thetaacc = (p.gravity * sintheta - costheta * temp) / (
+        p.length * (4.0 / 3.0 - p.masspole * (costheta * costheta) / p.total_mass)
+    )
+    xacc = temp - p.polemass_length * thetaacc * costheta / p.total_mass
+    x = x + p.tau * x_dot
+    x_dot = x_dot + p.tau * xacc
+    theta = theta + p.tau * theta_dot
+    theta_dot = theta_dot + p.tau * thetaacc
+    terminated = (
+        (x < -p.x_threshold)
+        | (x > p.x_threshold)
+        | (theta < -p.theta_threshold_radians)
+        | (theta > p.theta_threshold_radians)
+    )
+    return x, x_dot, theta, theta_dot, terminated
+
+
+def sample_reset(rng: np.random.Generator, low: float, high: float) -> np.ndarray:
+    """Gymnasium's reset draw: all four components ~ U(low, high), float64 ``[4]``."""
+    return rng.uniform(low=low, high=high, size=(4,))
+
+
+def observation_space(p: CartPoleParams) -> Box:
+    """Gymnasium's box: ±2·x_threshold, ±inf, ±2·theta_threshold, ±inf."""
+    high = np.array(
+        [p.x_threshold * 2, np.inf, p.theta_threshold_radians * 2, np.inf], dtype=np.float32
+    )
+    return Box(-high, high, dtype=np.float32)
+
+
+class CartPoleEnv(ClassicControlEnv):
+    """Single CartPole: the Python-float fast path of :func:`step_state`."""
+
+    metadata: dict[str, Any] = {"render_modes": RENDER_MODES, "render_fps": 50}
+
+    def __init__(self, sutton_barto_reward: bool = False, render_mode: str | None = None) -> None:
+        self._sutton_barto_reward = sutton_barto_reward
+        self.params = CartPoleParams()
+        self.kinematics_integrator = "euler"
+        self.action_space = Discrete(2)
+        self.observation_space = observation_space(self.params)
+        self._init_render(render_mode)
+        self._s: tuple[float, float, float, float] | None = None
+        self.steps_beyond_terminated: int | None = None
+
+    @property
+    def state(self) -> np.ndarray | None:
+        """``[x, x_dot, theta, theta_dot]`` as float64 (None before the first reset)."""
+        return None if self._s is None else np.array(self._s)
+
+    @state.setter
+    def state(self, value: Any) -> None:
+        self._s = None if value is None else tuple(float(v) for v in value)  # type: ignore[assignment]
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Advance one step; an action outside ``Discrete(2)`` raises InvalidAction."""
+        if type(action) is not int or not 0 <= action < 2:
+            action = check_discrete_action(action, self.action_space)
+        if self._s is None:
+            raise error.ResetNeeded("Call reset before using step method.")
+        *s, terminated = step_state(SCALAR, self.params, *self._s, action)
+        self._s = s = tuple(s)
+        if not terminated:
+            reward = 0.0 if self._sutton_barto_reward else 1.0
+        elif self.steps_beyond_terminated is None:
+            self.steps_beyond_terminated = 0
+            reward = -1.0 if self._sutton_barto_reward else 1.0
+        else:
+            if self.steps_beyond_terminated == 0:
+                logger.warn(
+                    "You are calling 'step()' even though this environment has already returned "
+                    "terminated = True. You should always call 'reset()' once you receive "
+                    "'terminated = True' -- any further steps are undefined behavior."
+                )
+            self.steps_beyond_terminated += 1
+            reward = -1.0 if self._sutton_barto_reward else 0.0
+        if self.render_mode == "human":
+            self.render()
+        return np.array(s, dtype=np.float32), reward, terminated, False, {}
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start with every component ~ U(-0.05, 0.05) (``options`` low/high override)."""
+        super().reset(seed=seed)
+        low, high = parse_reset_bounds(options, -0.05, 0.05)
+        self._s = tuple(sample_reset(self.np_random, low, high).tolist())
+        self.steps_beyond_terminated = None
+        if self.render_mode == "human":
+            self.render()
+        return np.array(self._s, dtype=np.float32), {}
+
+    def _frame(self) -> np.ndarray:
+        from palaestra.rendering.scenes import render_cartpole
+
+        assert self._s is not None, "Call reset before render."
+        return render_cartpole(np.array(self._s))
+
+
+expose_params(
+    CartPoleEnv,
+    [
+        "gravity",
+        "masscart",
+        "masspole",
+        "total_mass",
+        "length",
+        "polemass_length",
+        "force_mag",
+        "tau",
+        "theta_threshold_radians",
+        "x_threshold",
+    ],
+)
+
+
+class CartPoleBatch(BatchedEnv):
+    """N CartPoles stepped by :func:`step_state` on ``[N]`` arrays.
+
+    Rewards follow the single env, including 0 (or -1) for steps after termination.
+    """
+
+    state_dim = 4
+
+    def __init__(self, num_envs: int, sutton_barto_reward: bool = False) -> None:
+        self.params = CartPoleParams()
+        self.sutton_barto_reward = sutton_barto_reward
+        self.single_action_space = Discrete(2)
+        self.single_observation_space = observation_space(self.params)
+        super().__init__(num_envs)
+        self._done = np.zeros(self.num_envs, dtype=bool)  # [N] terminated before this step
+
+    def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
+        return parse_reset_bounds(options, -0.05, 0.05)
+
+    def _sample_row(self, rng: np.random.Generator, bounds: tuple[float, float]) -> Any:
+        return sample_reset(rng, *bounds)
+
+    def _after_reset(self, rows: np.ndarray) -> None:
+        self._done[rows] = False
+
+    def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        *s, terminated = step_state(ARRAY, self.params, *self._state[:4], actions)  # type: ignore[call-arg]
+        for k, component in enumerate(s):
+            self._state[k] = component
+        if self.sutton_barto_reward:
+            reward = np.where(terminated | self._done, -1.0, 0.0)
+        else:
+            reward = np.where(self._done, 0.0, 1.0)
+        self._done |= terminated
+        return reward, terminated
+
+    def _observe(self, rows: np.ndarray | None) -> None:
+        if rows is None:
+            self._obs[:] = self._state.T
+        else:
+            self._obs[rows] = self._state[:, rows].T

@@ -1,0 +1,172 @@
+"""Pendulum-v1: swing a pendulum up and keep it upright with a bounded torque.
+
+Physics equal to Gymnasium 1.x's ``PendulumEnv``: float64 state ``[theta, theta_dot]``, the
+torque clipped to [-2, 2] and kept float32, so ``3/(m l^2) * u`` and ``0.001 * u**2`` are
+float32 products (numpy 2 / NEP 50 rounds a float32 scalar times a Python float to float32)
+that then join the float64 sums. Reward is ``-(angle^2 + 0.1 theta_dot^2 + 0.001 u^2)``; the
+episode never terminates (the 200-step limit truncates it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from palaestra import error
+from palaestra.envs.classic_control._common import (
+    RENDER_MODES,
+    ClassicControlEnv,
+    check_box_action,
+    expose_params,
+    parse_number,
+)
+from palaestra.envs.classic_control._ops import ARRAY, SCALAR
+from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.spaces import Box
+
+DEFAULT_X = math.pi
+DEFAULT_Y = 1.0
+
+
+@dataclass(frozen=True)
+class PendulumParams:
+    """Gymnasium's Pendulum constants."""
+
+    max_speed: float = 8
+    max_torque: float = 2.0
+    dt: float = 0.05
+    g: float = 10.0
+    m: float = 1.0
+    l: float = 1.0  # noqa: E741 (Gymnasium's name)
+
+
+def angle_normalize(ops: Any, x: Any) -> Any:
+    """Wrap an angle into [-pi, pi) exactly as Gymnasium does."""
+    return ops.mod(x + math.pi, 2 * math.pi) - math.pi
+
+
+def step_state(ops: Any, p: PendulumParams, th: Any, thdot: Any, u: Any) -> Any:
+    """One step: ``(theta, theta_dot, reward, clipped_u)``; ``u`` holds float32 values."""
+    u = ops.clip(u, -p.max_torque, p.max_torque)
+    f32_cost = ops.f32(ops.f32(0.001) * ops.powf2(u))  # 0.001 * u**2 in float32
+    costs = ops.pow2(angle_normalize(ops, th)) + 0.1 * ops.pow2(thdot) + f32_cost
+    torque_term = ops.f32(ops.f32(3.0 / (p.m * p.l**2)) * u)  # float32 product, as in Gymnasium
+    newthdot = thdot + (3 * p.g / (2 * p.l) * ops.sin(th) + torque_term) * p.dt
+    newthdot = ops.clip(newthdot, -p.max_speed, p.max_speed)
+    newth = th + newthdot * p.dt
+    return newth, newthdot, -costs, u
+
+
+def parse_options(options: dict[str, Any] | None) -> tuple[float, float]:
+    """``x_init``/``y_init`` reset options (half-widths of the symmetric reset box)."""
+    if options is None:
+        return DEFAULT_X, DEFAULT_Y
+    x = parse_number("x_init", options["x_init"]) if "x_init" in options else DEFAULT_X
+    y = parse_number("y_init", options["y_init"]) if "y_init" in options else DEFAULT_Y
+    return x, y
+
+
+def sample_reset(rng: np.random.Generator, x: float, y: float) -> np.ndarray:
+    """Gymnasium's reset draw: ``U(-[x, y], [x, y])``, float64 ``[2]``."""
+    high = np.array([x, y])
+    return rng.uniform(low=-high, high=high)
+
+
+def spaces(p: PendulumParams) -> tuple[Box, Box]:
+    """``(observation_space, action_space)`` as Gymnasium builds them."""
+    high = np.array([1.0, 1.0, p.max_speed], dtype=np.float32)
+    obs = Box(-high, high, dtype=np.float32)
+    return obs, Box(-p.max_torque, p.max_torque, shape=(1,), dtype=np.float32)
+
+
+class PendulumEnv(ClassicControlEnv):
+    """Single Pendulum: the Python-float path of :func:`step_state`."""
+
+    metadata: dict[str, Any] = {"render_modes": RENDER_MODES, "render_fps": 30}
+
+    def __init__(self, render_mode: str | None = None, g: float = 10.0) -> None:
+        self.params = PendulumParams(g=g)
+        self.observation_space, self.action_space = spaces(self.params)
+        self._init_render(render_mode)
+        self._s: tuple[float, float] | None = None
+        self.last_u: float | None = None  # for rendering
+
+    @property
+    def state(self) -> np.ndarray | None:
+        """``[theta, theta_dot]`` as float64 (None before the first reset)."""
+        return None if self._s is None else np.array(self._s)
+
+    @state.setter
+    def state(self, value: Any) -> None:
+        self._s = None if value is None else (float(value[0]), float(value[1]))
+
+    def _get_obs(self) -> np.ndarray:
+        assert self._s is not None
+        th, thdot = self._s
+        return np.array((math.cos(th), math.sin(th), thdot), dtype=np.float32)
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Advance one step; a wrongly shaped or non-finite action raises InvalidAction."""
+        u = check_box_action(action, self.action_space)
+        if self._s is None:
+            raise error.ResetNeeded("Call reset before using step method.")
+        th, thdot, reward, self.last_u = step_state(SCALAR, self.params, *self._s, u)
+        self._s = (th, thdot)
+        if self.render_mode == "human":
+            self.render()
+        return self._get_obs(), reward, False, False, {}
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start at ``U(-[pi, 1], [pi, 1])`` (options ``x_init``/``y_init`` override)."""
+        super().reset(seed=seed)
+        x, y = parse_options(options)
+        self._s = tuple(sample_reset(self.np_random, x, y).tolist())
+        self.last_u = None
+        if self.render_mode == "human":
+            self.render()
+        return self._get_obs(), {}
+
+    def _frame(self) -> np.ndarray:
+        from palaestra.rendering.scenes import render_pendulum
+
+        assert self._s is not None, "Call reset before render."
+        return render_pendulum(self._s[0], self.last_u)
+
+
+expose_params(PendulumEnv, ["max_speed", "max_torque", "dt", "g", "m", "l"])
+
+
+class PendulumBatch(BatchedEnv):
+    """N Pendulums stepped by :func:`step_state` on ``[N]`` arrays."""
+
+    state_dim = 2
+
+    def __init__(self, num_envs: int, g: float = 10.0) -> None:
+        self.params = PendulumParams(g=g)
+        self.single_observation_space, self.single_action_space = spaces(self.params)
+        super().__init__(num_envs)
+
+    def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
+        return parse_options(options)
+
+    def _sample_row(self, rng: np.random.Generator, bounds: tuple[float, float]) -> Any:
+        return sample_reset(rng, *bounds)
+
+    def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        th, thdot, reward, _ = step_state(
+            ARRAY, self.params, self._state[0], self._state[1], actions
+        )
+        self._state[0], self._state[1] = th, thdot
+        return reward, np.zeros(self.num_envs, dtype=bool)
+
+    def _observe(self, rows: np.ndarray | None) -> None:
+        sel = slice(None) if rows is None else rows
+        th = self._state[0, sel]
+        self._obs[sel, 0] = np.cos(th)
+        self._obs[sel, 1] = np.sin(th)
+        self._obs[sel, 2] = self._state[1, sel]
