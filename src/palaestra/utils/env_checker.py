@@ -18,7 +18,6 @@ import numpy as np
 from palaestra import error, logger, spaces
 from palaestra.core import Env
 from palaestra.utils.passive_env_checker import (
-    _space_cls,
     check_action_space,
     check_observation_space,
     data_shares_objects,
@@ -255,10 +254,10 @@ def check_space_limit(space: Any, space_type: str) -> None:
                     "https://stable-baselines3.readthedocs.io/en/master/guide/rl_tips.html for "
                     "more information."
                 )
-    elif isinstance(space, _space_cls("Tuple")):
+    elif isinstance(space, spaces.Tuple):
         for subspace in space.spaces:
             check_space_limit(subspace, space_type)
-    elif isinstance(space, _space_cls("Dict")):
+    elif isinstance(space, spaces.Dict):
         for subspace in space.values():
             check_space_limit(subspace, space_type)
 

@@ -29,15 +29,6 @@ __all__ = [
 ]
 
 
-class _NotYetAvailable:
-    """Stands in for a space class palaestra.spaces does not define (yet): matches nothing."""
-
-
-def _space_cls(name: str) -> Any:
-    # palaestra.spaces lands class by class; looked up per call so new classes are checked too.
-    return getattr(spaces, name, _NotYetAvailable)
-
-
 def _check_box_bounds(space: Any, space_type: str) -> None:
     for bound in ("low", "high"):
         shape = getattr(space, bound).shape
@@ -68,7 +59,7 @@ def check_space(space: Any, space_type: str) -> None:
         assert space.shape == (), (
             f"Discrete {space_type} space's shape should be empty, actual shape: {space.shape}"
         )
-    elif isinstance(space, _space_cls("MultiDiscrete")):
+    elif isinstance(space, spaces.MultiDiscrete):
         assert space.shape == space.nvec.shape, (
             f"Multi-discrete {space_type} space's shape must be equal to the nvec shape, "
             f"space shape: {space.shape}, nvec shape: {space.nvec.shape}"
@@ -77,16 +68,18 @@ def check_space(space: Any, space_type: str) -> None:
             f"Multi-discrete {space_type} space's all nvec elements must be greater than 0, "
             f"actual nvec: {space.nvec}"
         )
-    elif isinstance(space, _space_cls("MultiBinary")):
+    elif isinstance(space, spaces.MultiBinary):
         assert np.all(0 < np.asarray(space.shape)), (
             f"Multi-binary {space_type} space's all shape elements must be greater than 0, "
             f"actual shape: {space.shape}"
         )
-    elif isinstance(space, (_space_cls("Tuple"), _space_cls("Dict"))):
-        kind = "Tuple" if isinstance(space, _space_cls("Tuple")) else "Dict"
-        subspaces = list(space.spaces if kind == "Tuple" else space.spaces.values())
-        assert 0 < len(subspaces), f"An empty {kind} {space_type} space is not allowed."
-        for subspace in subspaces:
+    elif isinstance(space, spaces.Tuple):
+        assert 0 < len(space.spaces), f"An empty Tuple {space_type} space is not allowed."
+        for subspace in space.spaces:
+            check_space(subspace, space_type)
+    elif isinstance(space, spaces.Dict):
+        assert 0 < len(space.spaces), f"An empty Dict {space_type} space is not allowed."
+        for subspace in space.spaces.values():
             check_space(subspace, space_type)
 
 
@@ -115,10 +108,10 @@ def check_obs(obs: Any, observation_space: Any, method_name: str) -> None:
                     f"{pre} was expecting numpy array dtype to be {observation_space.dtype}, "
                     f"actual type: {obs.dtype}"
                 )
-    elif isinstance(observation_space, (_space_cls("MultiBinary"), _space_cls("MultiDiscrete"))):
+    elif isinstance(observation_space, (spaces.MultiBinary, spaces.MultiDiscrete)):
         if not isinstance(obs, np.ndarray):
             logger.warn(f"{pre} was expecting a numpy array, actual type: {type(obs)}")
-    elif isinstance(observation_space, _space_cls("Tuple")):
+    elif isinstance(observation_space, spaces.Tuple):
         if not isinstance(obs, tuple):
             logger.warn(f"{pre} was expecting a tuple, actual type: {type(obs)}")
         assert len(obs) == len(observation_space.spaces), (
@@ -127,7 +120,7 @@ def check_obs(obs: Any, observation_space: Any, method_name: str) -> None:
         )
         for sub_obs, sub_space in zip(obs, observation_space.spaces):
             check_obs(sub_obs, sub_space, method_name)
-    elif isinstance(observation_space, _space_cls("Dict")):
+    elif isinstance(observation_space, spaces.Dict):
         assert isinstance(obs, dict), f"{pre} must be a dict, actual type: {type(obs)}"
         assert obs.keys() == observation_space.spaces.keys(), (
             f"{pre} observation keys is not same as the observation space keys, obs keys: "
