@@ -17,7 +17,13 @@ import numpy as np
 
 from palaestra.error import dependency_not_installed
 
-__all__ = ["encode_gif", "mp4_available", "save_video", "validate_frames"]
+__all__ = [
+    "capped_cubic_video_schedule",
+    "encode_gif",
+    "mp4_available",
+    "save_video",
+    "validate_frames",
+]
 
 SUPPORTED_SUFFIXES = (".gif", ".mp4")
 
@@ -54,6 +60,17 @@ def validate_frames(frames: Iterable[np.ndarray]) -> list[np.ndarray]:
                 "all frames of a video must have the same size"
             )
     return out
+
+
+def capped_cubic_video_schedule(episode_id: int) -> bool:
+    """Gymnasium's default recording trigger: episodes 0, 1, 8, 27, ..., 729, then every 1000th.
+
+    >>> [i for i in range(3001) if capped_cubic_video_schedule(i)][:12]
+    [0, 1, 8, 27, 64, 125, 216, 343, 512, 729, 1000, 2000]
+    """
+    if episode_id < 1000:
+        return round(episode_id ** (1.0 / 3)) ** 3 == episode_id
+    return episode_id % 1000 == 0
 
 
 def mp4_available() -> bool:
