@@ -24,11 +24,13 @@ recomputes just those with Python's ``**`` (the same libm call), a few percent o
 from __future__ import annotations
 
 import math
+import struct
 from typing import Any
 
 import numpy as np
 
 _f32 = np.float32
+_pack_f32, _unpack_f32 = struct.Struct("f").pack, struct.Struct("f").unpack
 _SPLIT = 134217729.0  # 2**27 + 1: Veltkamp's splitter for the exact error of x*x
 _POW_HARD = 0.48  # ulps from the exact square beyond which libm pow may round differently
 _POWF_HARD = 0.45  # the same for powf (measured mismatches all beyond 0.498)
@@ -53,7 +55,10 @@ class ScalarOps:
     @staticmethod
     def f32(x: float) -> float:
         """Round to the nearest float32, kept as a Python float."""
-        return float(_f32(x))
+        try:
+            return _unpack_f32(_pack_f32(x))[0]  # type: ignore[no-any-return]  # 3x np.float32
+        except OverflowError:  # beyond float32's range: numpy gives inf
+            return float(_f32(x))
 
     @staticmethod
     def mod(x: float, m: float) -> float:

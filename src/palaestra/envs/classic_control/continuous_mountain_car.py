@@ -19,8 +19,9 @@ innocuous). Finite out-of-range actions are clipped as in Gymnasium; NaN/inf are
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -37,13 +38,19 @@ from palaestra.envs.classic_control.batched import BatchedEnv
 from palaestra.spaces import Box
 
 
-def _f32(x: float) -> float:
-    return float(np.float32(x))
+class Limits(NamedTuple):
+    """The Python constants a step compares the state with, as numpy compares them."""
+
+    max_speed: Any
+    max_position: Any
+    min_position: Any
+    goal_position: Any
+    goal_velocity: Any
 
 
 @dataclass(frozen=True)
 class ContinuousMountainCarParams:
-    """Gymnasium's constants, with the float32 roundings its float32 steps compare against."""
+    """Gymnasium's constants."""
 
     min_action: float = -1.0
     max_action: float = 1.0
@@ -54,59 +61,71 @@ class ContinuousMountainCarParams:
     goal_velocity: float = 0
     power: float = 0.0015
     gravity: float = 0.0025  # a literal in Gymnasium's step
-    f32: dict[str, float] = field(default_factory=dict, compare=False, repr=False)
 
-    def __post_init__(self) -> None:
-        for name in (
-            "min_position",
-            "max_position",
-            "max_speed",
-            "goal_position",
-            "goal_velocity",
-            "power",
-        ):
-            self.f32[name] = _f32(getattr(self, name))
+    def limits(self, ops: Any) -> Limits:
+        """The limits rounded with ``ops.f32``: what a float32 state is compared with."""
+        return Limits(
+            *(ops.f32(float(getattr(self, name))) for name in Limits._fields)  # type: ignore[arg-type]
+        )
 
 
 def step_state(
-    ops: Any, p: ContinuousMountainCarParams, position: Any, velocity: Any, fresh: Any, action: Any
+    ops: Any,
+    p: ContinuousMountainCarParams,
+    position: Any,
+    velocity: Any,
+    action: Any,
+    rnd: Callable[[Any], Any],
+    lim: Limits,
 ) -> Any:
     """One step: ``(position, velocity, terminated, reward)``, state rounded to float32.
 
-    ``action`` holds float32 values; ``fresh`` is True on the first step after a reset.
+    ``action`` holds float32 values. ``rnd`` rounds like the stored state and ``lim`` are the
+    limits as compared with it: identity and ``p`` itself on the first step after a reset
+    (float64 state), float32 rounding and ``p.limits(ops)`` afterwards -- see :func:`precision`.
     """
-    c32 = p.f32
-
-    def rnd(x: Any) -> Any:  # the stored state's precision
-        return ops.where(fresh, x, ops.f32(x))
-
-    def const(name: str) -> Any:  # a Python constant as numpy compares it with the state
-        return ops.where(fresh, getattr(p, name), c32[name])
-
     cos = ops.cos(rnd(3 * position))
     in_range = (action >= p.min_action) & (action <= p.max_action)
+    power32 = ops.f32(p.power)
     acc = ops.where(
         in_range,
-        ops.f32(ops.f32(action * c32["power"]) - ops.f32(p.gravity * cos)),  # float32 force
+        ops.f32(ops.f32(action * power32) - ops.f32(p.gravity * cos)),  # float32 force
         ops.clip(action, p.min_action, p.max_action) * p.power - p.gravity * cos,  # Python force
     )
     v1 = rnd(velocity + rnd(acc))
-    too_fast, too_slow = v1 > const("max_speed"), v1 < -const("max_speed")
+    too_fast, too_slow = v1 > lim.max_speed, v1 < -lim.max_speed
     v2 = ops.where(too_fast, p.max_speed, ops.where(too_slow, -p.max_speed, v1))
     p1 = rnd(position + rnd(v2))
     pos = ops.where(
-        p1 > const("max_position"),
+        p1 > lim.max_position,
         p.max_position,
-        ops.where(p1 < const("min_position"), p.min_position, p1),
+        ops.where(p1 < lim.min_position, p.min_position, p1),
     )
-    stop = (p1 <= const("min_position")) & (v2 < 0)  # the inelastic left wall
+    stop = (p1 <= lim.min_position) & (v2 < 0)  # the inelastic left wall
     vel = ops.where(stop, 0.0, v2)
     # A velocity replaced by a Python constant is compared in float64, a float32 one in float32.
     python_vel = stop | too_fast | too_slow
-    vel_ok = ops.where(python_vel, vel >= p.goal_velocity, vel >= const("goal_velocity"))
-    terminated = (p1 >= const("goal_position")) & vel_ok
+    vel_ok = ops.where(python_vel, vel >= p.goal_velocity, vel >= lim.goal_velocity)
+    terminated = (p1 >= lim.goal_position) & vel_ok
     reward = ops.where(terminated, 100.0, 0.0) - action * action * 0.1
     return ops.f32(pos), ops.f32(vel), terminated, reward
+
+
+def precision(ops: Any, p: ContinuousMountainCarParams, fresh: Any) -> tuple[Any, Limits]:
+    """``(rnd, lim)`` for :func:`step_state` given which rows are fresh from a reset."""
+    lim32 = p.limits(ops)
+    if isinstance(fresh, bool):
+        return (_identity, p) if fresh else (ops.f32, lim32)  # type: ignore[return-value]
+
+    def rnd(x: Any) -> Any:
+        return ops.where(fresh, x, ops.f32(x))
+
+    exact = Limits(*(float(getattr(p, name)) for name in Limits._fields))
+    return rnd, Limits(*(ops.where(fresh, a, b) for a, b in zip(exact, lim32)))
+
+
+def _identity(x: Any) -> Any:
+    return x
 
 
 def sample_reset(rng: np.random.Generator, low: float, high: float) -> tuple[float, float]:
@@ -133,6 +152,7 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
         self._init_render(render_mode)
         self._s: tuple[float, float] | None = None
         self._fresh = True
+        self._lim32 = (self.params, self.params.limits(SCALAR))
 
     @property
     def state(self) -> np.ndarray | None:
@@ -152,7 +172,14 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
         a = check_box_action(action, self.action_space)
         if self._s is None:
             raise error.ResetNeeded("Call reset before using step method.")
-        pos, vel, terminated, reward = step_state(SCALAR, self.params, *self._s, self._fresh, a)
+        p = self.params
+        if self._fresh:
+            rnd, lim = _identity, p
+        else:
+            if self._lim32[0] is not p:  # params replaced (env.unwrapped.power = ...)
+                self._lim32 = (p, p.limits(SCALAR))
+            rnd, lim = SCALAR.f32, self._lim32[1]
+        pos, vel, terminated, reward = step_state(SCALAR, p, *self._s, a, rnd, lim)
         self._s, self._fresh = (pos, vel), False
         if self.render_mode == "human":
             self.render()
@@ -212,8 +239,9 @@ class ContinuousMountainCarBatch(BatchedEnv):
         self._fresh[rows] = True
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        rnd, lim = precision(ARRAY, self.params, self._fresh)
         pos, vel, terminated, reward = step_state(
-            ARRAY, self.params, self._state[0], self._state[1], self._fresh, actions
+            ARRAY, self.params, self._state[0], self._state[1], actions, rnd, lim
         )
         self._state[0], self._state[1] = pos, vel
         self._fresh[:] = False
