@@ -160,6 +160,16 @@ CASES: dict[str, tuple[str, Any, dict[str, Any]]] = {
         {},
     ),
     "DiscretizeAction": ("ToyContinuous", lambda e, L: L.W.DiscretizeAction(e, 5), {}),
+    "DiscretizeAction-no-table": (  # 300**2 actions: centres computed per step
+        "ToyContinuous",
+        lambda e, L: L.W.DiscretizeAction(e, 300),
+        {},
+    ),
+    "DiscretizeAction-multidiscrete-no-table": (
+        "ToyContinuous",
+        lambda e, L: L.W.DiscretizeAction(e, 300, multidiscrete=True),
+        {},
+    ),
     "DiscretizeAction-multidiscrete": (
         "ToyContinuous",
         lambda e, L: L.W.DiscretizeAction(e, (2, 7), multidiscrete=True),

@@ -12,13 +12,12 @@ from typing import Any
 import numpy as np
 
 from palaestra.core import ActionWrapper, ActType, Env, ObsType, WrapperActType
-from palaestra.error import InvalidAction, InvalidBound
-from palaestra.spaces import Box, Discrete, MultiDiscrete, Space
+from palaestra.error import InvalidBound
+from palaestra.spaces import Box, Space
 from palaestra.utils.record_constructor import RecordConstructorArgs
-from palaestra.wrappers.transform_observation import _bins_array
 from palaestra.wrappers.utils import _as_bound, rescale_box
 
-__all__ = ["ClipAction", "DiscretizeAction", "RescaleAction", "TransformAction"]
+__all__ = ["ClipAction", "RescaleAction", "TransformAction"]
 
 
 class TransformAction(ActionWrapper[ObsType, WrapperActType, ActType], RecordConstructorArgs):
@@ -86,73 +85,3 @@ class RescaleAction(TransformAction[ObsType, WrapperActType, ActType], RecordCon
                 f"({max_action}), the rescaling has no inverse where they are equal"
             )
         TransformAction.__init__(self, env=env, func=backward, action_space=new_space)  # type: ignore[misc]
-
-
-class DiscretizeAction(TransformAction[ObsType, WrapperActType, ActType], RecordConstructorArgs):
-    """Expose a bounded ``Box`` action space as ``Discrete(prod(bins))`` or ``MultiDiscrete(bins)``.
-
-    Each discrete choice maps to the centre of a uniform bin per dimension; the ``Discrete``
-    index is the row-major (C order) flattening of the per-dimension bins, as in Gymnasium 1.4.
-    Out-of-range indices raise :class:`palaestra.error.InvalidAction` (Gymnasium clamps them).
-    """
-
-    def __init__(
-        self, env: Env[ObsType, ActType], bins: int | tuple[int, ...], multidiscrete: bool = False
-    ) -> None:
-        space = env.action_space
-        if not isinstance(space, Box):
-            raise TypeError(f"DiscretizeAction is only compatible with Box actions, got {space}")
-        self.low, self.high = np.ravel(space.low), np.ravel(space.high)
-        self.n_dims = int(self.low.size)
-        if not (np.all(np.isfinite(self.low)) and np.all(np.isfinite(self.high))):
-            raise ValueError(
-                "Discretization requires action space to be finite. "
-                f"Found: low={self.low}, high={self.high}"
-            )
-        self.bins = _bins_array(bins, self.n_dims)
-        RecordConstructorArgs.__init__(self, bins=bins, multidiscrete=multidiscrete)
-        self.multidiscrete = multidiscrete
-        self.bin_centers = []
-        # [n_dims, max_bins] centres, +inf padded so revert_action's argmin ignores the padding
-        self._centers = np.full((self.n_dims, int(self.bins.max())), np.inf)
-        for i in range(self.n_dims):
-            edges = np.linspace(self.low[i], self.high[i], self.bins[i] + 1)
-            centers = 0.5 * (edges[:-1] + edges[1:])
-            self.bin_centers.append(centers)
-            self._centers[i, : self.bins[i]] = centers
-        self._dims = np.arange(self.n_dims)
-        self._strides = np.array(
-            [int(np.prod(self.bins[i + 1 :])) for i in range(self.n_dims)], dtype=np.int64
-        )
-        self._n = int(np.prod(self.bins))
-        self._inner_dtype, self._inner_shape = space.dtype, space.shape
-        new_space: Space[Any] = MultiDiscrete(self.bins) if multidiscrete else Discrete(self._n)
-        TransformAction.__init__(self, env=env, func=self._continuous, action_space=new_space)  # type: ignore[arg-type]
-
-    def _continuous(self, action: Any) -> np.ndarray:
-        if self.multidiscrete:
-            indices = np.asarray(action, dtype=np.int64).ravel()
-            if (
-                indices.shape != (self.n_dims,)
-                or np.any(indices < 0)
-                or np.any(indices >= self.bins)
-            ):
-                raise InvalidAction(
-                    f"Action {action!r} is not in the action space {self.action_space}"
-                )
-        else:
-            if not np.issubdtype(np.asarray(action).dtype, np.integer) or not 0 <= action < self._n:
-                raise InvalidAction(
-                    f"Action {action!r} is not in the action space {self.action_space}"
-                )
-            indices = (int(action) // self._strides) % self.bins
-        values = self._centers[self._dims, indices]
-        return values.astype(self._inner_dtype).reshape(self._inner_shape)
-
-    def revert_action(self, action: Any) -> Any:
-        """The discrete action whose bin centre is closest to the continuous ``action``."""
-        x = np.ravel(action)
-        indices = np.argmin(np.abs(self._centers - x[:, None]), axis=1)
-        if self.multidiscrete:
-            return indices.astype(int)
-        return np.ravel_multi_index(tuple(indices), tuple(self.bins))

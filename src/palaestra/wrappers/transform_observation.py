@@ -18,7 +18,6 @@ from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.wrappers.utils import rescale_box
 
 __all__ = [
-    "DiscretizeObservation",
     "DtypeObservation",
     "FilterObservation",
     "FlattenObservation",
@@ -259,90 +258,3 @@ class DtypeObservation(
         self.dtype = dtype
         cast = new_space.dtype.type
         TransformObservation.__init__(self, env=env, func=cast, observation_space=new_space)  # type: ignore[misc]
-
-
-class DiscretizeObservation(
-    TransformObservation[WrapperObsType, ActType, ObsType], RecordConstructorArgs
-):
-    """Bin a bounded ``Box`` observation uniformly: one ``Discrete`` index, or ``MultiDiscrete``.
-
-    Each dimension ``i`` is cut into ``bins[i]`` equal intervals between its finite bounds;
-    the ``Discrete`` index is the row-major (C order) flattening of the per-dimension indices,
-    as in Gymnasium 1.4. Values outside the bounds fall into the first or last bin.
-    """
-
-    def __init__(
-        self, env: Env[ObsType, ActType], bins: int | tuple[int, ...], multidiscrete: bool = False
-    ) -> None:
-        space = env.observation_space
-        if not isinstance(space, Box):
-            raise TypeError(
-                f"DiscretizeObservation is only compatible with Box observations, got {space}"
-            )
-        self.low, self.high = np.ravel(space.low), np.ravel(space.high)
-        self.n_dims = int(self.low.size)
-        if not (np.all(np.isfinite(self.low)) and np.all(np.isfinite(self.high))):
-            raise ValueError(
-                "Discretization requires observation space to be finite. "
-                f"Found: low={self.low}, high={self.high}"
-            )
-        self.bins = _bins_array(bins, self.n_dims)
-        RecordConstructorArgs.__init__(self, bins=bins, multidiscrete=multidiscrete)
-        self.multidiscrete = multidiscrete
-        # Inner edges per dimension, padded with +inf so all dimensions vectorize together;
-        # the bin index is the number of inner edges <= x, which is what np.digitize returns.
-        width = int(self.bins.max()) - 1
-        self._edges = np.full((self.n_dims, width), np.inf)
-        for i in range(self.n_dims):
-            self._edges[i, : self.bins[i] - 1] = np.linspace(
-                self.low[i], self.high[i], self.bins[i] + 1
-            )[1:-1]
-        self._clip_high = self.high - 1e-8  # keeps x == high inside the last bin, as Gymnasium
-        self._strides = np.array(
-            [int(np.prod(self.bins[i + 1 :])) for i in range(self.n_dims)], dtype=np.int64
-        )
-        new_space: Space[Any] = (
-            MultiDiscrete(self.bins) if multidiscrete else Discrete(int(np.prod(self.bins)))
-        )
-        TransformObservation.__init__(
-            self, env=env, func=self._discretize, observation_space=new_space
-        )
-
-    def _discretize(self, observation: Any) -> Any:
-        x = np.clip(np.ravel(observation), self.low, self._clip_high)
-        indices = np.count_nonzero(self._edges <= x[:, None], axis=1).astype(np.int64)
-        if self.multidiscrete:
-            return indices
-        return int(indices @ self._strides)
-
-    def revert_observation(self, obs: Any) -> tuple[np.ndarray, np.ndarray]:
-        """The ``(low, high)`` edges of the bin that the discrete observation ``obs`` stands for."""
-        if self.multidiscrete:
-            indices = np.asarray(obs, dtype=np.int64)
-        else:
-            indices = np.array(np.unravel_index(int(obs), tuple(self.bins)), dtype=np.int64)
-        lows, highs = np.empty(self.n_dims), np.empty(self.n_dims)
-        for i, idx in enumerate(indices):
-            edges = np.linspace(self.low[i], self.high[i], self.bins[i] + 1)
-            lows[i], highs[i] = edges[idx], edges[idx + 1]
-        dtype = self.env.observation_space.dtype
-        return lows.astype(dtype), highs.astype(dtype)
-
-
-def _bins_array(bins: int | tuple[int, ...], n_dims: int) -> np.ndarray:
-    """Validate ``bins`` (one count, or one per dimension) and return it as an int array."""
-    if np.issubdtype(type(bins), np.integer):
-        out = np.full(n_dims, int(bins))  # type: ignore[arg-type]
-    else:
-        if not isinstance(bins, (tuple, list)) or not all(
-            np.issubdtype(type(b), np.integer) for b in bins
-        ):
-            raise TypeError(f"`bins` must be an int or a tuple of ints, got {bins!r}")
-        if len(bins) != n_dims:
-            raise ValueError(
-                f"bins must match the space dimensions: expected {n_dims}, got {len(bins)}"
-            )
-        out = np.array(bins, dtype=np.int64)
-    if np.any(out < 1):
-        raise ValueError(f"Every entry of `bins` must be at least 1, got {bins!r}")
-    return out
