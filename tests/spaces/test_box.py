@@ -209,7 +209,8 @@ def test_legacy_pickle_state_is_accepted() -> None:
     state["np_random"] = state.pop("_np_random")
     state.pop("low_repr")
     state.pop("high_repr")
-    state.pop("_all_bounded")  # derived cache, absent from old pickles
+    state.pop("_all_bounded")  # derived caches, absent from old pickles
+    state.pop("_interval_kinds")
     restored = Box.__new__(Box)
     restored.__setstate__(state)
     assert restored == box and repr(restored) == "Box(0.0, 1.0, (2,), float32)"

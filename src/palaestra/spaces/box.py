@@ -9,7 +9,7 @@ import numpy as np
 import numpy.typing as npt
 
 from palaestra import error, logger
-from palaestra.spaces.space import Space
+from palaestra.spaces.space import Space, can_cast
 
 BoundLike = SupportsFloat | np.ndarray
 
@@ -203,7 +203,16 @@ class Box(Space[npt.NDArray[Any]]):
 
     def _cache_sampling_layout(self) -> None:
         # Most boxes are fully bounded; remembering that lets `sample` skip the masked writes.
-        self._all_bounded = bool(np.all(self.bounded_below) and np.all(self.bounded_above))
+        # For the others, keep only the non-empty interval kinds, in Gymnasium's draw order.
+        below, above = self.bounded_below, self.bounded_above
+        self._all_bounded = bool(below.all() and above.all())
+        kinds = [
+            ("normal", ~below & ~above),
+            ("exponential", below & ~above),
+            ("negative_exponential", ~below & above),
+            ("uniform", below & above),
+        ]
+        self._interval_kinds = [(kind, mask, int(mask.sum())) for kind, mask in kinds if mask.any()]
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -267,18 +276,16 @@ class Box(Space[npt.NDArray[Any]]):
         return sample
 
     def _sample_mixed(self, rng: np.random.Generator, high: np.ndarray) -> np.ndarray:
-        below, above = self.bounded_below, self.bounded_above
         sample = np.empty(self._shape)  # float64, cast to the box dtype by the caller
-        unbounded = ~below & ~above
-        upp_bounded = ~below & above
-        low_bounded = below & ~above
-        bounded = below & above
-        sample[unbounded] = rng.normal(size=int(unbounded.sum()))
-        sample[low_bounded] = rng.exponential(size=int(low_bounded.sum())) + self.low[low_bounded]
-        sample[upp_bounded] = -rng.exponential(size=int(upp_bounded.sum())) + high[upp_bounded]
-        sample[bounded] = rng.uniform(
-            low=self.low[bounded], high=high[bounded], size=int(bounded.sum())
-        )
+        for kind, mask, count in self._interval_kinds:
+            if kind == "normal":
+                sample[mask] = rng.normal(size=count)
+            elif kind == "exponential":
+                sample[mask] = rng.exponential(size=count) + self.low[mask]
+            elif kind == "negative_exponential":
+                sample[mask] = -rng.exponential(size=count) + high[mask]
+            else:
+                sample[mask] = rng.uniform(low=self.low[mask], high=high[mask], size=count)
         return sample
 
     def contains(self, x: Any) -> bool:
@@ -292,9 +299,8 @@ class Box(Space[npt.NDArray[Any]]):
         # Cheapest checks first; NaN fails both comparisons, so it is never contained.
         return bool(
             x.shape == self._shape
-            and np.can_cast(x.dtype, self.dtype)
-            and (x >= self.low).all()
-            and (x <= self.high).all()
+            and can_cast(x.dtype, self.dtype)
+            and ((x >= self.low) & (x <= self.high)).all()
         )
 
     def to_jsonable(self, sample_n: Iterable[np.ndarray]) -> list[Any]:
@@ -320,6 +326,13 @@ class Box(Space[npt.NDArray[Any]]):
             and np.allclose(self.low, other.low)
             and np.allclose(self.high, other.high)
         )
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The sampling layout is derived from the bounds; keep pickles to Gymnasium's fields.
+        state = self.__dict__.copy()
+        state.pop("_all_bounded", None)
+        state.pop("_interval_kinds", None)
+        return state
 
     def __setstate__(self, state: Iterable[tuple[str, Any]] | Mapping[str, Any]) -> None:
         super().__setstate__(state)

@@ -8,7 +8,7 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space
+from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space, can_cast
 
 
 class Discrete(Space[np.integer]):
@@ -59,7 +59,6 @@ class Discrete(Space[np.integer]):
         iinfo = np.iinfo(self.dtype)
         self._lo = max(int(self.start), int(iinfo.min))
         self._hi = min(int(self.start) + int(self.n), int(iinfo.max) + 1)  # exclusive
-        self._castable: dict[np.dtype, bool] = {}
 
     @property
     def is_np_flattenable(self) -> Literal[True]:
@@ -147,10 +146,7 @@ class Discrete(Space[np.integer]):
         if isinstance(x, int):  # includes bool, as in Gymnasium
             return self._lo <= x < self._hi
         if isinstance(x, (np.generic, np.ndarray)) and x.shape == () and x.dtype.kind in "iu":
-            castable = self._castable.get(x.dtype)
-            if castable is None:
-                castable = self._castable[x.dtype] = bool(np.can_cast(x.dtype, self.dtype))
-            return castable and self._lo <= int(x) < self._hi
+            return can_cast(x.dtype, self.dtype) and self._lo <= int(x) < self._hi
         return False
 
     def __repr__(self) -> str:
@@ -172,7 +168,7 @@ class Discrete(Space[np.integer]):
     def __getstate__(self) -> dict[str, Any]:
         # The cached bounds are derived data; keep pickles to Gymnasium's attribute set.
         state = self.__dict__.copy()
-        for key in ("_lo", "_hi", "_castable"):
+        for key in ("_lo", "_hi"):
             state.pop(key, None)
         return state
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Generic, TypeVar
 
@@ -100,6 +101,12 @@ class Space(Generic[T_co]):
     def from_jsonable(self, sample_n: Any) -> list[Any]:
         """Convert JSON data from ``to_jsonable`` back to a batch of samples."""
         return sample_n
+
+
+@functools.lru_cache(maxsize=256)
+def can_cast(from_dtype: np.dtype, to_dtype: np.dtype) -> bool:
+    """``np.can_cast`` for dtypes, memoised: ``contains`` runs on every step."""
+    return bool(np.can_cast(from_dtype, to_dtype))
 
 
 class InvalidMask(error.Error, AssertionError):
