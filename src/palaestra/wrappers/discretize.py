@@ -31,6 +31,13 @@ class DiscretizeObservation(
     Each dimension ``i`` is cut into ``bins[i]`` equal intervals between its finite bounds;
     the ``Discrete`` index is the row-major (C order) flattening of the per-dimension indices,
     as in Gymnasium 1.4. Values outside the bounds fall into the first or last bin.
+
+    >>> import palaestra as gym
+    >>> env = DiscretizeObservation(gym.make("MountainCar-v0"), bins=10)
+    >>> env.observation_space
+    Discrete(100)
+    >>> env.reset(seed=42)
+    (45, {})
     """
 
     def __init__(
@@ -116,6 +123,11 @@ class DiscretizeAction(TransformAction[ObsType, WrapperActType, ActType], Record
     Each discrete choice maps to the centre of a uniform bin per dimension; the ``Discrete``
     index is the row-major (C order) flattening of the per-dimension bins, as in Gymnasium 1.4.
     Out-of-range indices raise :class:`palaestra.error.InvalidAction` (Gymnasium clamps them).
+
+    >>> import palaestra as gym
+    >>> env = DiscretizeAction(gym.make("Pendulum-v1"), bins=5)
+    >>> env.action_space, env.action(0), env.action(4)
+    (Discrete(5), array([-1.6], dtype=float32), array([1.6], dtype=float32))
     """
 
     _MAX_TABLE = 1 << 16  # entries of the precomputed action table

@@ -17,6 +17,16 @@ class RecordEpisodeStatistics(Wrapper[ObsType, ActType, ObsType, ActType], Recor
     ``info[stats_key]`` and append them to :attr:`return_queue`, :attr:`length_queue` and
     :attr:`time_queue` (the last ``buffer_length`` episodes). ``t`` is the episode's own
     duration, rounded to microseconds.
+
+    >>> import palaestra as gym
+    >>> env = RecordEpisodeStatistics(gym.make("CartPole-v1"))
+    >>> _ = env.reset(seed=0)
+    >>> done = False
+    >>> while not done:
+    ...     _, _, terminated, truncated, info = env.step(1)
+    ...     done = terminated or truncated
+    >>> info["episode"]["r"], info["episode"]["l"], list(env.length_queue)
+    (8.0, 8, [8])
     """
 
     def __init__(
@@ -73,6 +83,12 @@ class Autoreset(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstructorAr
 
     The step that ends an episode is returned unchanged; the following ``step`` ignores its
     action and returns ``(reset_obs, 0.0, False, False, reset_info)``.
+
+    >>> import palaestra as gym
+    >>> env = Autoreset(gym.make("CartPole-v1"))
+    >>> _ = env.reset(seed=0)
+    >>> [env.step(1)[2] for _ in range(9)]  # terminated on the 8th step, reset on the 9th
+    [False, False, False, False, False, False, False, True, False]
     """
 
     def __init__(self, env: Env[ObsType, ActType]) -> None:

@@ -23,6 +23,16 @@ class FrameStackObservation(
     for 4 frames of ``(96, 96, 3)``. At reset the older slots are filled with ``padding_type``:
     ``"reset"`` (the first observation repeated, default), ``"zero"`` (the space's zero element)
     or a custom element of the inner observation space.
+
+    >>> import palaestra as gym
+    >>> env = FrameStackObservation(gym.make("CartPole-v1"), 3, padding_type="zero")
+    >>> env.observation_space.shape
+    (3, 4)
+    >>> env.reset(seed=123)[0]
+    array([[ 0.        ,  0.        ,  0.        ,  0.        ],
+           [ 0.        ,  0.        ,  0.        ,  0.        ],
+           [ 0.01823519, -0.0446179 , -0.02796401, -0.03156282]],
+          dtype=float32)
     """
 
     def __init__(

@@ -46,6 +46,16 @@ class Monitor(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstructorArgs
     ``reset_keywords`` are required ``reset`` kwargs logged with the episode; ``info_keywords``
     are keys of the final step's ``info`` logged too. With ``allow_early_resets=False`` a reset
     before the episode ends raises. ``override_existing=False`` appends to an existing file.
+
+    >>> import palaestra as gym
+    >>> env = Monitor(gym.make("CartPole-v1"))
+    >>> _ = env.reset(seed=0)
+    >>> done = False
+    >>> while not done:
+    ...     _, _, terminated, truncated, info = env.step(1)
+    ...     done = terminated or truncated
+    >>> sorted(info["episode"]), env.get_episode_rewards(), env.get_total_steps()
+    (['l', 'r', 't'], [8.0], 8)
     """
 
     EXT = EXT

@@ -91,6 +91,13 @@ class TimeAwareObservation(
     become ``Dict(obs=..., time=...)``; ``flatten=True`` (default) flattens the result to a
     ``Box``. Time is an ``int32`` count, or the fraction of the episode's step limit when
     ``normalize_time``. Needs a ``TimeLimit`` in the stack or ``spec.max_episode_steps``.
+
+    >>> import palaestra as gym
+    >>> env = TimeAwareObservation(gym.make("CartPole-v1"), flatten=False)
+    >>> env.observation_space["time"]
+    Box(0, 500, (1,), int32)
+    >>> env.reset(seed=42)[0]["time"], env.step(1)[0]["time"]
+    (array([0], dtype=int32), array([1], dtype=int32))
     """
 
     def __init__(

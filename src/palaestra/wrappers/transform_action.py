@@ -51,7 +51,13 @@ def _require_box(env: Env[Any, Any], wrapper: str) -> Box:
 
 
 class ClipAction(TransformAction[ObsType, WrapperActType, ActType], RecordConstructorArgs):
-    """Clip actions into the inner ``Box``; the agent sees an unbounded ``Box`` of that shape."""
+    """Clip actions into the inner ``Box``; the agent sees an unbounded ``Box`` of that shape.
+
+    >>> import palaestra as gym
+    >>> env = ClipAction(gym.make("Pendulum-v1"))
+    >>> env.action_space, env.action(np.array([5.0], dtype=np.float32))
+    (Box(-inf, inf, (1,), float32), array([2.], dtype=float32))
+    """
 
     def __init__(self, env: Env[ObsType, ActType]) -> None:
         space = _require_box(env, "ClipAction")
@@ -67,7 +73,13 @@ class ClipAction(TransformAction[ObsType, WrapperActType, ActType], RecordConstr
 
 class RescaleAction(TransformAction[ObsType, WrapperActType, ActType], RecordConstructorArgs):
     """Let the agent act in ``[min_action, max_action]``; actions are mapped affinely onto the
-    inner ``Box``. Bounds are scalars or arrays of the action shape."""
+    inner ``Box``. Bounds are scalars or arrays of the action shape.
+
+    >>> import palaestra as gym
+    >>> env = RescaleAction(gym.make("Pendulum-v1"), np.float32(0), np.float32(1))
+    >>> env.action_space, env.action(np.array([0.0, 0.5, 1.0], dtype=np.float32))
+    (Box(0.0, 1.0, (1,), float32), array([-2.,  0.,  2.], dtype=float32))
+    """
 
     def __init__(self, env: Env[ObsType, ActType], min_action: Any, max_action: Any) -> None:
         space = _require_box(env, "RescaleAction")
