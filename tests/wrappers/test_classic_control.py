@@ -65,3 +65,28 @@ def test_time_aware_reads_max_episode_steps_from_the_spec() -> None:
     env = pal().W.TimeAwareObservation(palaestra.make("CartPole-v1", max_episode_steps=17))
     assert env.max_timesteps == 17
     assert env.spec is not None and env.spec.additional_wrappers[-1].name == "TimeAwareObservation"
+
+
+def test_make_rebuilds_a_wrapped_env_from_its_spec() -> None:
+    W = pal().W
+    env = W.NormalizeReward(
+        W.FrameStackObservation(
+            W.ClipAction(
+                W.RescaleAction(palaestra.make("Pendulum-v1"), np.float32(0), np.float32(1))
+            ),
+            3,
+            padding_type="zero",
+        ),
+        gamma=0.9,
+    )
+    rebuilt = palaestra.make(env.spec)
+    assert str(rebuilt) == str(env)
+    names = [w.name for w in rebuilt.spec.additional_wrappers]
+    assert names == ["RescaleAction", "ClipAction", "FrameStackObservation", "NormalizeReward"]
+    runs = []
+    for e in (env, rebuilt):
+        rng = np.random.default_rng(0)
+        runs.append(
+            [e.reset(seed=2)] + [e.step(sample_action(e.action_space, rng)) for _ in range(20)]
+        )
+    assert_same(runs[1], runs[0])
