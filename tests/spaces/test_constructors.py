@@ -57,6 +57,26 @@ def test_invalid_spaces_raise_like_gymnasium(recipe: Any, exc: type, match: str)
         recipe(palaestra.spaces)
 
 
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: palaestra.spaces.Discrete(100, start=100, dtype=np.int8), "199 does not fit"),
+        (lambda: palaestra.spaces.MultiDiscrete([3, 100], start=[0, 100], dtype=np.int8), "int8"),
+        (lambda: palaestra.spaces.MultiDiscrete([2.5, 3]), "nvec must be whole numbers"),
+        (lambda: palaestra.spaces.MultiDiscrete([2, 3], start=[0.5, 0]), "start must be whole"),
+        (lambda: palaestra.spaces.Text(3, charset=""), "at least one character"),
+    ],
+)
+def test_spaces_gymnasium_accepts_but_cannot_sample_are_rejected(call: Any, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def test_whole_float_counts_are_accepted() -> None:
+    assert palaestra.spaces.MultiDiscrete(np.array([2.0, 3.0])) == MultiDiscrete([2, 3])
+    assert 127 in palaestra.spaces.Discrete(100, start=28, dtype=np.int8)
+
+
 def test_graph_rejects_non_space_subspaces_clearly() -> None:
     with pytest.raises(TypeError, match="`node_space` to be a palaestra Space"):
         palaestra.spaces.Graph(5, None)  # type: ignore[arg-type]
@@ -91,7 +111,7 @@ DISCRETE_MEMBERS: list[Any] = [
         lambda S: S.Discrete(3),
         lambda S: S.Discrete(3, start=-1),
         lambda S: S.Discrete(3, dtype=np.int32),
-        lambda S: S.Discrete(100, start=100, dtype=np.int8),  # range runs past the dtype
+        lambda S: S.Discrete(100, start=28, dtype=np.int8),  # range ends at the dtype max
         lambda S: S.Discrete(5, dtype=np.uint8),
     ],
 )

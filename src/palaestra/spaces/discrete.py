@@ -50,12 +50,20 @@ class Discrete(Space[np.integer]):
             raise TypeError(f"Invalid Discrete dtype ({self.dtype}), must be an integer dtype")
         self.n = self.dtype.type(n)  # type: ignore[assignment]
         self.start = self.dtype.type(start)  # type: ignore[assignment]
+        largest, dtype_max = int(start) + int(n) - 1, int(np.iinfo(self.dtype).max)
+        if largest > dtype_max:
+            # Gymnasium accepts this, then samples wrap around to values outside the space.
+            raise ValueError(
+                f"Discrete largest element start + n - 1 = {largest} does not fit dtype "
+                f"{self.dtype} (max {dtype_max}); use a wider dtype or a smaller start/n"
+            )
         self._cache_bounds()
         super().__init__((), self.dtype, seed)
 
     def _cache_bounds(self) -> None:
-        # `contains` is on the step hot path: precompute the accepted integer range
-        # (clipped to what the dtype can hold) instead of calling np.iinfo per call.
+        # `contains` is on the step hot path: precompute the accepted integer range instead of
+        # calling np.iinfo per call (clipped to the dtype for spaces unpickled from Gymnasium,
+        # which allows ranges past the dtype).
         iinfo = np.iinfo(self.dtype)
         self._lo = max(int(self.start), int(iinfo.min))
         self._hi = min(int(self.start) + int(self.n), int(iinfo.max) + 1)  # exclusive

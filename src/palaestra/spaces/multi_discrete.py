@@ -14,6 +14,15 @@ from palaestra.spaces.discrete import Discrete
 from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space
 
 
+def _integer_array(values: npt.ArrayLike, dtype: np.dtype, name: str) -> np.ndarray:
+    """``values`` as a new array of ``dtype``, refusing fractions that a cast would truncate."""
+    raw = np.asarray(values)
+    if raw.dtype.kind == "f" and not (raw == np.floor(raw)).all():
+        # Gymnasium silently turns MultiDiscrete([2.5]) into MultiDiscrete([2]).
+        raise ValueError(f"MultiDiscrete {name} must be whole numbers, actual values: {raw}")
+    return np.array(raw, dtype=dtype, copy=True)
+
+
 class MultiDiscrete(Space[npt.NDArray[np.integer]]):
     """Independent categorical variables: entry ``i`` is in ``start[i] .. start[i]+nvec[i]-1``.
 
@@ -45,11 +54,11 @@ class MultiDiscrete(Space[npt.NDArray[np.integer]]):
             raise ValueError(
                 f"Invalid MultiDiscrete dtype ({self.dtype}), must be an integer dtype"
             )
-        self.nvec = np.array(nvec, dtype=self.dtype, copy=True)
+        self.nvec = _integer_array(nvec, self.dtype, "nvec")
         if start is None:
             self.start = np.zeros(self.nvec.shape, dtype=self.dtype)
         else:
-            self.start = np.array(start, dtype=self.dtype, copy=True)
+            self.start = _integer_array(start, self.dtype, "start")
         if self.start.shape != self.nvec.shape:
             raise ValueError(
                 "start and nvec (counts) should have the same shape, "
@@ -57,6 +66,14 @@ class MultiDiscrete(Space[npt.NDArray[np.integer]]):
             )
         if not (self.nvec > 0).all():
             raise ValueError("nvec (counts) have to be positive")
+        # Python ints cannot overflow; Gymnasium accepts spaces whose samples wrap around.
+        largest = self.start.astype(object) + self.nvec.astype(object) - 1
+        dtype_max = int(np.iinfo(self.dtype).max)
+        if (largest > dtype_max).any():
+            raise ValueError(
+                f"MultiDiscrete largest elements start + nvec - 1 = {largest} "
+                f"do not fit dtype {self.dtype} (max {dtype_max}); use a wider dtype"
+            )
         super().__init__(self.nvec.shape, self.dtype, seed)
 
     @property

@@ -58,6 +58,9 @@ class Text(Space[str]):
             char_list = sorted(charset)
         else:
             char_list = list(dict.fromkeys(charset))  # keep order, drop duplicates
+        if not char_list:
+            # Gymnasium accepts an empty charset and then fails when sampling.
+            raise ValueError("Text charset must contain at least one character, actual: empty")
         invalid = [char for char in char_list if len(char) != 1]
         if invalid:
             # A multi-character element would make samples longer than max_length.
