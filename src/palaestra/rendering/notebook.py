@@ -35,10 +35,10 @@ __all__ = ["LiveView", "in_notebook", "play", "show", "to_frame"]
 
 def in_notebook() -> bool:
     """Whether this code runs in a Jupyter kernel (where a pygame window would block)."""
-    ipython = sys.modules.get("IPython")
-    if ipython is None:
+    get_ipython = getattr(sys.modules.get("IPython"), "get_ipython", None)
+    if get_ipython is None:  # IPython not imported (or a stand-in without it): no kernel
         return False
-    shell = ipython.get_ipython()
+    shell = get_ipython()
     return shell is not None and type(shell).__name__ == "ZMQInteractiveShell"
 
 
