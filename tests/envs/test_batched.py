@@ -1,0 +1,134 @@
+"""The batched engines agree exactly, row by row, with single envs seeded ``seed + i``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from tests.envs.cases import CLASSES, batch_actions
+
+from palaestra import error
+
+N = 8
+
+
+def _single_action(action: np.ndarray) -> object:
+    return int(action) if action.ndim == 0 else action
+
+
+@pytest.mark.parametrize("env_id", list(CLASSES))
+def test_rows_equal_single_envs(env_id: str) -> None:
+    single_cls, batch_cls = CLASSES[env_id]
+    singles = [single_cls() for _ in range(N)]
+    batch = batch_cls(N)
+    obs = batch.reset(seed=42)
+    assert obs.shape == (N, *batch.single_observation_space.shape)
+    assert obs.dtype == np.float32
+    ref = np.stack([env.reset(seed=42 + i)[0] for i, env in enumerate(singles)])
+    assert obs.tobytes() == ref.tobytes()
+    rng = np.random.default_rng(3)
+    resets = 0
+    for t in range(400):
+        actions = batch_actions(env_id, rng, obs)
+        obs, reward, terminated = batch.step(actions)
+        results = [env.step(_single_action(a)) for env, a in zip(singles, actions)]
+        where = f"{env_id} step {t}"
+        assert obs.tobytes() == np.stack([r[0] for r in results]).tobytes(), where
+        assert reward.dtype == np.float64 and terminated.dtype == np.bool_
+        np.testing.assert_array_equal(reward, [r[1] for r in results], err_msg=where)
+        np.testing.assert_array_equal(terminated, [r[2] for r in results], err_msg=where)
+        done = terminated | (rng.random(N) < 0.01)  # plus a few "truncations"
+        if done.any():
+            resets += int(done.sum())
+            obs = batch.reset(mask=done)  # rows keep their own generators
+            for i in np.flatnonzero(done):
+                singles[i].reset()
+            ref = np.stack([env.state for env in singles]).astype(np.float64)
+            np.testing.assert_array_equal(batch.state, ref, err_msg=where)
+    assert resets > 0
+
+
+def test_seed_list_and_partial_reseed() -> None:
+    single_cls, batch_cls = CLASSES["CartPole-v1"]
+    batch = batch_cls(3)
+    batch.reset(seed=[5, None, 9])
+    assert batch.seeds[0] == 5 and batch.seeds[2] == 9
+    mask = np.array([False, True, False])
+    before = batch.state.copy()
+    obs = batch.reset(seed=100, mask=mask)  # row 1 gets seed 100 + 1
+    np.testing.assert_array_equal(batch.state[[0, 2]], before[[0, 2]])
+    assert obs[1].tobytes() == single_cls().reset(seed=101)[0].tobytes()
+
+
+def test_state_is_a_writable_rows_by_components_view() -> None:
+    _, batch_cls = CLASSES["MountainCar-v0"]
+    batch = batch_cls(4)
+    batch.reset(seed=0)
+    assert batch.state.shape == (4, 2) and batch.state.dtype == np.float64
+    batch.state[2] = (0.55, 0.01)  # next to the flag, moving right
+    _, _, terminated = batch.step(np.full(4, 2))
+    assert terminated.tolist() == [False, False, True, False]
+
+
+def test_spaces_and_repr() -> None:
+    _, batch_cls = CLASSES["Pendulum-v1"]
+    batch = batch_cls(5)
+    assert batch.num_envs == 5
+    assert batch.observation_space.shape == (5, 3)
+    assert batch.single_action_space.shape == (1,)
+    assert repr(batch) == "PendulumBatch(num_envs=5)"
+
+
+def test_step_before_reset_and_bad_sizes() -> None:
+    _, batch_cls = CLASSES["CartPole-v1"]
+    with pytest.raises(ValueError, match="num_envs"):
+        batch_cls(0)
+    batch = batch_cls(3)
+    with pytest.raises(error.ResetNeeded):
+        batch.step(np.zeros(3, dtype=np.int64))
+    with pytest.raises(ValueError, match="3 seeds"):
+        batch.reset(seed=[1, 2])
+
+
+@pytest.mark.parametrize(
+    "actions, match",
+    [
+        (np.array([0, 1, 2]), r"rows \[2\]"),  # out of range, named by row
+        (np.array([0, -1, 1]), r"rows \[1\]"),
+        (np.array([0, 1]), "shape"),
+        (np.array([0.0, 1.0, 1.0]), "dtype"),
+        ([[0], [1], [1]], "shape"),
+    ],
+)
+def test_discrete_batch_action_validation(actions: object, match: str) -> None:
+    _, batch_cls = CLASSES["CartPole-v1"]
+    batch = batch_cls(3)
+    batch.reset(seed=0)
+    with pytest.raises(error.InvalidAction, match=match):
+        batch.step(actions)
+
+
+@pytest.mark.parametrize(
+    "actions, match",
+    [
+        (np.array([[0.0], [np.nan], [0.0]]), r"rows \[1\].*not finite"),
+        (np.array([[0.0], [0.0], [np.inf]]), r"rows \[2\]"),
+        (np.zeros(3), "shape"),
+        (np.zeros((3, 2)), "shape"),
+        ([["a"], ["b"], ["c"]], "not numeric"),
+    ],
+)
+def test_box_batch_action_validation(actions: object, match: str) -> None:
+    _, batch_cls = CLASSES["MountainCarContinuous-v0"]
+    batch = batch_cls(3)
+    batch.reset(seed=0)
+    with pytest.raises(error.InvalidAction, match=match):
+        batch.step(actions)
+
+
+def test_batch_reset_options_checked_once() -> None:
+    _, batch_cls = CLASSES["MountainCar-v0"]
+    batch = batch_cls(2)
+    with pytest.raises(ValueError, match="Lower bound"):
+        batch.reset(seed=0, options={"low": 0.1, "high": -0.1})
+    obs = batch.reset(seed=0, options={"low": -0.3, "high": -0.2})
+    assert ((obs[:, 0] >= -0.3) & (obs[:, 0] <= -0.2)).all()

@@ -1,0 +1,63 @@
+"""The assumptions that let one ``step_state`` serve Python floats and numpy arrays exactly."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from palaestra.envs.classic_control._ops import ARRAY, SCALAR
+
+
+@pytest.fixture(scope="module")
+def points() -> np.ndarray:
+    rng = np.random.default_rng(0)
+    return np.concatenate([rng.uniform(-4, 4, 300_000), rng.uniform(-60, 60, 100_000)])
+
+
+@pytest.mark.parametrize("name", ["cos", "sin"])
+def test_numpy_trig_is_libm_bit_for_bit(points: np.ndarray, name: str) -> None:
+    """numpy's float64 cos/sin (arrays, strided views, scalars) equal math.cos/sin here.
+
+    If this fails on a platform, the batched engine and the numpy-scalar Gymnasium envs
+    differ from the Python-float path by an ulp now and then: parity is no longer exact.
+    """
+    ufunc, libm = getattr(np, name), getattr(math, name)
+    expected = np.array([libm(x) for x in points.tolist()])
+    np.testing.assert_array_equal(ufunc(points), expected)
+    np.testing.assert_array_equal(ufunc(points[::3]), expected[::3])
+    assert [float(ufunc(np.float64(x))) for x in points[:2000]] == expected[:2000].tolist()
+
+
+def test_pow2_is_libm_pow_not_the_square() -> None:
+    """Gymnasium's ``x**2`` on numpy scalars is libm pow, which differs from x*x sometimes."""
+    x = np.random.default_rng(1).uniform(-30, 30, 400_000)
+    expected = np.array([v**2 for v in x.tolist()])  # Python's float pow: the same libm call
+    assert (expected != x * x).sum() > 0  # the reason pow2 exists
+    np.testing.assert_array_equal(ARRAY.pow2(x), expected)
+    assert [SCALAR.pow2(v) for v in x[:1000].tolist()] == expected[:1000].tolist()
+    assert [float(np.float64(v) ** 2) for v in x[:1000]] == expected[:1000].tolist()
+
+
+def test_powf2_is_numpy_float32_scalar_power() -> None:
+    u = np.random.default_rng(2).uniform(-3, 3, 200_000).astype(np.float32)
+    expected = np.array([float(v**2) for v in u])
+    np.testing.assert_array_equal(ARRAY.powf2(u.astype(np.float64)), expected)
+    assert [SCALAR.powf2(float(v)) for v in u[:1000]] == expected[:1000].tolist()
+
+
+def test_f32_rounding_agrees() -> None:
+    x = np.random.default_rng(3).normal(size=10_000) * 10.0 ** np.arange(-5, 5).repeat(1000)
+    expected = x.astype(np.float32).astype(np.float64)
+    np.testing.assert_array_equal(ARRAY.f32(x), expected)
+    assert [SCALAR.f32(v) for v in x.tolist()] == expected.tolist()
+    assert SCALAR.f32(1e300) == math.inf  # numpy's overflow, not struct's OverflowError
+
+
+def test_remainder_and_clip_agree() -> None:
+    x = np.random.default_rng(4).uniform(-50, 50, 100_000)
+    np.testing.assert_array_equal(
+        ARRAY.mod(x + math.pi, 2 * math.pi), [SCALAR.mod(v + math.pi, 2 * math.pi) for v in x]
+    )
+    np.testing.assert_array_equal(ARRAY.clip(x, -8, 8), [SCALAR.clip(v, -8, 8) for v in x])

@@ -1,0 +1,112 @@
+"""One contract for every registered id, plus Gymnasium's specs for the classic ones."""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+import pytest
+from tests.envs.cases import CLASSIC_IDS
+
+from palaestra import error
+from palaestra.core import Env
+from palaestra.envs.registration import make, registry
+
+ALL_IDS = sorted(registry)
+pytestmark = pytest.mark.filterwarnings("ignore:.*is out of date")
+
+
+def _make(env_id: str, **kwargs: Any) -> Env:
+    try:
+        return make(env_id, **kwargs)
+    except error.DependencyNotInstalled as e:  # e.g. an optional extra such as atari
+        pytest.skip(str(e))
+
+
+def test_every_classic_id_is_registered() -> None:
+    assert set(CLASSIC_IDS) <= set(registry)
+
+
+@pytest.mark.parametrize("env_id", ALL_IDS)
+def test_contract(env_id: str) -> None:
+    env, twin = _make(env_id), _make(env_id)
+    assert env.spec is not None and env.spec.id == env_id
+    obs, info = env.reset(seed=0)
+    twin_obs, _ = twin.reset(seed=0)
+    assert isinstance(info, dict)
+    assert obs in env.observation_space, f"{obs} not in {env.observation_space}"
+    np.testing.assert_array_equal(obs, twin_obs)
+    env.action_space.seed(0)
+    for _ in range(50):
+        action = env.action_space.sample()
+        obs, reward, terminated, truncated, info = env.step(action)
+        twin_obs, twin_reward, *_ = twin.step(action)
+        assert obs in env.observation_space
+        np.testing.assert_array_equal(obs, twin_obs)  # seeded runs are deterministic
+        assert float(reward) == float(twin_reward)
+        assert type(terminated) is bool and type(truncated) is bool
+        assert isinstance(info, dict)
+        if terminated or truncated:
+            env.reset()
+            twin.reset()
+    env.close()
+    env.close()  # closing twice is harmless
+
+
+@pytest.mark.parametrize("env_id", CLASSIC_IDS)
+def test_classic_spec_matches_gymnasium(env_id: str) -> None:
+    gymnasium = pytest.importorskip("gymnasium")
+    ours, ref = registry[env_id], gymnasium.spec(env_id)
+    assert ours.max_episode_steps == ref.max_episode_steps
+    assert ours.reward_threshold == ref.reward_threshold
+    assert ours.entry_point.split(":")[1] == ref.entry_point.split(":")[1]  # class name
+    env, ref_env = _make(env_id), gymnasium.make(env_id)
+    assert repr(env.observation_space) == repr(ref_env.observation_space)
+    assert repr(env.action_space) == repr(ref_env.action_space)
+    assert env.unwrapped.metadata == ref_env.unwrapped.metadata
+    assert str(env) == str(ref_env)
+
+
+@pytest.mark.parametrize("env_id", CLASSIC_IDS)
+def test_time_limit_truncates(env_id: str) -> None:
+    env = _make(env_id, max_episode_steps=5)
+    env.reset(seed=0)
+    flags = [env.step(env.action_space.sample())[3] for _ in range(5)]
+    assert flags == [False] * 4 + [True]
+
+
+@pytest.mark.parametrize("env_id", CLASSIC_IDS)
+def test_check_env(env_id: str) -> None:
+    env_checker = pytest.importorskip("palaestra.utils.env_checker")
+    env = _make(env_id, render_mode="rgb_array")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        env_checker.check_env(env.unwrapped)
+    # Only the space warnings Gymnasium's checker gives its own envs: CartPole's infinite
+    # velocity bounds and Pendulum's [-2, 2] action box.
+    expected = ("infinity", "symmetric", "normalised")
+    messages = [str(w.message) for w in caught]
+    assert [m for m in messages if not any(e in m for e in expected)] == [], messages
+
+
+def test_tutorial_reward_shaping_reads_unwrapped_state() -> None:
+    env = _make("MountainCar-v0")
+    obs, _ = env.reset(seed=0)
+    state = env.unwrapped.state
+    assert state.dtype == np.float64 and state.shape == (2,)
+    assert np.float32(state[0]) == obs[0]
+    obs, *_ = env.step(2)
+    assert np.float32(env.unwrapped.state[0]) == obs[0]
+
+
+@pytest.mark.parametrize("env_id", ["CartPole-v1", "Acrobot-v1", "Pendulum-v1"])
+def test_unwrapped_params_are_settable(env_id: str) -> None:
+    """``env.unwrapped.dt = 0.05`` (Acrobot's docs) changes the dynamics, as in Gymnasium."""
+    name = {"CartPole-v1": "tau", "Acrobot-v1": "dt", "Pendulum-v1": "dt"}[env_id]
+    fast, slow = _make(env_id), _make(env_id)
+    setattr(slow.unwrapped, name, getattr(slow.unwrapped, name) / 4)
+    fast.reset(seed=0)
+    slow.reset(seed=0)
+    action = fast.action_space.sample()
+    assert fast.step(action)[0].tobytes() != slow.step(action)[0].tobytes()
