@@ -259,7 +259,7 @@ class Box(Space[npt.NDArray[Any]]):
         else:
             sample = self._sample_mixed(rng, high)
         if self.dtype.kind == "f":
-            return sample.astype(self.dtype)
+            return sample.astype(self.dtype, copy=False)  # sample is fresh; float64 needs no copy
 
         sample = np.floor(sample)
         if self.dtype.kind != "b":

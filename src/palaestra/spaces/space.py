@@ -110,7 +110,7 @@ def can_cast(from_dtype: np.dtype, to_dtype: np.dtype) -> bool:
 
 
 class InvalidMask(error.Error, AssertionError):
-    """A ``sample(mask=...)`` argument has the wrong type, shape, dtype or values.
+    """A ``sample()`` argument (a mask, a length, a node count) has a wrong type, shape or value.
 
     Gymnasium checks masks with ``assert``; subclassing ``AssertionError`` keeps code that
     catches that working, while the check itself survives ``python -O``.
