@@ -28,8 +28,9 @@ def test_gif_round_trip(tmp_path):
         assert gif.info["duration"] == 50
         gif.seek(3)
         back = np.asarray(gif.convert("RGB"))
-    # palette quantisation is nearly lossless on these few-colour pictures
-    assert np.abs(back.astype(int) - frames[3]).mean() < 1.0
+    # the octree palette keeps colours within a few levels (white comes back as 254)
+    diff = np.abs(back.astype(int) - frames[3])
+    assert diff.mean() < 2.0 and (diff.max(axis=2) > 32).mean() < 0.001
 
 
 def test_accepts_a_stacked_array_and_str_paths(tmp_path):

@@ -44,17 +44,23 @@ def blend(img: np.ndarray, patch: Patch | None, color: Color) -> None:
     if patch is None:
         return
     x0, y0, cov = patch
+    if x0 < 0 or y0 < 0:  # crop a patch hanging off the top/left (slices can't be negative)
+        cov = cov[max(-y0, 0) :, max(-x0, 0) :]
+        x0, y0 = max(x0, 0), max(y0, 0)
+    cov = cov[: img.shape[0] - y0, : img.shape[1] - x0]
     h, w = cov.shape
+    if h <= 0 or w <= 0:
+        return
     region = img[y0 : y0 + h, x0 : x0 + w]
-    # Opaque pixels (the bulk of a shape) are assigned directly; only the anti-aliased rim
-    # pays for the float blend.
-    full = cov >= 1.0
-    region[full] = color
-    rim = (cov > 0.0) & ~full
+    rgb = np.asarray(color, dtype=np.uint8)
+    # Opaque pixels (the bulk of a shape) are copied; only the anti-aliased rim pays for the
+    # float blend. copyto(where=) is faster than boolean-index assignment.
+    np.copyto(region, rgb, where=(cov >= 1.0)[:, :, None])
+    rim = (cov > 0.0) & (cov < 1.0)
     if rim.any():
         a = cov[rim][:, None]
         src = region[rim].astype(np.float32)
-        region[rim] = (src + (np.asarray(color, np.float32) - src) * a + 0.5).astype(np.uint8)
+        region[rim] = (src + (rgb - src) * a + 0.5).astype(np.uint8)
 
 
 def _bbox(

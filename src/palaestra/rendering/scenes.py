@@ -181,29 +181,39 @@ _ARROW_HEAD = (
 )
 
 
-def _draw_torque_arrow(img: np.ndarray, last_u: float) -> None:
-    """Circular arrow of side ``scale * |u| / 2``; clockwise for u <= 0, mirrored for u > 0."""
-    side = int(_PD_SCALE * abs(last_u) / 2)
-    if side < 1:
-        return
+@lru_cache(maxsize=256)
+def _torque_arrow(side: int, mirror: bool) -> tuple[raster.Patch, raster.Patch | None]:
+    """Coverage of the arrow's ring and head for a square of ``side`` pixels (cached: the
+    arrow only changes with the integer ``side``, as Gymnasium's scaled image does)."""
     col0, row0 = _PD_OFFSET - side // 2, _PD_OFFSET - (side - side // 2)
     bw, bh = _ARROW_BOX
-    mirror = last_u > 0
 
     def to_pixels(u: float, v: float) -> tuple[float, float]:
         x = u / bw * side
         return col0 + (side - x if mirror else x) - 0.5, row0 + v / bh * side - 0.5
 
-    cols = np.arange(col0, col0 + side, dtype=np.float32)[None, :] + 0.5 - col0
-    rows = np.arange(row0, row0 + side, dtype=np.float32)[:, None] + 0.5 - row0
+    cols = np.arange(side, dtype=np.float32)[None, :] + 0.5
+    rows = np.arange(side, dtype=np.float32)[:, None] + 0.5
     u = (side - cols if mirror else cols) * (bw / side) - _ARROW_CENTRE[0]
     v = rows * (bh / side) - _ARROW_CENTRE[1]
     ring = raster.ring_sector_coverage(
         u, v, _ARROW_RADIUS, _ARROW_HALF_WIDTH, *_ARROW_ARC, aa=(bw + bh) / 2 / side
     )
-    raster.blend(img, raster.Patch(col0, row0, ring.astype(np.float32)), BLACK)
     head = [[to_pixels(u_, v_) for u_, v_ in tri] for tri in _ARROW_HEAD]
-    raster.blend(img, raster.polygons_patch(head, img.shape, grow=0.5), BLACK)
+    return (
+        raster.Patch(col0, row0, ring.astype(np.float32)),
+        raster.polygons_patch(head, PENDULUM_SIZE, grow=0.5),
+    )
+
+
+def _draw_torque_arrow(img: np.ndarray, last_u: float) -> None:
+    """Circular arrow of side ``scale * |u| / 2``; clockwise for u <= 0, mirrored for u > 0."""
+    side = int(_PD_SCALE * abs(last_u) / 2)
+    if side < 1:
+        return
+    ring, head = _torque_arrow(side, last_u > 0)
+    raster.blend(img, ring, BLACK)
+    raster.blend(img, head, BLACK)
 
 
 def render_pendulum(theta: float, last_u: float | None) -> np.ndarray:

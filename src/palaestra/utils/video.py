@@ -87,9 +87,9 @@ def save_video(frames: Iterable[np.ndarray], path: str | os.PathLike[str], fps: 
     """Write ``frames`` to ``path`` (``.gif`` or ``.mp4``) at ``fps`` frames per second.
 
     The folder is created if needed and the written path is returned. GIFs loop forever and
-    use one adaptive 256-colour palette per frame; GIF stores delays in hundredths of a
-    second, so ``fps`` is rounded to the nearest 10 ms per frame, and Pillow merges identical
-    consecutive frames into one longer frame (playback time is unchanged).
+    use an adaptive 256-colour (fast octree) palette per frame; GIF stores delays in
+    hundredths of a second, so ``fps`` is rounded to the nearest 10 ms per frame, and Pillow
+    merges identical consecutive frames into one longer frame (playback time is unchanged).
 
     Raises ``ValueError``/``TypeError`` for bad frames, a bad ``fps`` or an unsupported
     suffix, and :class:`palaestra.error.DependencyNotInstalled` naming the ``pip install``
@@ -125,11 +125,10 @@ def _write_gif(frames: list[np.ndarray], path: Path | BinaryIO, fps: float) -> N
         from PIL import Image
     except ImportError as e:
         raise dependency_not_installed("Pillow", "video", "writing GIF files") from e
-    # An adaptive palette per frame keeps anti-aliased edges smooth; the default web palette
-    # would band them.
-    images = [
-        Image.fromarray(f).convert("P", palette=Image.Palette.ADAPTIVE, colors=256) for f in frames
-    ]
+    # An adaptive palette per frame keeps anti-aliased edges smooth (the default web palette
+    # bands them). Fast octree instead of median cut: ~6 instead of ~45 ms per 600x400 frame
+    # (benchmarks/render.py), colours within a few levels (white may come back as 254).
+    images = [Image.fromarray(f).quantize(256, method=Image.Quantize.FASTOCTREE) for f in frames]
     duration = max(round(1000 / fps / 10) * 10, 10)  # GIF delays are in 1/100 s
     images[0].save(
         path,
