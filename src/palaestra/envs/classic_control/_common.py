@@ -49,14 +49,20 @@ def invalid_action(action: Any, space: Any, why: str = "") -> error.InvalidActio
     )
 
 
-def check_discrete_action(action: Any, space: Any) -> int:
-    """The slow path of a discrete step: any accepted action as an ``int``, else InvalidAction.
+def check_discrete_action(action: Any, space: Any, n: int) -> int:
+    """The slow path of a discrete step: an accepted action as an ``int`` in ``[0, n)``.
 
-    Accepts what ``Discrete.contains`` accepts (ints, bools, 0-d integer numpy values).
+    ``np.int64`` (what ``Discrete.sample()`` returns) is checked first and cheaply; anything
+    else goes through ``space.contains`` (ints, bools, 0-d integer numpy values that cast
+    safely), as in Gymnasium. Anything rejected raises InvalidAction naming action and space.
     """
-    if not space.contains(action):
-        raise invalid_action(action, space)
-    return int(action)
+    if type(action) is np.int64:
+        value = int(action)
+        if 0 <= value < n:
+            return value
+    elif space.contains(action):
+        return int(action)
+    raise invalid_action(action, space)
 
 
 def check_box_action(action: Any, space: Any) -> float:

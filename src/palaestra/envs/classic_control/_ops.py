@@ -56,7 +56,7 @@ class ScalarOps:
     def f32(x: float) -> float:
         """Round to the nearest float32, kept as a Python float."""
         try:
-            return _unpack_f32(_pack_f32(x))[0]  # type: ignore[no-any-return]  # 3x np.float32
+            return _unpack_f32(_pack_f32(x))[0]  # 3x np.float32
         except OverflowError:  # beyond float32's range: numpy gives inf
             return float(_f32(x))
 

@@ -147,7 +147,7 @@ class AcrobotEnv(ClassicControlEnv):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Advance one RK4 step; an action outside ``Discrete(3)`` raises InvalidAction."""
         if type(action) is not int or not 0 <= action < 3:
-            action = check_discrete_action(action, self.action_space)
+            action = check_discrete_action(action, self.action_space, 3)
         if self._s is None:
             raise error.ResetNeeded("Call reset before using step method.")
         *s, terminated = step_state(SCALAR, self.params, *self._s, AVAIL_TORQUE[action])

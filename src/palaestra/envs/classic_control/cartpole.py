@@ -109,7 +109,7 @@ class CartPoleEnv(ClassicControlEnv):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Advance one step; an action outside ``Discrete(2)`` raises InvalidAction."""
         if type(action) is not int or not 0 <= action < 2:
-            action = check_discrete_action(action, self.action_space)
+            action = check_discrete_action(action, self.action_space, 2)
         if self._s is None:
             raise error.ResetNeeded("Call reset before using step method.")
         *s, terminated = step_state(SCALAR, self.params, *self._s, action)

@@ -64,9 +64,7 @@ class ContinuousMountainCarParams:
 
     def limits(self, ops: Any) -> Limits:
         """The limits rounded with ``ops.f32``: what a float32 state is compared with."""
-        return Limits(
-            *(ops.f32(float(getattr(self, name))) for name in Limits._fields)  # type: ignore[arg-type]
-        )
+        return Limits(*(ops.f32(float(getattr(self, name))) for name in Limits._fields))
 
 
 def step_state(
@@ -76,7 +74,7 @@ def step_state(
     velocity: Any,
     action: Any,
     rnd: Callable[[Any], Any],
-    lim: Limits,
+    lim: Any,
 ) -> Any:
     """One step: ``(position, velocity, terminated, reward)``, state rounded to float32.
 
@@ -173,8 +171,9 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
         if self._s is None:
             raise error.ResetNeeded("Call reset before using step method.")
         p = self.params
+        lim: Any
         if self._fresh:
-            rnd, lim = _identity, p
+            rnd, lim = _identity, p  # p has the limits as attributes
         else:
             if self._lim32[0] is not p:  # params replaced (env.unwrapped.power = ...)
                 self._lim32 = (p, p.limits(SCALAR))
