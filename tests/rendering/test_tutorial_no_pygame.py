@@ -1,12 +1,13 @@
 """The tutorial's rendering blocks run on palaestra with pygame unavailable.
 
-Each block runs in a fresh interpreter where ``sys.modules["pygame"] = None`` (any
-``import pygame`` raises ImportError), with ``import gymnasium as gym`` replaced by
-``import palaestra as gym``. Changes to the tutorial's text, and why:
+The blocks run in one fresh interpreter (each in its own namespace) where
+``sys.modules["pygame"] = None`` (any ``import pygame`` raises ImportError), with
+``import gymnasium as gym`` replaced by ``import palaestra as gym``; the run fails if
+anything imported pygame. Changes to the tutorial's text, and why:
 
 - loops that draw with matplotlib are shortened (100 -> 30, 1500 -> 20, 200 -> 20 steps) to
   keep the suite fast;
-- ``from IPython import display`` gets a recording stub when IPython is not installed
+- ``from IPython import display`` gets a no-op stub when IPython is not installed
   (the venv has none; in Jupyter it is the real module);
 - the GIF block's trained ``DQN.load("dqn_mountaincar")`` policy is replaced by random
   actions (the agent is not under test here, the frames and the GIF are).

@@ -103,3 +103,24 @@ def test_backend_choice(monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     with pytest.raises(DependencyNotInstalled, match=r'pip install "palaestra\[render\]"'):
         HumanWindow("x", fps=30)
+
+
+def test_closing_one_human_env_never_breaks_another(pygame_dummy):
+    """Gymnasium's close() calls pygame.quit(), killing every other env's window."""
+    palaestra = pytest.importorskip("palaestra")
+    if not hasattr(palaestra, "make"):
+        pytest.skip("palaestra.make not available yet")
+    a = palaestra.make("CartPole-v1", render_mode="human")
+    b = palaestra.make("Pendulum-v1", render_mode="human")
+    a.unwrapped.metadata = {**a.unwrapped.metadata, "render_fps": 0}  # no pacing in tests
+    b.unwrapped.metadata = {**b.unwrapped.metadata, "render_fps": 0}
+    a.reset(seed=0)
+    b.reset(seed=0)
+    a.step(a.action_space.sample())
+    a.close()
+    for _ in range(3):
+        b.step(b.action_space.sample())  # raised "video system not initialized" in Gymnasium
+    assert pygame_dummy.display.get_init()
+    assert pygame_dummy.display.get_surface().get_size() == (500, 500)
+    b.close()
+    assert not pygame_dummy.display.get_init()
