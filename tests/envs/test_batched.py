@@ -132,3 +132,31 @@ def test_batch_reset_options_checked_once() -> None:
         batch.reset(seed=0, options={"low": 0.1, "high": -0.1})
     obs = batch.reset(seed=0, options={"low": -0.3, "high": -0.2})
     assert ((obs[:, 0] >= -0.3) & (obs[:, 0] <= -0.2)).all()
+
+
+@pytest.mark.parametrize("env_id", list(CLASSES))
+def test_many_resets_draw_like_single_envs(env_id: str) -> None:
+    """Pre-drawn uniforms (refilled every few resets) give each row its single env's draws."""
+    single_cls, batch_cls = CLASSES[env_id]
+    singles = [single_cls() for _ in range(3)]
+    batch = batch_cls(3)
+    batch.reset(seed=7)
+    for i, env in enumerate(singles):
+        env.reset(seed=7 + i)
+    rng = np.random.default_rng(0)
+    for k in range(70):  # past several buffer refills for every env
+        mask = rng.random(3) < 0.7
+        seed = 1000 + k if k % 25 == 24 else None  # reseeding drops the buffered draws
+        obs = batch.reset(seed=seed, mask=mask)
+        for i in np.flatnonzero(mask):
+            ref, _ = singles[i].reset(seed=None if seed is None else seed + int(i))
+            assert obs[i].tobytes() == ref.tobytes(), (k, i)
+
+
+def test_bad_mask() -> None:
+    _, batch_cls = CLASSES["CartPole-v1"]
+    batch = batch_cls(3)
+    with pytest.raises(ValueError, match="mask"):
+        batch.reset(mask=np.array([1, 0, 1]))
+    with pytest.raises(ValueError, match="mask"):
+        batch.reset(mask=np.ones(4, dtype=bool))

@@ -99,9 +99,15 @@ def step_state(ops: Any, p: AcrobotParams, s0: Any, s1: Any, s2: Any, s3: Any, t
     return n0, n1, n2, n3, terminated
 
 
-def sample_reset(rng: np.random.Generator, low: float, high: float) -> np.ndarray:
-    """Gymnasium's reset draw: U(low, high) for all four, rounded to float32 ``[4]``."""
-    return rng.uniform(low=low, high=high, size=(4,)).astype(np.float32)
+RESET_DRAWS = 4
+
+
+def reset_state(uniforms: np.ndarray, low: float, high: float) -> np.ndarray:
+    """Initial float32 states ``[R, 4]`` from ``[R, 4]`` uniforms: U(low, high), then float32.
+
+    ``low + (high - low) * u`` is numpy's ``uniform`` bit for bit, so this is Gymnasium's draw.
+    """
+    return (low + (high - low) * uniforms).astype(np.float32)
 
 
 def reset_observation(state32: np.ndarray) -> np.ndarray:
@@ -166,11 +172,11 @@ class AcrobotEnv(ClassicControlEnv):
         """Start with all four components ~ U(-0.1, 0.1) (``options`` low/high override)."""
         super().reset(seed=seed)
         low, high = parse_reset_bounds(options, -0.1, 0.1)
-        state32 = sample_reset(self.np_random, low, high)
-        self._s, self._fresh = tuple(state32.tolist()), True
+        state32 = reset_state(self.np_random.random((1, RESET_DRAWS)), low, high)
+        self._s, self._fresh = tuple(state32[0].tolist()), True
         if self.render_mode == "human":
             self.render()
-        return reset_observation(state32[None])[0], {}
+        return reset_observation(state32)[0], {}
 
     def _frame(self) -> np.ndarray:
         from palaestra.rendering.scenes import render_acrobot
@@ -200,6 +206,7 @@ class AcrobotBatch(BatchedEnv):
     """N Acrobots stepped by :func:`step_state` on ``[N]`` arrays."""
 
     state_dim = 4
+    reset_draws = RESET_DRAWS
 
     def __init__(self, num_envs: int) -> None:
         self.params = AcrobotParams()
@@ -210,8 +217,8 @@ class AcrobotBatch(BatchedEnv):
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.1, 0.1)
 
-    def _sample_row(self, rng: np.random.Generator, bounds: tuple[float, float]) -> Any:
-        return sample_reset(rng, *bounds)
+    def _reset_state(self, uniforms: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
+        return reset_state(uniforms, *bounds)
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         torque = actions - 1.0  # AVAIL_TORQUE[a] for a in {0, 1, 2}

@@ -7,7 +7,11 @@ generators and seeding. There is no autoreset, time limit or info here: the vect
 those on top.
 
 Row ``i`` reset with ``seed=s`` uses ``np.random.default_rng(s + i)`` and draws exactly what a
-single env reset with ``seed=s + i`` draws, so the two stay identical step by step.
+single env reset with ``seed=s + i`` draws, so the two stay identical step by step. Every reset
+of an env consumes a fixed number of uniform doubles (``reset_draws``), and numpy's
+``uniform(low, high)`` is ``low + (high - low) * random()``, so each row pre-draws the uniforms
+of several resets at once and resets become a vectorised gather: the per-row Python loop runs
+only when a row's buffer is empty (once per ``_BUFFERED`` resets) or when it is reseeded.
 """
 
 from __future__ import annotations
@@ -20,11 +24,14 @@ import numpy as np
 from palaestra.spaces import Box, Discrete, Space
 from palaestra.utils.seeding import np_random
 
+_BUFFERED = 32  # uniforms pre-drawn per row (a multiple of reset_draws)
+
 
 class BatchedEnv:
     """``num_envs`` envs of one kind, as arrays. Subclasses fill in the class variables."""
 
     state_dim: ClassVar[int]
+    reset_draws: ClassVar[int]  # uniform doubles one reset consumes
     single_observation_space: Space[Any]
     single_action_space: Space[Any]
 
@@ -38,6 +45,11 @@ class BatchedEnv:
         self._obs = np.zeros((self.num_envs, obs_dim), dtype=np.float32)  # [N, obs_dim]
         self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
         self.seeds: list[int | None] = [None] * self.num_envs
+        self._per_buffer = max(1, _BUFFERED // self.reset_draws)  # resets per refill
+        # [N, resets, draws] pre-drawn uniforms; _next[i] == _per_buffer means "empty"
+        self._uniforms = np.empty((self.num_envs, self._per_buffer, self.reset_draws))
+        self._next = np.full(self.num_envs, self._per_buffer)  # [N]
+        self._seeded = np.zeros(self.num_envs, dtype=bool)  # [N] has a generator
         self._needs_reset = np.ones(self.num_envs, dtype=bool)  # [N]
 
     @property
@@ -76,22 +88,38 @@ class BatchedEnv:
         None keep their generator. The returned array is reused by the next call: copy it to
         keep it.
         """
-        rows = np.arange(self.num_envs) if mask is None else np.flatnonzero(mask)
+        if mask is None:
+            rows = np.arange(self.num_envs)
+        else:
+            mask = np.asarray(mask)
+            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
+                raise ValueError(f"mask must be a bool array of shape ({self.num_envs},)")
+            rows = np.flatnonzero(mask)
         bounds = self._parse_options(options)  # once for all rows, so bad options fail early
-        seeds = self._row_seeds(seed)
-        fresh = np.empty((len(rows), self.state_dim))  # [R, k]
-        # One draw per reset row with that row's own generator: this loop runs on reset only.
-        for j, i in enumerate(rows.tolist()):
+        if seed is not None or not self._seeded[rows].all():
+            self._seed_rows(rows, self._row_seeds(seed))
+        empty = rows[self._next[rows] == self._per_buffer]
+        for i in empty.tolist():  # refill: once per _per_buffer resets of a row
             rng = self._rngs[i]
-            if seeds[i] is not None or rng is None:
-                rng, self.seeds[i] = np_random(seeds[i])
-                self._rngs[i] = rng
-            fresh[j] = self._sample_row(rng, bounds)
+            assert rng is not None
+            self._uniforms[i] = rng.random((self._per_buffer, self.reset_draws))
+        self._next[empty] = 0
+        uniforms = self._uniforms[rows, self._next[rows]]  # [R, draws]
+        self._next[rows] += 1
+        fresh = self._reset_state(uniforms, bounds)  # [R, k]
         self._state[:, rows] = fresh.T
         self._needs_reset[rows] = False
         self._after_reset(rows)
         self._observe(rows)
         return self._obs
+
+    def _seed_rows(self, rows: np.ndarray, seeds: list[int | None]) -> None:
+        """New generators for rows given a seed (or never seeded); their buffers start empty."""
+        for i in rows.tolist():
+            if seeds[i] is not None or self._rngs[i] is None:
+                self._rngs[i], self.seeds[i] = np_random(seeds[i])
+                self._next[i] = self._per_buffer
+        self._seeded[rows] = True
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Step every row: ``(obs [N, obs_dim] float32, reward [N] float64, terminated [N])``.
@@ -124,8 +152,8 @@ class BatchedEnv:
         """Reset options checked once (Gymnasium's ``options={"low", "high"}`` by default)."""
         raise NotImplementedError
 
-    def _sample_row(self, rng: np.random.Generator, bounds: Any) -> np.ndarray:
-        """One row's initial state ``[k]``, drawn exactly as the single env draws it."""
+    def _reset_state(self, uniforms: np.ndarray, bounds: Any) -> np.ndarray:
+        """Initial states ``[R, k]`` from ``[R, reset_draws]`` uniforms (the module's math)."""
         raise NotImplementedError
 
     def _after_reset(self, rows: np.ndarray) -> None:

@@ -69,9 +69,15 @@ def step_state(
     return x, x_dot, theta, theta_dot, terminated
 
 
-def sample_reset(rng: np.random.Generator, low: float, high: float) -> np.ndarray:
-    """Gymnasium's reset draw: all four components ~ U(low, high), float64 ``[4]``."""
-    return rng.uniform(low=low, high=high, size=(4,))
+RESET_DRAWS = 4
+
+
+def reset_state(uniforms: np.ndarray, low: float, high: float) -> np.ndarray:
+    """Initial states ``[R, 4]`` from ``[R, 4]`` uniforms: every component ~ U(low, high).
+
+    ``low + (high - low) * u`` is numpy's ``uniform`` bit for bit, so this is Gymnasium's draw.
+    """
+    return low + (high - low) * uniforms
 
 
 def observation_space(p: CartPoleParams) -> Box:
@@ -138,7 +144,8 @@ class CartPoleEnv(ClassicControlEnv):
         """Start with every component ~ U(-0.05, 0.05) (``options`` low/high override)."""
         super().reset(seed=seed)
         low, high = parse_reset_bounds(options, -0.05, 0.05)
-        self._s = tuple(sample_reset(self.np_random, low, high).tolist())
+        state = reset_state(self.np_random.random((1, RESET_DRAWS)), low, high)
+        self._s = tuple(state[0].tolist())
         self.steps_beyond_terminated = None
         if self.render_mode == "human":
             self.render()
@@ -175,6 +182,7 @@ class CartPoleBatch(BatchedEnv):
     """
 
     state_dim = 4
+    reset_draws = RESET_DRAWS
 
     def __init__(self, num_envs: int, sutton_barto_reward: bool = False) -> None:
         self.params = CartPoleParams()
@@ -187,8 +195,8 @@ class CartPoleBatch(BatchedEnv):
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.05, 0.05)
 
-    def _sample_row(self, rng: np.random.Generator, bounds: tuple[float, float]) -> Any:
-        return sample_reset(rng, *bounds)
+    def _reset_state(self, uniforms: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
+        return reset_state(uniforms, *bounds)
 
     def _after_reset(self, rows: np.ndarray) -> None:
         self._done[rows] = False

@@ -35,6 +35,7 @@ from palaestra.envs.classic_control._common import (
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.envs.classic_control.mountain_car import RESET_DRAWS, reset_state
 from palaestra.spaces import Box
 
 
@@ -126,11 +127,6 @@ def _identity(x: Any) -> Any:
     return x
 
 
-def sample_reset(rng: np.random.Generator, low: float, high: float) -> tuple[float, float]:
-    """Gymnasium's reset draw: position ~ U(low, high), velocity 0 (float64)."""
-    return float(rng.uniform(low=low, high=high)), 0.0
-
-
 def spaces(p: ContinuousMountainCarParams) -> tuple[Box, Box]:
     """``(observation_space, action_space)`` as Gymnasium builds them."""
     low = np.array([p.min_position, -p.max_speed], dtype=np.float32)
@@ -190,7 +186,8 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
         """Start at position ~ U(-0.6, -0.4) (``options`` low/high override), velocity 0."""
         super().reset(seed=seed)
         low, high = parse_reset_bounds(options, -0.6, -0.4)
-        self._s, self._fresh = sample_reset(self.np_random, low, high), True
+        state = reset_state(self.np_random.random((1, RESET_DRAWS)), low, high)  # as MountainCar
+        self._s, self._fresh = (float(state[0, 0]), float(state[0, 1])), True
         if self.render_mode == "human":
             self.render()
         return np.array(self._s, dtype=np.float32), {}
@@ -221,6 +218,7 @@ class ContinuousMountainCarBatch(BatchedEnv):
     """N continuous MountainCars stepped by :func:`step_state` on ``[N]`` arrays."""
 
     state_dim = 2
+    reset_draws = RESET_DRAWS
 
     def __init__(self, num_envs: int, goal_velocity: float = 0) -> None:
         self.params = ContinuousMountainCarParams(goal_velocity=goal_velocity)
@@ -231,8 +229,8 @@ class ContinuousMountainCarBatch(BatchedEnv):
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.6, -0.4)
 
-    def _sample_row(self, rng: np.random.Generator, bounds: tuple[float, float]) -> Any:
-        return sample_reset(rng, *bounds)
+    def _reset_state(self, uniforms: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
+        return reset_state(uniforms, *bounds)
 
     def _after_reset(self, rows: np.ndarray) -> None:
         self._fresh[rows] = True

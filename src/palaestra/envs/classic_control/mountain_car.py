@@ -50,9 +50,17 @@ def step_state(ops: Any, p: MountainCarParams, position: Any, velocity: Any, act
     return position, velocity, terminated
 
 
-def sample_reset(rng: np.random.Generator, low: float, high: float) -> tuple[float, float]:
-    """Gymnasium's reset draw: position ~ U(low, high), velocity 0."""
-    return float(rng.uniform(low=low, high=high)), 0.0
+RESET_DRAWS = 1
+
+
+def reset_state(uniforms: np.ndarray, low: float, high: float) -> np.ndarray:
+    """Initial states ``[R, 2]`` from ``[R, 1]`` uniforms: position ~ U(low, high), velocity 0.
+
+    ``low + (high - low) * u`` is numpy's ``uniform`` bit for bit, so this is Gymnasium's draw.
+    """
+    state = np.zeros((len(uniforms), 2))
+    state[:, 0] = low + (high - low) * uniforms[:, 0]
+    return state
 
 
 def observation_space(p: MountainCarParams) -> Box:
@@ -104,7 +112,8 @@ class MountainCarEnv(ClassicControlEnv):
         """Start at position ~ U(-0.6, -0.4) (``options`` low/high override), velocity 0."""
         super().reset(seed=seed)
         low, high = parse_reset_bounds(options, -0.6, -0.4)
-        self._s = sample_reset(self.np_random, low, high)
+        state = reset_state(self.np_random.random((1, RESET_DRAWS)), low, high)
+        self._s = (float(state[0, 0]), float(state[0, 1]))
         if self.render_mode == "human":
             self.render()
         return np.array(self._s, dtype=np.float32), {}
@@ -138,6 +147,7 @@ class MountainCarBatch(BatchedEnv):
     """N MountainCars stepped by :func:`step_state` on ``[N]`` arrays."""
 
     state_dim = 2
+    reset_draws = RESET_DRAWS
 
     def __init__(self, num_envs: int, goal_velocity: float = 0) -> None:
         self.params = MountainCarParams(goal_velocity=goal_velocity)
@@ -149,8 +159,8 @@ class MountainCarBatch(BatchedEnv):
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.6, -0.4)
 
-    def _sample_row(self, rng: np.random.Generator, bounds: tuple[float, float]) -> Any:
-        return sample_reset(rng, *bounds)
+    def _reset_state(self, uniforms: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
+        return reset_state(uniforms, *bounds)
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         position, velocity, terminated = step_state(

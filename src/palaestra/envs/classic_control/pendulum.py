@@ -69,10 +69,17 @@ def parse_options(options: dict[str, Any] | None) -> tuple[float, float]:
     return x, y
 
 
-def sample_reset(rng: np.random.Generator, x: float, y: float) -> np.ndarray:
-    """Gymnasium's reset draw: ``U(-[x, y], [x, y])``, float64 ``[2]``."""
+RESET_DRAWS = 2
+
+
+def reset_state(uniforms: np.ndarray, x: float, y: float) -> np.ndarray:
+    """Initial states ``[R, 2]`` from ``[R, 2]`` uniforms: ``U(-[x, y], [x, y])``.
+
+    ``low + (high - low) * u`` is numpy's ``uniform`` bit for bit, so this is Gymnasium's draw.
+    """
     high = np.array([x, y])
-    return rng.uniform(low=-high, high=high)
+    low = -high
+    return low + (high - low) * uniforms
 
 
 def spaces(p: PendulumParams) -> tuple[Box, Box]:
@@ -125,7 +132,8 @@ class PendulumEnv(ClassicControlEnv):
         """Start at ``U(-[pi, 1], [pi, 1])`` (options ``x_init``/``y_init`` override)."""
         super().reset(seed=seed)
         x, y = parse_options(options)
-        self._s = tuple(sample_reset(self.np_random, x, y).tolist())
+        state = reset_state(self.np_random.random((1, RESET_DRAWS)), x, y)
+        self._s = tuple(state[0].tolist())
         self.last_u = None
         if self.render_mode == "human":
             self.render()
@@ -145,6 +153,7 @@ class PendulumBatch(BatchedEnv):
     """N Pendulums stepped by :func:`step_state` on ``[N]`` arrays."""
 
     state_dim = 2
+    reset_draws = RESET_DRAWS
 
     def __init__(self, num_envs: int, g: float = 10.0) -> None:
         self.params = PendulumParams(g=g)
@@ -154,8 +163,8 @@ class PendulumBatch(BatchedEnv):
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_options(options)
 
-    def _sample_row(self, rng: np.random.Generator, bounds: tuple[float, float]) -> Any:
-        return sample_reset(rng, *bounds)
+    def _reset_state(self, uniforms: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
+        return reset_state(uniforms, *bounds)
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         th, thdot, reward, _ = step_state(
