@@ -31,6 +31,9 @@ EDGE_GROW = 1.0
 DISC_GROW = 1.0
 
 
+_PIXEL = np.dtype((np.void, 3))  # one RGB pixel as a single element
+
+
 class Patch(NamedTuple):
     """A coverage mask ``cov`` (float32 in [0, 1], shape ``[h, w]``) placed at ``(x0, y0)``."""
 
@@ -51,16 +54,22 @@ def blend(img: np.ndarray, patch: Patch | None, color: Color) -> None:
     h, w = cov.shape
     if h <= 0 or w <= 0:
         return
-    region = img[y0 : y0 + h, x0 : x0 + w]
     rgb = np.asarray(color, dtype=np.uint8)
-    # Opaque pixels (the bulk of a shape) are copied; only the anti-aliased rim pays for the
-    # float blend. copyto(where=) is faster than boolean-index assignment.
-    np.copyto(region, rgb, where=(cov >= 1.0)[:, :, None])
-    rim = (cov > 0.0) & (cov < 1.0)
-    if rim.any():
-        a = cov[rim][:, None]
-        src = region[rim].astype(np.float32)
-        region[rim] = (src + (rgb - src) * a + 0.5).astype(np.uint8)
+    full = cov >= 1.0
+    if img.flags.c_contiguous:
+        # Opaque pixels (the bulk of a shape) are copied as whole 3-byte pixels through a void
+        # view: one masked assignment instead of three (about 6x faster than per channel).
+        pixels = img.view(_PIXEL)[:, :, 0]
+        pixels[y0 : y0 + h, x0 : x0 + w][full] = rgb.view(_PIXEL)[0]
+    else:
+        np.copyto(img[y0 : y0 + h, x0 : x0 + w], rgb, where=full[:, :, None])
+    # Only the anti-aliased rim pays for the float blend.
+    rows, cols = np.nonzero((cov > 0.0) & ~full)
+    if rows.size:
+        region = img[y0 : y0 + h, x0 : x0 + w]
+        a = cov[rows, cols][:, None]
+        src = region[rows, cols].astype(np.float32)
+        region[rows, cols] = (src + (rgb - src) * a + 0.5).astype(np.uint8)
 
 
 def _bbox(
