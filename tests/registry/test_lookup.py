@@ -23,6 +23,7 @@ from palaestra.envs.registration import (
     registry,
     spec,
 )
+from palaestra.envs.registration import namespace as registration_namespace
 
 
 def _raised(fn: Callable[[], Any]) -> BaseException:
@@ -175,3 +176,14 @@ def test_register_envs_is_a_no_op() -> None:
     before = dict(registry)
     assert register_envs(gymnasium) is None
     assert registry == before
+
+
+@pytest.mark.usefixtures("clean_registry")
+def test_namespace_context_registers_under_the_namespace() -> None:
+    with registration_namespace("Plugin"):
+        register("Thing-v0", entry_point=PalToy)
+        with pytest.warns(UserWarning, match="Custom namespace `Other` is being overridden"):
+            register("Other/Stuff-v1", entry_point=PalToy, kwargs={"namespace": "Other"})
+    register("Outside-v0", entry_point=PalToy)
+    assert {"Plugin/Thing-v0", "Plugin/Stuff-v1", "Outside-v0"} <= set(registry)
+    assert lookup.current_namespace is None

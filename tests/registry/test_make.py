@@ -235,3 +235,16 @@ def test_make_vec_with_a_vector_entry_point(
         registration.make_vec("Vec-v0", wrappers=[ScaleReward])
     with pytest.raises(error.Error, match="doesn't have an entry point defined"):
         registration.make_vec("Vec-v0", vectorization_mode="sync")
+
+
+@pytest.mark.skipif(not registration._vector_available(), reason="palaestra.vector not there yet")
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_make_vec_matches_gymnasium(toy_ids: tuple[str, ...], mode: str) -> None:
+    env = registration.make_vec("PalTest/Toy-v3", num_envs=2, vectorization_mode=mode)
+    gym_env = gymnasium.make_vec("PalTest/Toy-v3", num_envs=2, vectorization_mode=mode)
+    try:
+        np.testing.assert_array_equal(env.reset(seed=3)[0], gym_env.reset(seed=3)[0])
+        assert env.spec.kwargs == {"num_envs": 2, "vectorization_mode": mode}
+    finally:
+        env.close()
+        gym_env.close()

@@ -7,12 +7,13 @@ deprecated versions, and unversioned ids that resolve to the latest version.
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import importlib
 import importlib.util
 import re
 from collections import defaultdict
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from types import ModuleType
 from typing import Any
 
@@ -128,6 +129,21 @@ def _check_spec_register(new: EnvSpec) -> None:
         )
 
 
+# Set by `namespace(...)`: ids registered inside the block get this namespace (plugin loading).
+current_namespace: str | None = None
+
+
+@contextlib.contextmanager
+def namespace(ns: str) -> Iterator[None]:
+    """Register every id inside the ``with`` block under namespace ``ns``."""
+    global current_namespace
+    previous, current_namespace = current_namespace, ns
+    try:
+        yield
+    finally:
+        current_namespace = previous
+
+
 def register(
     id: str,
     entry_point: EnvCreator | str | None = None,
@@ -143,6 +159,17 @@ def register(
     """Register ``id`` so that ``make(id)`` calls ``entry_point`` (callable or "module:Name")."""
     if entry_point is None and vector_entry_point is None:
         raise ValueError("Either `entry_point` or `vector_entry_point` (or both) must be provided")
+    kwargs = {} if kwargs is None else kwargs
+    if current_namespace is not None:
+        if kwargs.get("namespace") not in (None, current_namespace):
+            logger.warn(
+                f"Custom namespace `{kwargs.get('namespace')}` is being overridden by namespace "
+                f"`{current_namespace}`. If you are developing a plugin you shouldn't specify a "
+                "namespace in `register` calls. The namespace is specified through the entry "
+                "point package metadata."
+            )
+        _, name, version = parse_env_id(id)
+        id = get_env_id(current_namespace, name, version)
     new_spec = EnvSpec(
         id=id,
         entry_point=entry_point,
@@ -151,7 +178,7 @@ def register(
         max_episode_steps=max_episode_steps,
         order_enforce=order_enforce,
         disable_env_checker=disable_env_checker,
-        kwargs={} if kwargs is None else kwargs,
+        kwargs=kwargs,
         additional_wrappers=additional_wrappers,
         vector_entry_point=vector_entry_point,
     )

@@ -31,6 +31,7 @@ from palaestra.envs.env_spec import (
 from palaestra.envs.lookup import (
     find_highest_version,
     load_env_creator,
+    namespace,
     pprint_registry,
     register,
     register_envs,
@@ -49,6 +50,7 @@ __all__ = [
     "load_env_creator",
     "make",
     "make_vec",
+    "namespace",
     "parse_env_id",
     "pprint_registry",
     "register",
@@ -166,6 +168,12 @@ def make(
     ``id`` may start with ``"module:"`` to import that module (which registers the id) first.
     ``max_episode_steps`` overrides the spec's limit (``-1``: no ``TimeLimit``);
     ``disable_env_checker`` overrides the spec's; ``kwargs`` go to the environment constructor.
+
+    >>> env = make("CartPole-v1")
+    >>> env
+    <TimeLimit<OrderEnforcing<PassiveEnvChecker<CartPoleEnv<CartPole-v1>>>>>
+    >>> make("CartPole-v1", max_episode_steps=3, disable_env_checker=True).spec.max_episode_steps
+    3
     """
     from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
 
@@ -226,7 +234,10 @@ def make(
 
 
 def _vector_available() -> bool:
-    return importlib.util.find_spec("palaestra.vector") is not None
+    # origin is None for a bare directory (namespace package): palaestra.vector while it is
+    # still being written, without the __init__ that exports the vector envs.
+    found = importlib.util.find_spec("palaestra.vector")
+    return found is not None and found.origin is not None
 
 
 def make_vec(
@@ -286,7 +297,7 @@ def make_vec(
             )
         if not _vector_available():
             raise NotImplementedError("make_vec arrives with palaestra.vector")
-        import palaestra.vector as vector
+        vector: Any = importlib.import_module("palaestra.vector")
 
         def create_single_env() -> Env[Any, Any]:
             single_env = make(env_spec, **env_kwargs.copy())
@@ -351,13 +362,12 @@ def _check_autoreset_metadata(env: Any) -> None:
     """Warn, as Gymnasium does, when a vector env does not declare its autoreset mode."""
     if not _vector_available():
         return  # nothing to compare against until palaestra.vector exists
-    from palaestra.vector import AutoresetMode
-
+    autoreset_mode = importlib.import_module("palaestra.vector").AutoresetMode
     if "autoreset_mode" not in env.metadata:
         logger.warn(
             f"The VectorEnv ({env}) is missing AutoresetMode metadata, metadata={env.metadata}"
         )
-    elif not isinstance(env.metadata["autoreset_mode"], AutoresetMode):
+    elif not isinstance(env.metadata["autoreset_mode"], autoreset_mode):
         logger.warn(
             f"The VectorEnv ({env}) metadata['autoreset_mode'] is not an instance of "
             f"AutoresetMode, {type(env.metadata['autoreset_mode'])}."
