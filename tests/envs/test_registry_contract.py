@@ -110,3 +110,17 @@ def test_unwrapped_params_are_settable(env_id: str) -> None:
     slow.reset(seed=0)
     action = fast.action_space.sample()
     assert fast.step(action)[0].tobytes() != slow.step(action)[0].tobytes()
+
+
+@pytest.mark.parametrize("env_id", CLASSIC_IDS)
+def test_copy_and_pickle_keep_the_trajectory(env_id: str) -> None:
+    import copy
+    import pickle
+
+    env = _make(env_id)
+    env.reset(seed=0)
+    clones = [copy.deepcopy(env), pickle.loads(pickle.dumps(env))]
+    action = env.action_space.sample()
+    obs = env.step(action)[0]
+    for clone in clones:
+        assert clone.step(action)[0].tobytes() == obs.tobytes()

@@ -126,7 +126,7 @@ def observation_space(p: AcrobotParams) -> Box:
 class AcrobotEnv(ClassicControlEnv):
     """Single Acrobot: the Python-float path of :func:`step_state`."""
 
-    metadata: dict[str, Any] = {"render_modes": RENDER_MODES, "render_fps": 15}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 15}
     AVAIL_TORQUE = list(AVAIL_TORQUE)
 
     def __init__(self, render_mode: str | None = None) -> None:

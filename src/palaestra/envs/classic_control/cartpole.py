@@ -41,6 +41,7 @@ class CartPoleParams:
     tau: float = 0.02
     theta_threshold_radians: float = 12 * 2 * math.pi / 360
     x_threshold: float = 2.4
+    kinematics_integrator: str = "euler"  # anything else: semi-implicit Euler, as Gymnasium
 
 
 def step_state(
@@ -56,10 +57,16 @@ def step_state(
         p.length * (4.0 / 3.0 - p.masspole * (costheta * costheta) / p.total_mass)
     )
     xacc = temp - p.polemass_length * thetaacc * costheta / p.total_mass
-    x = x + p.tau * x_dot
-    x_dot = x_dot + p.tau * xacc
-    theta = theta + p.tau * theta_dot
-    theta_dot = theta_dot + p.tau * thetaacc
+    if p.kinematics_integrator == "euler":
+        x = x + p.tau * x_dot
+        x_dot = x_dot + p.tau * xacc
+        theta = theta + p.tau * theta_dot
+        theta_dot = theta_dot + p.tau * thetaacc
+    else:
+        x_dot = x_dot + p.tau * xacc
+        x = x + p.tau * x_dot
+        theta_dot = theta_dot + p.tau * thetaacc
+        theta = theta + p.tau * theta_dot
     terminated = (
         (x < -p.x_threshold)
         | (x > p.x_threshold)
@@ -91,12 +98,11 @@ def observation_space(p: CartPoleParams) -> Box:
 class CartPoleEnv(ClassicControlEnv):
     """Single CartPole: the Python-float fast path of :func:`step_state`."""
 
-    metadata: dict[str, Any] = {"render_modes": RENDER_MODES, "render_fps": 50}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 50}
 
     def __init__(self, sutton_barto_reward: bool = False, render_mode: str | None = None) -> None:
         self._sutton_barto_reward = sutton_barto_reward
         self.params = CartPoleParams()
-        self.kinematics_integrator = "euler"
         self.action_space = Discrete(2)
         self.observation_space = observation_space(self.params)
         self._init_render(render_mode)
@@ -171,6 +177,7 @@ expose_params(
         "tau",
         "theta_threshold_radians",
         "x_threshold",
+        "kinematics_integrator",
     ],
 )
 

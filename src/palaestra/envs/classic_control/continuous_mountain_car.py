@@ -138,7 +138,7 @@ def spaces(p: ContinuousMountainCarParams) -> tuple[Box, Box]:
 class Continuous_MountainCarEnv(ClassicControlEnv):
     """Single continuous MountainCar: the Python-float path of :func:`step_state`."""
 
-    metadata: dict[str, Any] = {"render_modes": RENDER_MODES, "render_fps": 30}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 30}
 
     def __init__(self, render_mode: str | None = None, goal_velocity: float = 0) -> None:
         self.params = ContinuousMountainCarParams(goal_velocity=goal_velocity)

@@ -76,7 +76,7 @@ class MountainCarEnv(ClassicControlEnv):
     Actions: 0 push left, 1 no push, 2 push right. ``state`` is ``[position, velocity]``.
     """
 
-    metadata: dict[str, Any] = {"render_modes": RENDER_MODES, "render_fps": 30}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 30}
 
     def __init__(self, render_mode: str | None = None, goal_velocity: float = 0) -> None:
         self.params = MountainCarParams(goal_velocity=goal_velocity)

@@ -92,7 +92,7 @@ def spaces(p: PendulumParams) -> tuple[Box, Box]:
 class PendulumEnv(ClassicControlEnv):
     """Single Pendulum: the Python-float path of :func:`step_state`."""
 
-    metadata: dict[str, Any] = {"render_modes": RENDER_MODES, "render_fps": 30}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 30}
 
     def __init__(self, render_mode: str | None = None, g: float = 10.0) -> None:
         self.params = PendulumParams(g=g)
