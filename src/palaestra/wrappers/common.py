@@ -1,8 +1,13 @@
 """The three wrappers ``make()`` applies: ``PassiveEnvChecker``, ``OrderEnforcing``, ``TimeLimit``.
 
 They sit on every step of every ``make()``'d env, so their per-step cost is kept near zero:
-once a wrapper has nothing left to do on ``step`` it binds the inner env's ``step`` on its
-instance (``self.step = self.env.step``), so the call no longer passes through it at all.
+once a wrapper has nothing left to do on ``step`` it stores the inner env's ``step`` on its
+instance (``self.step = self.env.step``), and calls skip it. ``PassiveEnvChecker`` does so after
+checking two steps; ``OrderEnforcing`` after the first step (past ``reset``) during which the
+inner ``step`` did not rebind itself, so it never keeps a checking path alive. ``TimeLimit``
+counts every step and stays: a made env costs one wrapper call per step (Gymnasium's: four).
+Consequence: replacing ``env.unwrapped.step`` after the first steps is not seen by the stack.
+
 Behaviour, messages and ``env.spec`` bookkeeping follow Gymnasium 1.x.
 """
 
