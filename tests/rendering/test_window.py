@@ -9,8 +9,11 @@ import numpy as np
 import pytest
 
 from palaestra.error import DependencyNotInstalled
-from palaestra.rendering import scenes
+from palaestra.rendering import scenes, window
 from palaestra.rendering.window import HumanWindow, _PygameDisplay, choose_backend
+
+# matplotlib runs headless (Agg) here; the warning about it has its own test below.
+pytestmark = pytest.mark.filterwarnings("ignore:.*opens no window")
 
 
 @pytest.fixture
@@ -124,3 +127,12 @@ def test_closing_one_human_env_never_breaks_another(pygame_dummy):
     assert pygame_dummy.display.get_surface().get_size() == (500, 500)
     b.close()
     assert not pygame_dummy.display.get_init()
+
+
+@pytest.mark.filterwarnings("default")
+def test_headless_matplotlib_says_why_no_window_appears(monkeypatch):
+    pytest.importorskip("matplotlib")
+    monkeypatch.setattr(window, "_warned_headless", False)
+    with pytest.warns(UserWarning, match="which opens no window"):
+        win = HumanWindow("x", fps=0, backend="matplotlib")
+    win.close()

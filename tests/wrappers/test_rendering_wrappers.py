@@ -8,6 +8,8 @@ import pytest
 from palaestra.core import Env
 from palaestra.wrappers.rendering import HumanRendering, RenderCollection
 
+pytestmark = pytest.mark.filterwarnings("ignore:.*opens no window")  # headless matplotlib
+
 
 class Painter(Env):
     """Each frame's value is the number of steps taken since the last reset."""

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from palaestra import logger
 from palaestra.error import DependencyNotInstalled, dependency_not_installed
 
 __all__ = ["BACKENDS", "HumanWindow", "choose_backend"]
@@ -94,12 +95,35 @@ class _PygameDisplay:
             cls.size = cls.caption = None
 
 
+_warned_headless = False
+
+
+def _warn_if_headless(backend: str) -> None:
+    """Say once why no window appears when matplotlib can only draw to files."""
+    global _warned_headless
+    try:
+        from matplotlib.backends import BackendFilter, backend_registry
+
+        headless = set(backend_registry.list_builtin(BackendFilter.NON_INTERACTIVE))
+    except ImportError:  # matplotlib < 3.9
+        headless = {"agg", "cairo", "pdf", "pgf", "ps", "svg", "template"}
+    if backend.lower() in headless and not _warned_headless:
+        _warned_headless = True
+        logger.warn(
+            f"matplotlib's backend is {backend!r}, which opens no window, so "
+            "render_mode='human' shows nothing; install pygame or choose an interactive "
+            "backend (e.g. MPLBACKEND=TkAgg)"
+        )
+
+
 class _MatplotlibFigure:
     """A figure of its own per window; closing it leaves other figures alone."""
 
     def __init__(self, title: str) -> None:
+        import matplotlib
         import matplotlib.pyplot as plt
 
+        _warn_if_headless(matplotlib.get_backend())
         self._plt = plt
         self._title = title
         self._fig: Any = None
