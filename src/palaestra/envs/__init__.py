@@ -6,41 +6,31 @@ __all__ = ["make", "pprint_registry", "register", "registry", "spec"]
 
 # Classic control: Gymnasium 1.x's ids, entry-point class names, limits and thresholds. The
 # modules are imported only when make() loads an entry point. The native batched engines
-# (``*Batch``) get their vector entry points with the vector API, which adds autoreset and
-# time limits on top of them.
-_CLASSIC = "palaestra.envs.classic_control"
-register(
-    id="CartPole-v0",
-    entry_point=f"{_CLASSIC}.cartpole:CartPoleEnv",
-    max_episode_steps=200,
-    reward_threshold=195.0,
-)
-register(
-    id="CartPole-v1",
-    entry_point=f"{_CLASSIC}.cartpole:CartPoleEnv",
-    max_episode_steps=500,
-    reward_threshold=475.0,
-)
-register(
-    id="MountainCar-v0",
-    entry_point=f"{_CLASSIC}.mountain_car:MountainCarEnv",
-    max_episode_steps=200,
-    reward_threshold=-110.0,
-)
-register(
-    id="MountainCarContinuous-v0",
-    entry_point=f"{_CLASSIC}.continuous_mountain_car:Continuous_MountainCarEnv",
-    max_episode_steps=999,
-    reward_threshold=90.0,
-)
-register(
-    id="Pendulum-v1",
-    entry_point=f"{_CLASSIC}.pendulum:PendulumEnv",
-    max_episode_steps=200,
-)
-register(
-    id="Acrobot-v1",
-    entry_point=f"{_CLASSIC}.acrobot:AcrobotEnv",
-    reward_threshold=-100.0,
-    max_episode_steps=500,
-)
+# (``classic_control.*Batch``) get their vector entry points with the vector API, which adds
+# autoreset and time limits on top of them.
+_CC = "palaestra.envs.classic_control"
+_CLASSIC_CONTROL: dict[str, dict] = {
+    "CartPole-v0": dict(
+        entry_point=f"{_CC}.cartpole:CartPoleEnv", max_episode_steps=200, reward_threshold=195.0
+    ),
+    "CartPole-v1": dict(
+        entry_point=f"{_CC}.cartpole:CartPoleEnv", max_episode_steps=500, reward_threshold=475.0
+    ),
+    "MountainCar-v0": dict(
+        entry_point=f"{_CC}.mountain_car:MountainCarEnv",
+        max_episode_steps=200,
+        reward_threshold=-110.0,
+    ),
+    "MountainCarContinuous-v0": dict(
+        entry_point=f"{_CC}.continuous_mountain_car:Continuous_MountainCarEnv",
+        max_episode_steps=999,
+        reward_threshold=90.0,
+    ),
+    "Pendulum-v1": dict(entry_point=f"{_CC}.pendulum:PendulumEnv", max_episode_steps=200),
+    "Acrobot-v1": dict(
+        entry_point=f"{_CC}.acrobot:AcrobotEnv", max_episode_steps=500, reward_threshold=-100.0
+    ),
+}
+for _id, _kwargs in _CLASSIC_CONTROL.items():
+    if _id not in registry:  # importing this module twice (pytest's importlib mode) is harmless
+        register(id=_id, **_kwargs)

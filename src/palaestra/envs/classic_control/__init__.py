@@ -1,8 +1,24 @@
-"""The classic-control environments: one array physics per env, two faces.
+"""The classic-control environments: one physics per env, two faces.
 
 Each module holds a frozen params dataclass, a pure ``step_state(ops, params, *state, action)``
-written once against :mod:`._ops`, the single env (Gymnasium's class name, the Python-float
-fast path) and the batched engine (``*Batch``, N envs as arrays).
+and a ``reset_state(uniforms, ...)`` written once against :mod:`._ops`, the single env
+(Gymnasium's class name and arguments) and the batched engine (``*Batch``, N envs as arrays).
+
+The single env runs ``step_state`` on Python floats rather than as a batch of one: measured
+on MountainCar, a batch of one steps ~40k times/s (a dozen numpy calls on 1-element arrays)
+against ~400k/s for the float path, and both give the same bits (see ``_ops``).
+
+>>> from palaestra.envs.classic_control import MountainCarBatch, MountainCarEnv
+>>> engine = MountainCarBatch(3)
+>>> obs = engine.reset(seed=42)
+>>> obs.shape, obs.dtype
+((3, 2), dtype('float32'))
+>>> single, _ = MountainCarEnv().reset(seed=43)  # row i behaves like a single env seeded 42 + i
+>>> bool((obs[1] == single).all())
+True
+>>> obs, reward, terminated = engine.step([2, 2, 0])
+>>> reward.tolist(), terminated.tolist()
+([-1.0, -1.0, -1.0], [False, False, False])
 """
 
 from palaestra.envs.classic_control.acrobot import AcrobotBatch, AcrobotEnv
