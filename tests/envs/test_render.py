@@ -83,3 +83,10 @@ def test_human_mode_shows_each_step_in_one_window(monkeypatch: Any) -> None:
     env.close()
     assert win.closed
     env.close()  # twice is harmless
+
+
+def test_render_before_reset() -> None:
+    from palaestra import error
+
+    with pytest.raises(error.ResetNeeded):
+        CartPoleEnv(render_mode="rgb_array").render()

@@ -181,7 +181,8 @@ class AcrobotEnv(ClassicControlEnv):
     def _frame(self) -> np.ndarray:
         from palaestra.rendering.scenes import render_acrobot
 
-        assert self._s is not None, "Call reset before render."
+        if self._s is None:
+            raise error.ResetNeeded("Call reset before render.")
         return render_acrobot(self._s[0], self._s[1])
 
 

@@ -160,7 +160,8 @@ class CartPoleEnv(ClassicControlEnv):
     def _frame(self) -> np.ndarray:
         from palaestra.rendering.scenes import render_cartpole
 
-        assert self._s is not None, "Call reset before render."
+        if self._s is None:
+            raise error.ResetNeeded("Call reset before render.")
         return render_cartpole(np.array(self._s))
 
 

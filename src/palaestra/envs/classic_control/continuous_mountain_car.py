@@ -195,7 +195,8 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
     def _frame(self) -> np.ndarray:
         from palaestra.rendering.scenes import render_mountain_car
 
-        assert self._s is not None, "Call reset before render."
+        if self._s is None:
+            raise error.ResetNeeded("Call reset before render.")
         return render_mountain_car(self._s[0], self.params.goal_position)
 
 

@@ -121,7 +121,8 @@ class MountainCarEnv(ClassicControlEnv):
     def _frame(self) -> np.ndarray:
         from palaestra.rendering.scenes import render_mountain_car
 
-        assert self._s is not None, "Call reset before render."
+        if self._s is None:
+            raise error.ResetNeeded("Call reset before render.")
         return render_mountain_car(self._s[0], self.params.goal_position)
 
     def get_keys_to_action(self) -> dict[tuple[int, ...], int]:

@@ -142,7 +142,8 @@ class PendulumEnv(ClassicControlEnv):
     def _frame(self) -> np.ndarray:
         from palaestra.rendering.scenes import render_pendulum
 
-        assert self._s is not None, "Call reset before render."
+        if self._s is None:
+            raise error.ResetNeeded("Call reset before render.")
         return render_pendulum(self._s[0], self.last_u)
 
 
