@@ -50,6 +50,25 @@ class RunningMeanStd:
         """Fold in a batch of samples stacked along axis 0."""
         self.update_from_moments(np.mean(x, axis=0), np.var(x, axis=0), x.shape[0])
 
+    def update_one(self, x: Any) -> None:
+        """Fold in one sample; the same numbers as ``update(x[None])``, minus the reductions.
+
+        >>> a, b = RunningMeanStd(shape=(2,)), RunningMeanStd(shape=(2,))
+        >>> x = np.array([0.5, -2.0])
+        >>> a.update(x[None]); b.update_one(x)
+        >>> bool(np.array_equal(a.mean, b.mean) and np.array_equal(a.var, b.var))
+        True
+        """
+        x = np.asarray(x)
+        if x.dtype.kind != "f" or x.dtype.itemsize < 4:
+            # np.mean of ints is float64 and of float16 goes through float32: let numpy decide
+            self.update(x[None])
+            return
+        # One row's mean is the row; its variance is (x - x)**2: 0, or NaN where x is not
+        # finite, exactly what np.var gives.
+        diff = x - x
+        self.update_from_moments(x[()] if x.ndim == 0 else x, diff * diff, 1)
+
     def update_from_moments(self, batch_mean: Any, batch_var: Any, batch_count: Any) -> None:
         """Fold in a batch given by its mean, variance and size."""
         self.mean, self.var, self.count = update_mean_var_count_from_moments(

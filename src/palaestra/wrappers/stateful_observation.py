@@ -221,7 +221,7 @@ class NormalizeObservation(
         """Update the statistics (unless frozen) and return the standardized observation."""
         obs = np.asarray(observation)
         if self._update_running_mean:
-            self.obs_rms.update(obs[None])
+            self.obs_rms.update_one(obs)
         return np.float32(  # type: ignore[return-value]
             (obs - self.obs_rms.mean) / np.sqrt(self.obs_rms.var + self.epsilon)
         )

@@ -55,6 +55,6 @@ class NormalizeReward(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstru
             reward
         )
         if self._update_running_mean:
-            self.return_rms.update(self.discounted_reward)
+            self.return_rms.update_one(self.discounted_reward[0])
         normalized = reward / np.sqrt(self.return_rms.var + self.epsilon)
         return obs, normalized, terminated, truncated, info
