@@ -11,24 +11,39 @@ __all__ = ["make", "pprint_registry", "register", "registry", "spec"]
 _CC = "palaestra.envs.classic_control"
 _CLASSIC_CONTROL: dict[str, dict] = {
     "CartPole-v0": dict(
-        entry_point=f"{_CC}.cartpole:CartPoleEnv", max_episode_steps=200, reward_threshold=195.0
+        vector_entry_point="palaestra.vector.native:cartpole",
+        entry_point=f"{_CC}.cartpole:CartPoleEnv",
+        max_episode_steps=200,
+        reward_threshold=195.0,
     ),
     "CartPole-v1": dict(
-        entry_point=f"{_CC}.cartpole:CartPoleEnv", max_episode_steps=500, reward_threshold=475.0
+        vector_entry_point="palaestra.vector.native:cartpole",
+        entry_point=f"{_CC}.cartpole:CartPoleEnv",
+        max_episode_steps=500,
+        reward_threshold=475.0,
     ),
     "MountainCar-v0": dict(
+        vector_entry_point="palaestra.vector.native:mountain_car",
         entry_point=f"{_CC}.mountain_car:MountainCarEnv",
         max_episode_steps=200,
         reward_threshold=-110.0,
     ),
     "MountainCarContinuous-v0": dict(
+        vector_entry_point="palaestra.vector.native:continuous_mountain_car",
         entry_point=f"{_CC}.continuous_mountain_car:Continuous_MountainCarEnv",
         max_episode_steps=999,
         reward_threshold=90.0,
     ),
-    "Pendulum-v1": dict(entry_point=f"{_CC}.pendulum:PendulumEnv", max_episode_steps=200),
+    "Pendulum-v1": dict(
+        vector_entry_point="palaestra.vector.native:pendulum",
+        entry_point=f"{_CC}.pendulum:PendulumEnv",
+        max_episode_steps=200,
+    ),
     "Acrobot-v1": dict(
-        entry_point=f"{_CC}.acrobot:AcrobotEnv", max_episode_steps=500, reward_threshold=-100.0
+        vector_entry_point="palaestra.vector.native:acrobot",
+        entry_point=f"{_CC}.acrobot:AcrobotEnv",
+        max_episode_steps=500,
+        reward_threshold=-100.0,
     ),
 }
 for _id, _kwargs in _CLASSIC_CONTROL.items():

@@ -1,0 +1,157 @@
+"""Autoreset, written once: the three modes, ``reset_mask`` and per-row seeding over any engine.
+
+:class:`Autoresetter` turns an engine's raw "step these rows, reset those" into a
+:class:`Transition`; the Gymnasium face stacks its infos into a dict with ``_key`` masks, the
+SB3 face turns it into ``(obs, rewards, dones, infos)`` with ``terminal_observation``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from palaestra import error
+from palaestra.spaces import Box
+from palaestra.spaces.batched_samples import iterate
+from palaestra.vector.engine import Engine, Infos, row_seeds
+from palaestra.vector.vector_env import AutoresetMode
+
+
+class Transition(NamedTuple):
+    """One vector step as the engine saw it (arrays owned by the engine: copy to keep)."""
+
+    obs: Any  # batched observations after any autoreset
+    rewards: np.ndarray  # [N] float64
+    terminated: np.ndarray  # [N] bool
+    truncated: np.ndarray  # [N] bool
+    infos: Infos  # per-row step infos (reset infos for rows reset in this call)
+    final_rows: np.ndarray | None  # SAME_STEP: indices of rows that ended and were reset
+    final_obs: list[Any] | None  # their last observations, in final_rows order
+    final_infos: list[dict[str, Any]] | None  # their last step infos
+
+
+def parse_reset_mask(options: dict[str, Any] | None, num_envs: int) -> np.ndarray | None:
+    """Check ``options["reset_mask"]`` (Gymnasium's rules); None when absent."""
+    if options is None or "reset_mask" not in options:
+        return None
+    mask = options["reset_mask"]
+    if not isinstance(mask, np.ndarray):
+        raise TypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
+    if mask.shape != (num_envs,):
+        raise ValueError(
+            f"`options['reset_mask']` must have shape `({num_envs},)`, got {mask.shape}"
+        )
+    if mask.dtype != np.bool_:
+        raise TypeError(f"`options['reset_mask']` must have `dtype=np.bool_`, got {mask.dtype}")
+    if not mask.any():
+        raise ValueError(
+            "`options['reset_mask']` must contain a boolean array with at least one True value, "
+            f"got reset_mask={mask}"
+        )
+    return mask
+
+
+def take_rows(space: Any, obs: Any, rows: np.ndarray) -> list[Any]:
+    """Copies of the single observations in ``rows`` of a batch (loops over those rows only)."""
+    if isinstance(space, Box) and isinstance(obs, np.ndarray):
+        return list(obs[rows])  # fancy indexing copies: [R, *shape] -> R row arrays
+    wanted = set(rows.tolist())
+    return [
+        _copy_obs(item)
+        for i, item in enumerate(iterate(space, obs))
+        if i in wanted  # iterate walks every row; only non-Box spaces take this path
+    ]
+
+
+def _copy_obs(item: Any) -> Any:
+    if isinstance(item, np.ndarray):
+        return item.copy()
+    if isinstance(item, dict):
+        return {k: _copy_obs(v) for k, v in item.items()}
+    if isinstance(item, tuple):
+        return tuple(_copy_obs(v) for v in item)
+    return item
+
+
+class Autoresetter:
+    """Drives an engine in one autoreset mode; remembers which rows have finished."""
+
+    def __init__(self, engine: Engine, mode: AutoresetMode | str) -> None:
+        self.engine = engine
+        self.mode = mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
+        n = engine.num_envs
+        self._ended = np.zeros(n, dtype=bool)  # [N] finished on the last step, not yet reset
+        self._done = np.zeros(n, dtype=bool)  # [N] scratch for SAME_STEP
+        self._no_seeds: list[int | None] = [None] * n
+        self._pending: np.ndarray | None = None  # NEXT_STEP rows reset by the step in flight
+
+    def reset(self, seed: Any, options: dict[str, Any] | None) -> tuple[Any, Infos]:
+        """Reset all rows, or those in ``options["reset_mask"]``; ``seed`` is int/list/None."""
+        n = self.engine.num_envs
+        seeds = row_seeds(seed, n)
+        mask = parse_reset_mask(options, n)
+        if mask is not None:
+            # The sub-envs never see the mask (Gymnasium pops it; we leave the caller's dict).
+            options = {k: v for k, v in options.items() if k != "reset_mask"}  # type: ignore[union-attr]
+        infos = self.engine.reset(mask, seeds, options)
+        if mask is None:
+            self._ended[:] = False
+        else:
+            self._ended[mask] = False
+        return self.engine.obs, infos
+
+    def step(self, actions: Any) -> Transition:
+        """One vector step in this mode."""
+        self.begin_step(actions)
+        return self.finish_step()
+
+    def begin_step(self, actions: Any) -> None:
+        """Send the actions (rows that ended last step are reset instead under NEXT_STEP)."""
+        if self.mode is AutoresetMode.DISABLED and self._ended.any():
+            rows = np.flatnonzero(self._ended)[:10].tolist()
+            raise error.ResetNeeded(
+                f"Sub-environments {rows} have finished and autoreset_mode is DISABLED: "
+                "reset them with reset(options={'reset_mask': mask}) before stepping."
+            )
+        pending = None
+        if self.mode is AutoresetMode.NEXT_STEP and self._ended.any():
+            pending = self._ended.copy()
+        self.engine.step_send(actions, pending)
+        self._pending = pending
+
+    def finish_step(self, timeout: float | None = None) -> Transition:
+        """Collect the step and apply the mode's autoreset."""
+        engine = self.engine
+        rewards, terminated, truncated, infos = engine.step_recv(timeout)
+        if self.mode is not AutoresetMode.SAME_STEP:
+            pending = self._pending
+            if pending is not None:
+                # A row reset in place of a step reports reward 0 and not done (Gymnasium).
+                rewards[pending] = 0.0
+                terminated[pending] = False
+                truncated[pending] = False
+            np.logical_or(terminated, truncated, out=self._ended)
+            return Transition(engine.obs, rewards, terminated, truncated, infos, None, None, None)
+
+        done = np.logical_or(terminated, truncated, out=self._done)
+        if not done.any():
+            return Transition(engine.obs, rewards, terminated, truncated, infos, None, None, None)
+        rows = np.flatnonzero(done)
+        final_obs = take_rows(engine.single_observation_space, engine.obs, rows)
+        final_infos = [{} for _ in rows] if infos is None else [infos[i] for i in rows]
+        reset_infos = engine.reset(done, self._no_seeds, None)
+        if reset_infos is not None:
+            if infos is None:
+                infos = [{} for _ in range(engine.num_envs)]
+            else:
+                infos = list(infos)
+            for i in rows.tolist():
+                infos[i] = reset_infos[i]
+        elif infos is not None:
+            infos = list(infos)
+            for i in rows.tolist():
+                infos[i] = {}
+        return Transition(
+            engine.obs, rewards, terminated, truncated, infos, rows, final_obs, final_infos
+        )

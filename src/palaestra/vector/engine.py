@@ -1,0 +1,254 @@
+"""Engines: the one layer that steps N sub-envs, whatever runs them.
+
+An engine owns a batched observation buffer ``obs`` and steps or resets chosen rows in place.
+It knows nothing of autoreset modes or of how infos are presented: :mod:`.autoreset` drives it
+and the two faces (:mod:`palaestra.vector`, :mod:`palaestra.vec_env`) present the results.
+
+Three engines implement :class:`Engine`: :class:`LoopEngine` (here: a Python loop over env
+objects in this process), :class:`~.process_engine.ProcessEngine` (one worker process per env,
+observations in shared memory) and :class:`~.native_engine.NativeEngine` (a native
+``BatchedEnv``: one array step for all rows, time limits as a step-counter array).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
+
+import numpy as np
+
+from palaestra import error
+from palaestra.core import Env
+from palaestra.spaces import Space
+from palaestra.spaces.batched_samples import concatenate, create_empty_array, iterate
+from palaestra.spaces.batching import batch_differing_spaces, batch_space
+from palaestra.spaces.utils import is_space_dtype_shape_equiv
+
+Infos = list[dict[str, Any]] | None  # one raw info dict per row; None: every dict is empty
+StepResult = tuple[np.ndarray, np.ndarray, np.ndarray, Infos]
+
+
+class Engine(Protocol):
+    """What the autoreset layer needs from an engine."""
+
+    num_envs: int
+    single_observation_space: Space[Any]
+    single_action_space: Space[Any]
+    observation_space: Space[Any]
+    action_space: Space[Any]
+    metadata: dict[str, Any]
+    render_mode: str | None
+    obs: Any  # batched observations, rewritten in place by reset/step
+
+    def reset(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> Infos:
+        """Reset the rows in ``mask`` (all if None) with per-row seeds; write ``obs``."""
+        ...
+
+    def step_send(self, actions: Any, reset_mask: np.ndarray | None) -> None:
+        """Start stepping every row, except rows in ``reset_mask``: those are reset (no seed)."""
+        ...
+
+    def step_recv(self, timeout: float | None = None) -> StepResult:
+        """Finish the step: ``(rewards [N] f64, terminated [N], truncated [N], infos)``.
+
+        Entries of reset rows are left for the caller to overwrite. The arrays are reused.
+        """
+        ...
+
+    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> tuple[Any, ...]:
+        """Call method ``name`` (or read attribute ``name``) on every sub-env."""
+        ...
+
+    def set_attr(self, name: str, values: Sequence[Any]) -> None:
+        """Set attribute ``name`` on each sub-env to its value."""
+        ...
+
+    def render(self) -> tuple[Any, ...]:
+        """Every sub-env's frame."""
+        ...
+
+    def close(self) -> None:
+        """Release sub-envs and workers; idempotent."""
+        ...
+
+
+def row_seeds(seed: Any, num_envs: int) -> list[int | None]:
+    """One seed per row: None, an int ``s`` (row i gets ``s + i``), or a list of N seeds."""
+    if seed is None:
+        return [None] * num_envs
+    if isinstance(seed, (int, np.integer)):
+        return [int(seed) + i for i in range(num_envs)]
+    seeds = list(seed)
+    if len(seeds) != num_envs:
+        raise ValueError(
+            "If seeds are passed as a list the length must match "
+            f"num_envs={num_envs} but got length={len(seeds)}."
+        )
+    return seeds
+
+
+def check_actions_batch(space: Space[Any], actions: Any, num_envs: int) -> None:
+    """A clear error for a batch of array actions of the wrong shape or kind.
+
+    Per-element validity (range, NaN) is the sub-env's business; this catches the batch-level
+    mistakes that would otherwise surface as a confusing error deep inside ``iterate``.
+    """
+    shape = getattr(space, "shape", None)
+    if shape is None or not isinstance(actions, (np.ndarray, list, tuple)):
+        return
+    arr = np.asarray(actions) if not isinstance(actions, np.ndarray) else actions
+    if arr.dtype == object:
+        return
+    if arr.shape != shape:
+        raise error.InvalidAction(
+            f"Expected a batch of actions of shape {shape} for action space {space} "
+            f"({num_envs} envs), got shape {arr.shape}"
+        )
+    dtype = getattr(space, "dtype", None)
+    if dtype is not None and dtype.kind in "iu" and arr.dtype.kind not in "iub":
+        raise error.InvalidAction(
+            f"Expected integer actions for action space {space}, got dtype {arr.dtype}"
+        )
+
+
+def batch_spaces(
+    env_spaces: Sequence[Space[Any]], observation_mode: Any, who: str
+) -> tuple[Space[Any], Space[Any]]:
+    """``(single, batched)`` observation space from the sub-envs' spaces, checked.
+
+    ``observation_mode`` is Gymnasium's: "same" (all equal), "different" (same shape and
+    dtype, bounds may differ) or a ``(batched, single)`` pair of spaces.
+    """
+    first = env_spaces[0]
+    if isinstance(observation_mode, tuple) and len(observation_mode) == 2:
+        batched, single = observation_mode
+        if not isinstance(batched, Space) or not isinstance(single, Space):
+            raise TypeError(
+                "Expected both elements of observation_mode to be Spaces, "
+                f"got {type(batched)} and {type(single)}"
+            )
+    elif observation_mode == "same":
+        single, batched = first, batch_space(first, len(env_spaces))
+    elif observation_mode == "different":
+        single, batched = first, batch_differing_spaces(list(env_spaces))
+    else:
+        raise ValueError(
+            "Invalid `observation_mode`, expected: 'same' or 'different' or tuple of single and "
+            f"batch observation space, actual got {observation_mode}"
+        )
+    for i, space in enumerate(env_spaces):
+        if observation_mode == "same":
+            if space != single:
+                raise RuntimeError(
+                    f"{who}(..., observation_mode='same') however the sub-environments "
+                    f"observation spaces are not equivalent: sub-environment 0 has {single}, "
+                    f"sub-environment {i} has {space}. If this is intentional, use "
+                    "`observation_mode='different'` instead."
+                )
+        elif not is_space_dtype_shape_equiv(space, single):
+            raise RuntimeError(
+                f"{who}(..., observation_mode='different' or custom space) however the "
+                "sub-environments observation spaces do not share a common shape and dtype: "
+                f"single_observation_space={single}, sub-environment {i} has {space}"
+            )
+    return single, batched
+
+
+def check_action_spaces(env_spaces: Sequence[Space[Any]], who: str) -> Space[Any]:
+    """The common action space; every sub-env must have exactly it."""
+    for i, space in enumerate(env_spaces):
+        if space != env_spaces[0]:
+            raise RuntimeError(
+                f"{who}: sub-environment {i} has action space {space}, which is not the "
+                f"`single_action_space` {env_spaces[0]} of sub-environment 0"
+            )
+    return env_spaces[0]
+
+
+class LoopEngine:
+    """Sub-env objects in this process, stepped one after the other."""
+
+    def __init__(
+        self, env_fns: Sequence[Callable[[], Env[Any, Any]]], observation_mode: Any, who: str
+    ) -> None:
+        if len(env_fns) == 0:
+            raise ValueError(f"{who} needs at least one environment function")
+        self.envs = [fn() for fn in env_fns]
+        for i, env in enumerate(self.envs):
+            if not isinstance(env, Env):
+                raise TypeError(
+                    f"{who}: env_fns[{i}] returned {type(env)}, not a palaestra.Env (wrap a "
+                    "Gymnasium env with palaestra's adapter first)"
+                )
+        self.num_envs = len(self.envs)
+        first = self.envs[0]
+        self.metadata = dict(first.metadata)
+        self.render_mode = first.render_mode
+        self.single_observation_space, self.observation_space = batch_spaces(
+            [env.observation_space for env in self.envs], observation_mode, who
+        )
+        self.single_action_space = check_action_spaces([env.action_space for env in self.envs], who)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.obs = create_empty_array(self.single_observation_space, n=self.num_envs)
+        self._env_obs: list[Any] = [None] * self.num_envs
+        self._rewards = np.zeros(self.num_envs)  # [N] float64
+        self._terminated = np.zeros(self.num_envs, dtype=bool)  # [N]
+        self._truncated = np.zeros(self.num_envs, dtype=bool)  # [N]
+        self._sent: tuple[Any, np.ndarray | None] = (None, None)
+
+    def reset(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> Infos:
+        """Reset the masked rows (all if None), each with its seed."""
+        infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
+        for i, env in enumerate(self.envs):
+            if mask is None or mask[i]:
+                self._env_obs[i], infos[i] = env.reset(seed=seeds[i], options=options)
+        self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
+        return infos
+
+    def step_send(self, actions: Any, reset_mask: np.ndarray | None) -> None:
+        """Check the actions; the loop runs in :meth:`step_recv`."""
+        check_actions_batch(self.action_space, actions, self.num_envs)
+        self._sent = (actions, reset_mask)
+
+    def step_recv(self, timeout: float | None = None) -> StepResult:
+        """Step each row (or reset it, where the mask says)."""
+        actions, reset_mask = self._sent
+        infos: list[dict[str, Any]] = [{}] * self.num_envs
+        for i, action in enumerate(iterate(self.action_space, actions)):
+            if i >= self.num_envs:
+                raise error.InvalidAction(f"Got more than {self.num_envs} actions: {actions!r}")
+            env = self.envs[i]
+            if reset_mask is not None and reset_mask[i]:
+                self._env_obs[i], infos[i] = env.reset()
+                continue
+            (
+                self._env_obs[i],
+                self._rewards[i],
+                self._terminated[i],
+                self._truncated[i],
+                infos[i],
+            ) = env.step(action)
+        self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
+        return self._rewards, self._terminated, self._truncated, infos
+
+    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> tuple[Any, ...]:
+        """Call ``name`` on each sub-env, or read it when it is not callable."""
+        results = []
+        for env in self.envs:
+            attr = env.get_wrapper_attr(name)
+            results.append(attr(*args, **kwargs) if callable(attr) else attr)
+        return tuple(results)
+
+    def set_attr(self, name: str, values: Sequence[Any]) -> None:
+        """Set ``name`` on each sub-env (on the outermost layer that has it)."""
+        for env, value in zip(self.envs, values):
+            env.set_wrapper_attr(name, value)
+
+    def render(self) -> tuple[Any, ...]:
+        """Each sub-env's frame."""
+        return tuple(env.render() for env in self.envs)
+
+    def close(self) -> None:
+        """Close each sub-env."""
+        for env in self.envs:
+            env.close()

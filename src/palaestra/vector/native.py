@@ -1,0 +1,102 @@
+"""``BatchedVectorEnv``: a built-in env's native batch behind the Gymnasium vector API.
+
+``make_vec("CartPole-v1", n)`` returns one by default (the ids' ``vector_entry_point``); it
+steps all ``n`` envs with one array op each and matches ``n`` single envs row for row: row i
+of ``reset(seed=s)`` is the env ``make(id)`` reset with ``seed=s + i``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.vector.engine_env import EngineVectorEnv
+from palaestra.vector.native_engine import NativeEngine
+from palaestra.vector.vector_env import AutoresetMode
+
+__all__ = [
+    "BatchedVectorEnv",
+    "acrobot",
+    "cartpole",
+    "continuous_mountain_car",
+    "mountain_car",
+    "pendulum",
+]
+
+
+class BatchedVectorEnv(EngineVectorEnv):
+    """A ``BatchedEnv`` with time limits and autoreset, as a ``VectorEnv``.
+
+    >>> import palaestra as gym
+    >>> envs = gym.make_vec("MountainCar-v0", num_envs=3)
+    >>> envs
+    BatchedVectorEnv(MountainCar-v0, num_envs=3)
+    >>> obs, infos = envs.reset(seed=0)
+    >>> obs.shape, obs.dtype
+    ((3, 2), dtype('float32'))
+    """
+
+    def __init__(
+        self,
+        batch: BatchedEnv,
+        max_episode_steps: int | None = None,
+        copy: bool = True,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        metadata: dict[str, Any] | None = None,
+    ) -> None:
+        self.batch = batch
+        engine = NativeEngine(batch, max_episode_steps, metadata)
+        super().__init__(engine, copy=copy, autoreset_mode=autoreset_mode)
+
+
+def _make(
+    kind: str,
+    num_envs: int,
+    max_episode_steps: int | None,
+    render_mode: str | None,
+    vector_kwargs: dict[str, Any],
+    env_kwargs: dict[str, Any],
+) -> BatchedVectorEnv:
+    from palaestra.envs import classic_control as cc
+
+    if render_mode is not None:
+        raise ValueError(
+            f"Native batches do not render (render_mode={render_mode!r}); use "
+            "make_vec(..., vectorization_mode='sync') to render each env."
+        )
+    batch_cls, env_cls = {
+        "cartpole": (cc.CartPoleBatch, cc.CartPoleEnv),
+        "mountain_car": (cc.MountainCarBatch, cc.MountainCarEnv),
+        "continuous_mountain_car": (
+            cc.ContinuousMountainCarBatch,
+            cc.Continuous_MountainCarEnv,
+        ),
+        "pendulum": (cc.PendulumBatch, cc.PendulumEnv),
+        "acrobot": (cc.AcrobotBatch, cc.AcrobotEnv),
+    }[kind]
+    batch = batch_cls(num_envs, **env_kwargs)
+    return BatchedVectorEnv(batch, max_episode_steps, metadata=env_cls.metadata, **vector_kwargs)
+
+
+def _entry_point(kind: str) -> Any:
+    def make(
+        num_envs: int = 1,
+        max_episode_steps: int | None = None,
+        render_mode: str | None = None,
+        copy: bool = True,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        **kwargs: Any,
+    ) -> BatchedVectorEnv:
+        vector_kwargs = {"copy": copy, "autoreset_mode": autoreset_mode}
+        return _make(kind, num_envs, max_episode_steps, render_mode, vector_kwargs, kwargs)
+
+    make.__name__ = make.__qualname__ = kind
+    make.__doc__ = f"The {kind} native batch as a vector env (a ``vector_entry_point``)."
+    return make
+
+
+cartpole = _entry_point("cartpole")
+mountain_car = _entry_point("mountain_car")
+continuous_mountain_car = _entry_point("continuous_mountain_car")
+pendulum = _entry_point("pendulum")
+acrobot = _entry_point("acrobot")

@@ -1,0 +1,111 @@
+"""The native engine: a ``BatchedEnv`` (one array step for all rows) plus time limits.
+
+The batched envs of :mod:`palaestra.envs.classic_control` step physics only; this adds what
+``make()``'s wrappers add to a single env: a ``TimeLimit`` as a step-counter array, and resets
+of the rows that need one. A step is a fixed number of array ops whatever N is; only rows being
+reset are looped over, because each row draws from its own generator (row i seeded ``s`` draws
+what a single env seeded ``s + i`` draws).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.spaces.batching import batch_space
+from palaestra.vector.engine import Infos, StepResult
+
+
+class NativeEngine:
+    """Engine over a ``BatchedEnv``; ``max_episode_steps`` None means no time limit."""
+
+    def __init__(
+        self,
+        batch: BatchedEnv,
+        max_episode_steps: int | None,
+        metadata: dict[str, Any] | None = None,
+    ) -> None:
+        if max_episode_steps is not None and (
+            not isinstance(max_episode_steps, (int, np.integer)) or max_episode_steps < 1
+        ):
+            raise ValueError(f"max_episode_steps must be a positive int, got {max_episode_steps}")
+        self.batch = batch
+        self.num_envs = batch.num_envs
+        self.max_episode_steps = max_episode_steps
+        self.single_observation_space = batch.single_observation_space
+        self.single_action_space = batch.single_action_space
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.metadata = dict(metadata or {})
+        self.render_mode: str | None = None
+        n = self.num_envs
+        self.obs = batch._obs  # [N, obs_dim] float32, rewritten in place by the batch
+        self._elapsed = np.zeros(n, dtype=np.int64)  # [N] steps since each row's reset
+        self._rewards = np.zeros(n)  # [N] float64
+        self._terminated = np.zeros(n, dtype=bool)  # [N]
+        self._truncated = np.zeros(n, dtype=bool)  # [N]
+        # No time limit: truncation never happens, so the array stays all False.
+        self._sent: tuple[Any, np.ndarray | None] = (None, None)
+        self._limit = np.int64(max_episode_steps) if max_episode_steps is not None else None
+
+    def reset(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> Infos:
+        """Re-sample the masked rows (all if None); classic-control resets have empty infos."""
+        self.batch.reset(seed=seeds, options=options, mask=mask)
+        if mask is None:
+            self._elapsed[:] = 0
+        else:
+            self._elapsed[mask] = 0
+        return None
+
+    def step_send(self, actions: Any, reset_mask: np.ndarray | None) -> None:
+        """Remember the actions; the array step runs in :meth:`step_recv`."""
+        self._sent = (actions, reset_mask)
+
+    def step_recv(self, timeout: float | None = None) -> StepResult:
+        """One array step for every row; rows in the reset mask are then re-sampled."""
+        actions, reset_mask = self._sent
+        self._sent = (None, None)
+        _, reward, terminated = self.batch.step(actions)
+        # The batch reuses its reward/terminated arrays (MountainCar's reward is a constant):
+        # copy into ours so callers may overwrite entries.
+        np.copyto(self._rewards, reward)
+        np.copyto(self._terminated, terminated)
+        self._elapsed += 1
+        if self._limit is not None:
+            np.greater_equal(self._elapsed, self._limit, out=self._truncated)
+        if reset_mask is not None:
+            # The rows also stepped above: harmless, since a step draws no random numbers and
+            # the reset overwrites the whole row state.
+            self.batch.reset(mask=reset_mask)
+            self._elapsed[reset_mask] = 0
+        return self._rewards, self._terminated, self._truncated, None
+
+    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> tuple[Any, ...]:
+        """Call ``name`` on the batch (one result per row, as a loop over envs would give)."""
+        if name == "np_random_seed":
+            return tuple(-1 if s is None else s for s in self.batch.seeds)
+        if name == "np_random":
+            return tuple(self.batch._rngs)
+        attr = getattr(self.batch, name)
+        result = attr(*args, **kwargs) if callable(attr) else attr
+        return tuple(result for _ in range(self.num_envs))
+
+    def set_attr(self, name: str, values: Sequence[Any]) -> None:
+        """Set ``name`` on the batch: all rows share one value, so the values must agree."""
+        first = values[0]
+        if any(v is not first and v != first for v in values[1:]):
+            raise ValueError(
+                f"The rows of a native batch share their attributes; got different values "
+                f"for {name!r}. Use vectorization_mode='sync' for per-env attributes."
+            )
+        setattr(self.batch, name, first)
+
+    def render(self) -> tuple[Any, ...]:
+        """Native batches do not render (use a single env or vectorization_mode='sync')."""
+        return tuple(None for _ in range(self.num_envs))
+
+    def close(self) -> None:
+        """Nothing to release."""

@@ -1,0 +1,318 @@
+"""The process engine: one worker process per env, observations in shared memory.
+
+Every wait on a worker also watches its process sentinel, so a worker that dies (a segfault,
+SIGKILL, the OOM killer) is reported at once with its exit code instead of hanging the parent.
+An exception raised by an env is re-raised in the parent with its original type and the
+worker's traceback text attached (``__notes__`` and ``__cause__``).
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import signal
+import time
+from collections.abc import Callable, Sequence
+from multiprocessing.connection import wait
+from typing import Any
+
+import numpy as np
+
+from palaestra.core import Env
+from palaestra.spaces import Box, Discrete, MultiBinary, MultiDiscrete
+from palaestra.spaces.batched_samples import concatenate, create_empty_array, iterate
+from palaestra.spaces.batching import batch_space
+from palaestra.vector.engine import (
+    Infos,
+    StepResult,
+    batch_spaces,
+    check_action_spaces,
+    check_actions_batch,
+)
+from palaestra.vector.shared_memory import create_shared_memory, read_from_shared_memory
+from palaestra.vector.worker import Payload, run_worker
+
+_ARRAY_SPACES = (Box, Discrete, MultiDiscrete, MultiBinary)
+
+
+class WorkerDiedError(RuntimeError):
+    """A worker process exited without answering; the vector env has been closed."""
+
+
+class RemoteTraceback(Exception):
+    """The traceback text of an exception raised in a worker (the ``__cause__`` we attach)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+def _exit_reason(code: int | None) -> str:
+    if code is None:
+        return "exited"
+    if code < 0:
+        try:
+            return f"was killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"was killed by signal {-code}"
+    return f"exited with code {code}"
+
+
+class ProcessEngine:
+    """Runs ``env_fns[i]()`` in worker process i; see the module doc for failure handling."""
+
+    def __init__(
+        self,
+        env_fns: Sequence[Callable[[], Env[Any, Any]]],
+        shared_memory: bool = True,
+        context: str | None = None,
+        daemon: bool = True,
+        observation_mode: Any = "same",
+        who: str = "AsyncVectorEnv",
+    ) -> None:
+        if len(env_fns) == 0:
+            raise ValueError(f"{who} needs at least one environment function")
+        self.who = who
+        self.num_envs = n = len(env_fns)
+        self.closed = False
+        self.processes: list[Any] = []
+        self.conns: list[Any] = []
+        ctx = mp.get_context(context)
+        # The spaces are needed before the workers start (to size shared memory): build one env
+        # here and drop it, as Gymnasium does.
+        dummy = env_fns[0]()
+        self.metadata = dict(dummy.metadata)
+        self.render_mode = dummy.render_mode
+        single_obs, single_act = dummy.observation_space, dummy.action_space
+        dummy.close()
+        del dummy
+        if isinstance(observation_mode, tuple):
+            self.single_observation_space, self.observation_space = batch_spaces(
+                [single_obs], observation_mode, who
+            )
+        else:
+            self.single_observation_space = single_obs
+            self.observation_space = batch_space(single_obs, n)
+        self._observation_mode = observation_mode
+        self.single_action_space = single_act
+        self.action_space = batch_space(single_act, n)
+
+        self.shared = shared_memory
+        buffers: dict[str, Any] | None = None
+        if shared_memory:
+            buffers = {
+                "obs": create_shared_memory(self.single_observation_space, n, ctx),
+                "actions": (
+                    create_shared_memory(single_act, n, ctx)
+                    if isinstance(single_act, _ARRAY_SPACES)
+                    else None
+                ),
+                "rewards": ctx.Array("d", n, lock=False),
+                "terminated": ctx.Array("b", n, lock=False),
+                "truncated": ctx.Array("b", n, lock=False),
+            }
+            self.obs = read_from_shared_memory(self.single_observation_space, buffers["obs"], n)
+            self._actions = (
+                None
+                if buffers["actions"] is None
+                else read_from_shared_memory(single_act, buffers["actions"], n)
+            )
+            self._rewards = np.frombuffer(buffers["rewards"], dtype=np.float64, count=n)
+            self._terminated = np.frombuffer(buffers["terminated"], dtype=np.bool_, count=n)
+            self._truncated = np.frombuffer(buffers["truncated"], dtype=np.bool_, count=n)
+        else:
+            self.obs = create_empty_array(self.single_observation_space, n)
+            self._actions = None
+            self._rewards = np.zeros(n)  # [N] float64
+            self._terminated = np.zeros(n, dtype=bool)  # [N]
+            self._truncated = np.zeros(n, dtype=bool)  # [N]
+            self._env_obs: list[Any] = [None] * n
+        self._buffers = buffers  # keeps the shared arrays alive as long as the engine
+        spaces = (self.single_observation_space, single_act)
+        try:
+            for i, fn in enumerate(env_fns):
+                parent, child = ctx.Pipe()
+                proc = ctx.Process(
+                    target=run_worker,
+                    name=f"Worker<{who}>-{i}",
+                    args=(i, Payload(fn), child, parent, buffers, n, spaces),
+                    daemon=daemon,
+                )
+                self.conns.append(parent)
+                self.processes.append(proc)
+                proc.start()
+                child.close()
+            self._gather(range(n), "start")
+            self._check_spaces()
+        except BaseException:
+            self.close(terminate=True)
+            raise
+        self._step_rows: list[int] = []
+        self._reset_rows: list[int] = []
+
+    def _check_spaces(self) -> None:
+        answers = self.call_rows(range(self.num_envs), "spaces", None)
+        obs_spaces = [a[0] for a in answers]
+        if not isinstance(self._observation_mode, tuple):
+            batch_spaces(obs_spaces, self._observation_mode, self.who)
+        check_action_spaces([self.single_action_space] + [a[1] for a in answers], self.who)
+
+    # -- talking to workers -------------------------------------------------------------------
+    def _send(self, i: int, command: str, data: Any) -> None:
+        try:
+            self.conns[i].send((command, data))
+        except (BrokenPipeError, ConnectionResetError, EOFError) as e:
+            self._died(i, command, e)
+
+    def _died(self, i: int, what: str, cause: BaseException | None = None) -> None:
+        proc = self.processes[i]
+        proc.join(timeout=1.0)
+        reason = _exit_reason(proc.exitcode)
+        self.close(terminate=True)
+        raise WorkerDiedError(
+            f"{self.who} worker {i} (pid {proc.pid}) {reason} while running {what!r}; the "
+            "vector environment has been closed."
+        ) from cause
+
+    def _gather(self, rows: Any, what: str, timeout: float | None = None) -> list[Any]:
+        """Every answer from ``rows`` (in order); raises the first worker error after all came."""
+        rows = list(rows)
+        answers: dict[int, Any] = {}
+        errors: list[tuple[int, Any]] = []
+        waiting = {self.conns[i]: i for i in rows}
+        sentinels = {self.processes[i].sentinel: i for i in rows}
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while waiting:
+            left = None if deadline is None else max(0.0, deadline - time.monotonic())
+            ready = wait([*waiting, *sentinels], timeout=left)
+            if not ready:
+                raise mp.TimeoutError(
+                    f"{self.who}: {what!r} took longer than {timeout} seconds "
+                    f"(workers {sorted(waiting.values())} have not answered)"
+                )
+            for obj in ready:
+                i = waiting.get(obj) if obj in waiting else sentinels.get(obj)  # type: ignore[call-overload]
+                if i is None or i in answers:
+                    continue
+                conn = self.conns[i]
+                if obj is not conn and not conn.poll():
+                    self._died(i, what)  # the process ended and left no answer
+                try:
+                    ok, payload = conn.recv()
+                except (EOFError, ConnectionResetError, OSError) as e:
+                    self._died(i, what, e)
+                answers[i] = payload
+                if not ok:
+                    errors.append((i, payload))
+                del waiting[conn]
+                del sentinels[self.processes[i].sentinel]
+        if errors:
+            i, (exc, text) = errors[0]
+            _attach_remote_traceback(exc, text, f"{self.who} worker {i}")
+            raise exc
+        return [answers[i] for i in rows]
+
+    def call_rows(self, rows: Any, command: str, data: Any) -> list[Any]:
+        """Send ``command`` to each worker in ``rows`` and gather the answers."""
+        rows = list(rows)
+        for i in rows:
+            self._send(i, command, data)
+        return self._gather(rows, command)
+
+    # -- the engine protocol ------------------------------------------------------------------
+    def reset(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> Infos:
+        """Reset the masked workers' envs (all if None), each with its seed."""
+        rows = range(self.num_envs) if mask is None else np.flatnonzero(mask).tolist()
+        for i in rows:
+            self._send(i, "reset", (seeds[i], options))
+        answers = self._gather(rows, "reset")
+        infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
+        for i, answer in zip(rows, answers):
+            if self.shared:
+                infos[i] = answer
+            else:
+                self._env_obs[i], infos[i] = answer
+        if not self.shared:
+            self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
+        return infos
+
+    def step_send(self, actions: Any, reset_mask: np.ndarray | None) -> None:
+        """Send each worker its action (through shared memory for array action spaces)."""
+        check_actions_batch(self.action_space, actions, self.num_envs)
+        if self._actions is not None:
+            # One vectorised copy into shared memory; the pipe carries only "step".
+            np.copyto(self._actions, np.asarray(actions), casting="same_kind")
+            per_row: Any = None
+        else:
+            per_row = list(iterate(self.action_space, actions))
+        self._reset_rows = [] if reset_mask is None else np.flatnonzero(reset_mask).tolist()
+        for i in range(self.num_envs):
+            if reset_mask is not None and reset_mask[i]:
+                self._send(i, "reset", (None, None))
+            else:
+                self._send(i, "step", None if per_row is None else per_row[i])
+
+    def step_recv(self, timeout: float | None = None) -> StepResult:
+        """Gather the workers' answers: infos by pipe, the rest is already in shared memory."""
+        answers = self._gather(range(self.num_envs), "step", timeout)
+        reset_rows = set(self._reset_rows)
+        infos: list[dict[str, Any]] = [{}] * self.num_envs
+        for i, answer in enumerate(answers):
+            if self.shared:
+                infos[i] = answer
+            elif i in reset_rows:
+                self._env_obs[i], infos[i] = answer
+            else:
+                obs, reward, term, trunc, infos[i] = answer
+                self._env_obs[i] = obs
+                self._rewards[i], self._terminated[i], self._truncated[i] = reward, term, trunc
+        if not self.shared:
+            self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
+        return self._rewards, self._terminated, self._truncated, infos
+
+    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> tuple[Any, ...]:
+        """Call ``name`` in every worker."""
+        return tuple(self.call_rows(range(self.num_envs), "call", (name, args, kwargs)))
+
+    def set_attr(self, name: str, values: Sequence[Any]) -> None:
+        """Set ``name`` in every worker."""
+        for i, value in enumerate(values):
+            self._send(i, "set_attr", (name, value))
+        self._gather(range(self.num_envs), "set_attr")
+
+    def render(self) -> tuple[Any, ...]:
+        """Every worker's frame."""
+        return self.call("render", (), {})
+
+    def close(self, terminate: bool = False, timeout: float = 5.0) -> None:
+        """Ask workers to close (or terminate them); kill any still alive after ``timeout``."""
+        if self.closed:
+            return
+        self.closed = True
+        if not terminate:
+            for conn, proc in zip(self.conns, self.processes):
+                if proc.is_alive():
+                    try:
+                        conn.send(("close", None))
+                    except (BrokenPipeError, ConnectionResetError, OSError):
+                        pass
+        deadline = time.monotonic() + (0.0 if terminate else timeout)
+        for proc in self.processes:
+            if proc.pid is None:
+                continue  # never started
+            proc.join(timeout=max(0.0, deadline - time.monotonic()))
+            if proc.is_alive():
+                proc.terminate()
+                proc.join(timeout=1.0)
+            if proc.is_alive():
+                proc.kill()
+                proc.join(timeout=1.0)
+        for conn in self.conns:
+            conn.close()
+
+
+def _attach_remote_traceback(exc: BaseException, text: str, where: str) -> None:
+    """Make the worker's traceback part of what the parent prints for ``exc``."""
+    note = f"Raised in {where}; its traceback:\n{text.rstrip()}"
+    add_note = getattr(exc, "add_note", None)  # Python 3.11+
+    if add_note is not None:
+        add_note(note)
+    exc.__cause__ = RemoteTraceback(text)
