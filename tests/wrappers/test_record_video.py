@@ -160,3 +160,16 @@ def test_records_a_real_env_without_pygame(tmp_path):
             gif.seek(i)
             durations.append(gif.info["duration"])
     assert sum(durations) == 11 * 20
+
+
+def test_records_a_frame_list_env_and_keeps_its_frames_for_the_user(tmp_path):
+    from palaestra.wrappers.rendering import RenderCollection
+
+    env = RecordVideo(RenderCollection(Counter()), str(tmp_path), episode_trigger=lambda e: True)
+    env.reset()
+    env.step(0)
+    env.step(0)
+    # the user's render() still gets every frame, although RecordVideo consumed them
+    assert [int(f[0, 0, 0]) for f in env.render()] == [0, 1, 2]
+    env.close()
+    assert gif_frames(tmp_path / "rl-video-episode-0.gif") == 3
