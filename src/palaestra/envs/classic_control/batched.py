@@ -1,7 +1,7 @@
 """The batched engine: N copies of one classic-control env stepped with array ops, in place.
 
-A subclass names its state components, its spaces, how one row is sampled on reset (with that
-row's own generator) and how the whole batch steps (its module's ``step_state`` with
+A subclass names its state components, its spaces, how reset uniforms become initial states
+(its module's ``reset_state``) and how the whole batch steps (its module's ``step_state`` with
 :data:`~palaestra.envs.classic_control._ops.ARRAY`). The base owns the buffers, the per-row
 generators and seeding. There is no autoreset, time limit or info here: the vector layer adds
 those on top.
