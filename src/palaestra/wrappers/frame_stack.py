@@ -5,7 +5,10 @@ from __future__ import annotations
 from collections import deque
 from typing import Any, SupportsFloat
 
+import numpy as np
+
 from palaestra.core import ActType, Env, ObsType, Wrapper, WrapperObsType
+from palaestra.spaces import Box
 from palaestra.spaces.batching import batch_space, concatenate, create_empty_array
 from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.wrappers.stateful_observation import _check_int
@@ -56,13 +59,23 @@ class FrameStackObservation(
         self.stack_size = stack_size
         self.padding_type: str = padding_type
         self._inner_space = space
+        self._box_shape = (stack_size, *space.shape) if isinstance(space, Box) else None
         self.obs_queue: deque[Any] = deque([self.padding_value] * stack_size, maxlen=stack_size)
 
     def _stacked(self) -> WrapperObsType:
         # A fresh output each call (callers keep observations in replay buffers), written once:
-        # no deepcopy of a shared buffer as in Gymnasium.
-        out = create_empty_array(self._inner_space, n=self.stack_size)
-        return concatenate(self._inner_space, self.obs_queue, out)
+        # no deepcopy of a shared buffer as in Gymnasium. Box observations take the short road
+        # (np.array over the deque is ~4x cheaper than the generic batching helpers).
+        if self._box_shape is not None:
+            out = np.array(self.obs_queue, dtype=self._inner_space.dtype)
+            if out.shape != self._box_shape:
+                raise ValueError(
+                    f"FrameStackObservation got observations of shape {out.shape[1:]}, "
+                    f"expected {self._box_shape[1:]} from {self._inner_space}"
+                )
+            return out  # type: ignore[return-value]
+        empty = create_empty_array(self._inner_space, n=self.stack_size)
+        return concatenate(self._inner_space, self.obs_queue, empty)  # type: ignore[no-any-return]
 
     def step(
         self, action: ActType
