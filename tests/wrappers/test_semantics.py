@@ -249,3 +249,13 @@ def test_lazy_table_agrees_with_the_modules() -> None:
         if name in table:  # once the lead has added the entry
             assert table[name] == module
             assert getattr(palaestra.wrappers, name) is getattr(W, name)
+
+
+def test_frame_stack_names_a_wrong_observation_shape() -> None:
+    inner = cont()
+    env = W.FrameStackObservation(
+        W.TransformObservation(inner, lambda o: o[:2], None),
+        3,  # claims (3,), returns (2,)
+    )
+    with pytest.raises(ValueError, match=r"observations of shape \(2,\), expected \(3,\)"):
+        env.reset(seed=0)

@@ -75,7 +75,7 @@ class FrameStackObservation(
                 )
             return out  # type: ignore[return-value]
         empty = create_empty_array(self._inner_space, n=self.stack_size)
-        return concatenate(self._inner_space, self.obs_queue, empty)  # type: ignore[no-any-return]
+        return concatenate(self._inner_space, self.obs_queue, empty)
 
     def step(
         self, action: ActType
