@@ -1,0 +1,152 @@
+"""Network building blocks: observation preprocessing, feature extractors, MLPs.
+
+Extractors follow SB3's: ``FlattenExtractor`` (MlpPolicy), ``NatureCNN`` (CnnPolicy; Mnih et al.
+2015) and ``CombinedExtractor`` (MultiInputPolicy: a CNN per image key, flatten for the rest).
+Images are scaled by 1/255 and channel-last images are permuted here, inside the network, so no
+``VecTransposeImage`` wrapper is needed and ``predict`` accepts the env's own layout.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+from torch import nn
+
+from palaestra import spaces
+from palaestra.algos.spaces_util import is_image_space, is_image_space_channels_first
+
+__all__ = [
+    "BaseFeaturesExtractor",
+    "CombinedExtractor",
+    "FlattenExtractor",
+    "NatureCNN",
+    "mlp",
+    "preprocess_obs",
+    "preprocessed_dim",
+]
+
+
+def preprocess_obs(obs: Any, space: spaces.Space[Any], normalize_images: bool = True) -> Any:
+    """Batch of raw observations -> float tensors: images /255 (and CHW), discrete one-hot."""
+    if isinstance(space, spaces.Dict):
+        return {k: preprocess_obs(obs[k], s, normalize_images) for k, s in space.spaces.items()}
+    if isinstance(space, spaces.Box):
+        if is_image_space(space):
+            if not is_image_space_channels_first(space):
+                obs = obs.permute(0, 3, 1, 2)
+            return obs.float() / 255.0 if normalize_images else obs.float()
+        return obs.float()
+    if isinstance(space, spaces.Discrete):
+        return nn.functional.one_hot(
+            (obs.long() - int(space.start)).reshape(-1), int(space.n)
+        ).float()
+    if isinstance(space, spaces.MultiDiscrete):
+        flat = (obs.long() - torch.as_tensor(space.start, device=obs.device)).reshape(
+            obs.shape[0], -1
+        )
+        nvec = space.nvec.reshape(-1).tolist()
+        return torch.cat(
+            [nn.functional.one_hot(flat[:, i], int(n)).float() for i, n in enumerate(nvec)], dim=1
+        )
+    if isinstance(space, spaces.MultiBinary):
+        return obs.float().reshape(obs.shape[0], -1)
+    raise TypeError(f"unsupported observation space {space}")
+
+
+def preprocessed_dim(space: spaces.Space[Any]) -> int:
+    """Width of a flattened, preprocessed observation of a non-image space."""
+    if isinstance(space, spaces.Discrete):
+        return int(space.n)
+    if isinstance(space, spaces.MultiDiscrete):
+        return int(space.nvec.sum())
+    shape = tuple(space.shape or ())
+    return int(torch.Size(shape).numel())
+
+
+class BaseFeaturesExtractor(nn.Module):
+    """Maps a preprocessed observation batch to ``[B, features_dim]``."""
+
+    def __init__(self, observation_space: spaces.Space[Any], features_dim: int) -> None:
+        super().__init__()
+        self.observation_space = observation_space
+        self.features_dim = features_dim
+
+
+class FlattenExtractor(BaseFeaturesExtractor):
+    """Flatten, nothing else (MlpPolicy)."""
+
+    def __init__(self, observation_space: spaces.Space[Any]) -> None:
+        super().__init__(observation_space, preprocessed_dim(observation_space))
+        self.flatten = nn.Flatten()
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        return self.flatten(obs)
+
+
+def _chw(space: spaces.Box) -> tuple[int, int, int]:
+    shape = tuple(int(d) for d in space.shape)
+    if is_image_space(space) and not is_image_space_channels_first(space):
+        return shape[2], shape[0], shape[1]
+    return shape[0], shape[1], shape[2]
+
+
+class NatureCNN(BaseFeaturesExtractor):
+    """Three conv layers and a linear layer, as in the DQN Nature paper (Mnih et al. 2015)."""
+
+    def __init__(self, observation_space: spaces.Space[Any], features_dim: int = 512) -> None:
+        super().__init__(observation_space, features_dim)
+        if not isinstance(observation_space, spaces.Box) or len(observation_space.shape) != 3:
+            raise ValueError(
+                f"NatureCNN needs an image observation space (rank-3 Box), got "
+                f"{observation_space}; use 'MlpPolicy' for vector observations"
+            )
+        c, h, w = _chw(observation_space)
+        self.cnn = nn.Sequential(
+            nn.Conv2d(c, 32, kernel_size=8, stride=4),
+            nn.ReLU(),
+            nn.Conv2d(32, 64, kernel_size=4, stride=2),
+            nn.ReLU(),
+            nn.Conv2d(64, 64, kernel_size=3, stride=1),
+            nn.ReLU(),
+            nn.Flatten(),
+        )
+        with torch.no_grad():
+            n_flatten = self.cnn(torch.zeros(1, c, h, w)).shape[1]
+        self.linear = nn.Sequential(nn.Linear(n_flatten, features_dim), nn.ReLU())
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        return self.linear(self.cnn(obs))
+
+
+class CombinedExtractor(BaseFeaturesExtractor):
+    """Dict observations: NatureCNN(``cnn_output_dim``) per image key, flatten the others."""
+
+    def __init__(self, observation_space: spaces.Space[Any], cnn_output_dim: int = 256) -> None:
+        if not isinstance(observation_space, spaces.Dict):
+            raise ValueError(
+                f"MultiInputPolicy needs a Dict observation space, got {observation_space}"
+            )
+        extractors: dict[str, nn.Module] = {}
+        total = 0
+        for key, sub in observation_space.spaces.items():
+            if is_image_space(sub):
+                extractors[key] = NatureCNN(sub, features_dim=cnn_output_dim)
+                total += cnn_output_dim
+            else:
+                extractors[key] = nn.Flatten()
+                total += preprocessed_dim(sub)
+        super().__init__(observation_space, total)
+        self.extractors = nn.ModuleDict(extractors)
+
+    def forward(self, obs: dict[str, torch.Tensor]) -> torch.Tensor:
+        return torch.cat([net(obs[key]) for key, net in self.extractors.items()], dim=1)
+
+
+def mlp(in_dim: int, hidden: list[int], activation_fn: type[nn.Module]) -> nn.Sequential:
+    """``Linear -> activation`` for each hidden width (empty list: identity)."""
+    layers: list[nn.Module] = []
+    for width in hidden:
+        layers += [nn.Linear(in_dim, width), activation_fn()]
+        in_dim = width
+    return nn.Sequential(*layers)

@@ -1,0 +1,84 @@
+"""Replay and rollout buffers: layout, time-limit bootstrapping, sampling, persistence."""
+
+import numpy as np
+import pytest
+import torch
+
+from palaestra import spaces
+from palaestra.algos.replay_buffer import ReplayBuffer
+from palaestra.algos.rollout_buffer import RolloutBuffer
+
+OBS = spaces.Box(-10, 10, (2,))
+
+
+def _fill(buf: ReplayBuffer, steps: int) -> None:
+    for t in range(steps):
+        obs = np.full((buf.n_envs, 2), t, dtype=np.float32)
+        buf.add(
+            obs,
+            obs + 1,
+            np.arange(buf.n_envs),
+            np.full(buf.n_envs, float(t)),
+            np.array([t % 3 == 2] * buf.n_envs),
+            np.array([t % 6 == 5] * buf.n_envs),
+        )
+
+
+def test_timeouts_are_not_terminal() -> None:
+    buf = ReplayBuffer(100, OBS, spaces.Discrete(3), n_envs=2)
+    _fill(buf, 6)
+    # steps 2 and 5 are done; step 5 is a truncation, so only step 2 is terminal
+    assert buf.terminated[:6, 0].tolist() == [0, 0, 1, 0, 0, 0]
+    no_handle = ReplayBuffer(100, OBS, spaces.Discrete(3), handle_timeout_termination=False)
+    _fill(no_handle, 6)
+    assert no_handle.terminated[:6, 0].tolist() == [0, 0, 1, 0, 0, 1]
+
+
+def test_ring_wraps_and_sample_shapes() -> None:
+    buf = ReplayBuffer(8, OBS, spaces.Discrete(3), n_envs=2)  # 4 rows of 2 envs, as SB3
+    assert buf.buffer_size == 4
+    _fill(buf, 6)
+    assert buf.full and buf.pos == 2 and buf.size() == 4
+    batch = buf.sample(16, np.random.default_rng(0))
+    assert batch.observations.shape == (16, 2) and batch.actions.shape == (16,)
+    assert batch.rewards.dtype == torch.float32 and batch.terminated.shape == (16,)
+    # rows 0-1 were overwritten by steps 4-5: no step 0 or 1 transitions remain
+    assert set(batch.rewards.tolist()) <= {2.0, 3.0, 4.0, 5.0}
+    torch.testing.assert_close(batch.next_observations, batch.observations + 1)
+
+
+def test_dict_observations_and_state_roundtrip() -> None:
+    space = spaces.Dict({"img": spaces.Box(0, 255, (3, 4, 4), np.uint8), "v": spaces.Discrete(5)})
+    buf = ReplayBuffer(10, space, spaces.Discrete(2))
+    for t in range(3):
+        obs = {"img": np.full((1, 3, 4, 4), t, np.uint8), "v": np.array([t])}
+        buf.add(obs, obs, np.array([1]), np.array([1.0]), np.array([False]), np.array([False]))
+    batch = buf.sample(4, np.random.default_rng(1))
+    assert batch.observations["img"].dtype == torch.uint8
+    meta, arrays = buf.state()
+    other = ReplayBuffer(10, space, spaces.Discrete(2))
+    other.load_state(meta, arrays)
+    assert other.pos == 3 and not other.full
+    np.testing.assert_array_equal(other.observations["v"][:3, 0], [0, 1, 2])
+    with pytest.raises(ValueError, match="n_envs"):
+        ReplayBuffer(10, space, spaces.Discrete(2), n_envs=2).load_state(meta, arrays)
+
+
+def test_rollout_buffer_minibatches_cover_everything_once() -> None:
+    buf = RolloutBuffer(4, OBS, spaces.Box(-1, 1, (2,)), n_envs=3, gamma=0.9, gae_lambda=0.8)
+    for t in range(4):
+        buf.add(
+            np.full((3, 2), t),
+            np.zeros((3, 2)),
+            np.ones(3),
+            np.zeros(3),
+            np.arange(3) + 10 * t,
+            np.zeros(3),
+        )
+    assert buf.full
+    buf.compute_returns_and_advantage(np.zeros(3), np.ones(3))
+    seen = []
+    for mb in buf.minibatches(5, np.random.default_rng(0)):
+        assert mb.observations.shape[1:] == (2,) and mb.actions.dtype == torch.float32
+        seen += mb.old_values.tolist()
+    assert sorted(seen) == sorted(float(10 * t + e) for t in range(4) for e in range(3))

@@ -1,0 +1,123 @@
+"""Networks and action heads: SB3's sizes and inits, exact log-probs/entropies, image handling."""
+
+import numpy as np
+import pytest
+import torch
+
+from palaestra import spaces
+from palaestra.algos.distributions import ActionHead
+from palaestra.algos.networks import CombinedExtractor, NatureCNN, preprocess_obs
+from palaestra.algos.policies import ActorCritic, QNetwork, extractor_class
+
+BOX4 = spaces.Box(-1, 1, (4,))
+
+
+def _n_params(module: torch.nn.Module) -> int:
+    return sum(p.numel() for p in module.parameters())
+
+
+def test_parameter_counts_match_sb3() -> None:
+    from gymnasium import spaces as g
+    from stable_baselines3.common.policies import ActorCriticPolicy
+    from stable_baselines3.common.torch_layers import FlattenExtractor
+    from stable_baselines3.dqn.policies import QNetwork as SB3Q
+
+    for ours, theirs in [
+        (spaces.Discrete(3), g.Discrete(3)),
+        (spaces.MultiDiscrete([3, 2]), g.MultiDiscrete([3, 2])),
+        (spaces.MultiBinary(3), g.MultiBinary(3)),
+        (spaces.Box(-1, 1, (2,)), g.Box(-1, 1, (2,))),
+    ]:
+        sb3 = ActorCriticPolicy(g.Box(-1, 1, (4,)), theirs, lambda _: 3e-4)
+        assert _n_params(ActorCritic(BOX4, ours)) == _n_params(sb3), ours
+    sb3_q = SB3Q(g.Box(-1, 1, (4,)), g.Discrete(3), FlattenExtractor(g.Box(-1, 1, (4,))), 4)
+    assert _n_params(QNetwork(BOX4, spaces.Discrete(3))) == _n_params(sb3_q)
+
+
+@pytest.mark.parametrize(
+    "space",
+    [
+        spaces.Discrete(4),
+        spaces.Discrete(3, start=-1),
+        spaces.MultiDiscrete([3, 2, 4]),
+        spaces.MultiBinary(3),
+        spaces.Box(-1, 1, (2,)),
+    ],
+)
+def test_action_heads_agree_with_torch_distributions(space: spaces.Space) -> None:
+    torch.manual_seed(0)
+    head = ActionHead(space, 5, log_std_init=-0.3)
+    latent = torch.randn(6, 5)
+    actions, log_prob = head.act(latent, deterministic=False)
+    actions = actions.detach()
+    if not isinstance(space, spaces.Box):  # Gaussian samples are unbounded; the env clips
+        assert all(space.contains(a) for a in actions.numpy().astype(space.dtype))
+    lp, ent = head.evaluate(latent, actions)
+    torch.testing.assert_close(lp, log_prob)
+    params = head.net(latent)
+    D = torch.distributions
+    if isinstance(space, spaces.Box):
+        dist = D.Normal(params, head.log_std.exp())
+        ref_lp, ref_ent = dist.log_prob(actions).sum(1), dist.entropy().sum(1)
+    elif isinstance(space, spaces.MultiBinary):
+        dist = D.Bernoulli(logits=params)
+        ref_lp, ref_ent = dist.log_prob(actions).sum(1), dist.entropy().sum(1)
+    else:
+        sizes = [int(space.n)] if isinstance(space, spaces.Discrete) else space.nvec.tolist()
+        idx = (actions - torch.as_tensor(np.asarray(space.start))).reshape(6, -1)
+        parts = [D.Categorical(logits=chunk) for chunk in torch.split(params, sizes, 1)]
+        ref_lp = sum(d.log_prob(idx[:, i]) for i, d in enumerate(parts))
+        ref_ent = sum(d.entropy() for d in parts)
+    torch.testing.assert_close(lp, ref_lp)
+    torch.testing.assert_close(ent, ref_ent)
+    mode, _ = head.act(latent, deterministic=True)
+    again, _ = head.act(latent, deterministic=True)
+    torch.testing.assert_close(mode, again)
+
+
+def test_ortho_init_gains() -> None:
+    torch.manual_seed(0)
+    ac = ActorCritic(BOX4, spaces.Discrete(2))
+    w = ac.action_head.net.weight
+    # orthogonal rows scaled by 0.01
+    torch.testing.assert_close(w @ w.T, 1e-4 * torch.eye(2), atol=1e-7, rtol=1e-4)
+    assert float(ac.value_head.bias.detach()) == 0.0
+    assert isinstance(ac.pi_net[1], torch.nn.Tanh)
+
+
+def test_channel_last_images_are_permuted_and_scaled() -> None:
+    hwc = spaces.Box(0, 255, (36, 40, 3), np.uint8)
+    x = torch.randint(0, 256, (2, 36, 40, 3), dtype=torch.uint8)
+    pre = preprocess_obs(x, hwc)
+    assert pre.shape == (2, 3, 36, 40) and float(pre.max()) <= 1.0
+    torch.testing.assert_close(pre[0, 1], x[0, :, :, 1].float() / 255)
+    q = QNetwork(hwc, spaces.Discrete(4), NatureCNN)
+    assert q(x).shape == (2, 4)
+    assert len(q.mlp) == 0  # SB3: no hidden layers after NatureCNN
+
+
+def test_multi_input_and_discrete_obs() -> None:
+    space = spaces.Dict(
+        {"img": spaces.Box(0, 255, (1, 36, 36), np.uint8), "pos": spaces.Discrete(3)}
+    )
+    ac = ActorCritic(space, spaces.Discrete(2), CombinedExtractor)
+    obs = {
+        "img": torch.zeros(5, 1, 36, 36, dtype=torch.uint8),
+        "pos": torch.tensor([0, 1, 2, 0, 1]),
+    }
+    actions, values, log_prob = ac(obs)
+    assert actions.shape == values.shape == log_prob.shape == (5,)
+    assert ac.features_extractor.features_dim == 256 + 3
+    one_hot = preprocess_obs(torch.tensor([2, 0]), spaces.Discrete(3))
+    assert one_hot.tolist() == [[0, 0, 1], [1, 0, 0]]
+
+
+def test_unknown_policy_and_bad_arch() -> None:
+    with pytest.raises(ValueError, match="Policy 'MlpPolicyy' unknown"):
+        extractor_class("MlpPolicyy")
+    with pytest.raises(ValueError, match="net_arch"):
+        ActorCritic(BOX4, spaces.Discrete(2), net_arch="big")
+    with pytest.raises(TypeError, match="Tuple"):
+        ActorCritic(BOX4, spaces.Tuple([spaces.Discrete(2)]))
+    with pytest.raises(ValueError, match="image observation"):
+        QNetwork(BOX4, spaces.Discrete(2), NatureCNN)
