@@ -28,6 +28,7 @@ WRAPPER_MODULES: dict[str, str] = {
     "RescaleObservation": "transform_observation",
     "DtypeObservation": "transform_observation",
     "DiscretizeObservation": "discretize",
+    "ResizeObservation": "resize",
     "TransformAction": "transform_action",
     "ClipAction": "transform_action",
     "RescaleAction": "transform_action",

@@ -1,0 +1,138 @@
+"""``ResizeObservation`` and :func:`resize_area`: OpenCV's ``INTER_AREA`` in numpy.
+
+Gymnasium resizes with ``cv2.resize(..., interpolation=cv2.INTER_AREA)``. This module computes
+the same bytes without OpenCV, for downscaling (the case of frame preprocessing, e.g. Atari's
+210x160 -> 84x84): the same per-axis area weights in float32, summed in the same order, then
+rounded half to even. Exact integer factors take OpenCV's block-average path, including its
+``(sum + 2) >> 2`` rounding for 2x2 blocks.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from palaestra.core import ActType, Env, ObsType, WrapperObsType
+from palaestra.spaces import Box
+from palaestra.utils.record_constructor import RecordConstructorArgs
+from palaestra.wrappers.transform_observation import TransformObservation
+
+__all__ = ["ResizeObservation", "resize_area"]
+
+
+@lru_cache(maxsize=64)
+def _area_weights(src: int, dst: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(index, alpha)``, each ``[dst, terms]``: source cells and float32 weights per output
+    cell, in OpenCV's order (``computeResizeAreaTab``); padding terms have weight 0."""
+    scale = src / dst
+    cells: list[list[tuple[int, np.float32]]] = []
+    for d in range(dst):
+        start = d * scale
+        stop = start + scale
+        width = min(scale, src - start)
+        first, last = math.ceil(start), math.floor(stop)
+        last = min(last, src - 1)
+        first = min(first, last)
+        terms = []
+        if first - start > 1e-3:  # partial cell on the left
+            terms.append((first - 1, np.float32((first - start) / width)))
+        terms += [(s, np.float32(1.0 / width)) for s in range(first, last)]
+        if stop - last > 1e-3:  # partial cell on the right
+            terms.append((last, np.float32(min(stop - last, 1.0, width) / width)))
+        cells.append(terms)
+    n_terms = max(len(t) for t in cells)
+    index = np.zeros((dst, n_terms), dtype=np.intp)
+    alpha = np.zeros((dst, n_terms), dtype=np.float32)
+    for d, terms in enumerate(cells):
+        for j, (s, a) in enumerate(terms):
+            index[d, j], alpha[d, j] = s, a
+    return index, alpha
+
+
+def resize_area(image: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Downscale a ``(H, W, ...)`` uint8 image to ``shape = (h, w)`` like ``cv2.INTER_AREA``.
+
+    >>> img = np.arange(16, dtype=np.uint8).reshape(4, 4)
+    >>> resize_area(img, (2, 2))
+    array([[ 3,  5],
+           [11, 13]], dtype=uint8)
+    """
+    h, w = image.shape[:2]
+    oh, ow = shape
+    if not (0 < oh <= h and 0 < ow <= w):
+        raise ValueError(f"resize_area only downscales: cannot resize {(h, w)} to {(oh, ow)}")
+    trailing = image.shape[2:]
+    if h % oh == 0 and w % ow == 0:
+        sy, sx = h // oh, w // ow
+        blocks = image.astype(np.int32).reshape((oh, sy, ow, sx, *trailing))
+        total = blocks.sum(axis=(1, 3))
+        if sy == 2 and sx == 2:
+            return ((total + 2) >> 2).astype(np.uint8)  # OpenCV's SIMD 2x2 path rounds half up
+        mean = total.astype(np.float32) * np.float32(1.0 / (sy * sx))
+        return np.clip(np.rint(mean), 0, 255).astype(np.uint8)
+
+    yi, ya = _area_weights(h, oh)
+    xi, xa = _area_weights(w, ow)
+    src = image.astype(np.float32)
+    pad = (None,) * len(trailing)
+    # Horizontal pass for every source row, then the vertical one, each summed term by term in
+    # float32 so that the rounding (and hence every byte) matches OpenCV's.
+    rows = np.zeros((h, ow, *trailing), dtype=np.float32)
+    for j in range(xi.shape[1]):
+        rows = rows + src[:, xi[:, j]] * xa[(None, slice(None), j, *pad)]
+    out = np.zeros((oh, ow, *trailing), dtype=np.float32)
+    for j in range(yi.shape[1]):
+        out = out + ya[(slice(None), j, None, *pad)] * rows[yi[:, j]]
+    return np.clip(np.rint(out), 0, 255).astype(np.uint8)
+
+
+class ResizeObservation(
+    TransformObservation[WrapperObsType, ActType, ObsType], RecordConstructorArgs
+):
+    """Downscale ``(H, W[, C])`` uint8 image observations to ``shape = (h, w)`` with area
+    averaging; the same bytes as Gymnasium's OpenCV-based wrapper, without OpenCV.
+
+    Upscaling is not supported (Gymnasium's OpenCV path interpolates bilinearly there).
+    """
+
+    def __init__(self, env: Env[ObsType, ActType], shape: tuple[int, int]) -> None:
+        space = env.observation_space
+        if not isinstance(space, Box):
+            raise TypeError(
+                f"ResizeObservation requires a Box observation space, got {type(space)}"
+            )
+        if not (np.all(space.low == 0) and np.all(space.high == 255)):
+            raise ValueError("ResizeObservation requires observation bounds 0 to 255")
+        if space.dtype != np.uint8:
+            raise ValueError(
+                f"ResizeObservation requires observation dtype uint8, got {space.dtype}"
+            )
+        if not isinstance(shape, tuple):
+            raise TypeError(f"ResizeObservation requires shape to be a tuple, got {type(shape)}")
+        if len(shape) != 2:
+            raise ValueError(f"ResizeObservation requires shape tuple of length 2, got {shape}")
+        if not all(np.issubdtype(type(d), np.integer) for d in shape):
+            raise TypeError(
+                f"ResizeObservation requires shape elements to be integers, got {shape}"
+            )
+        if not all(d > 0 for d in shape):
+            raise ValueError(
+                f"ResizeObservation requires shape elements to be greater than 0, got {shape}"
+            )
+        if len(space.shape) < 2 or shape[0] > space.shape[0] or shape[1] > space.shape[1]:
+            raise ValueError(
+                f"ResizeObservation only downscales: cannot resize images of shape {space.shape} "
+                f"to {shape}"
+            )
+        RecordConstructorArgs.__init__(self, shape=shape)
+        self.shape = (int(shape[0]), int(shape[1]))
+        new_space = Box(0, 255, shape=self.shape + space.shape[2:], dtype=np.uint8)
+        target = self.shape
+
+        def func(obs: Any) -> np.ndarray:
+            return resize_area(np.asarray(obs), target)
+
+        TransformObservation.__init__(self, env=env, func=func, observation_space=new_space)  # type: ignore[misc]
