@@ -25,6 +25,7 @@ from palaestra.spaces.batching import batch_differing_spaces, batch_space
 from palaestra.spaces.utils import is_space_dtype_shape_equiv
 
 Infos = list[dict[str, Any]] | None  # one raw info dict per row; None: every dict is empty
+Rows = Sequence[int] | None  # sub-env indices; None: all
 StepResult = tuple[np.ndarray, np.ndarray, np.ndarray, Infos]
 
 
@@ -55,12 +56,18 @@ class Engine(Protocol):
         """
         ...
 
-    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> tuple[Any, ...]:
-        """Call method ``name`` (or read attribute ``name``) on every sub-env."""
+    def call(
+        self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any], rows: Rows = None
+    ) -> tuple[Any, ...]:
+        """Call method ``name`` (or read attribute ``name``) on each sub-env in ``rows``."""
         ...
 
-    def set_attr(self, name: str, values: Sequence[Any]) -> None:
-        """Set attribute ``name`` on each sub-env to its value."""
+    def set_attr(self, name: str, values: Sequence[Any], rows: Rows = None) -> None:
+        """Set attribute ``name`` on each sub-env in ``rows`` to its value."""
+        ...
+
+    def is_wrapped(self, wrapper_class: type, rows: Rows = None) -> list[bool]:
+        """Whether each sub-env in ``rows`` has a ``wrapper_class`` layer."""
         ...
 
     def render(self) -> tuple[Any, ...]:
@@ -165,6 +172,21 @@ def check_action_spaces(env_spaces: Sequence[Space[Any]], who: str) -> Space[Any
     return env_spaces[0]
 
 
+def call_env(env: Env[Any, Any], name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> Any:
+    """``env.name(*args, **kwargs)``, or the attribute's value when it is not callable."""
+    attr = env.get_wrapper_attr(name)
+    return attr(*args, **kwargs) if callable(attr) else attr
+
+
+def is_wrapped(env: Any, wrapper_class: type) -> bool:
+    """Whether any layer of ``env``'s wrapper stack is a ``wrapper_class``."""
+    while env is not None:
+        if isinstance(env, wrapper_class):
+            return True
+        env = getattr(env, "env", None)
+    return False
+
+
 class LoopEngine:
     """Sub-env objects in this process, stepped one after the other."""
 
@@ -231,18 +253,23 @@ class LoopEngine:
         self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
         return self._rewards, self._terminated, self._truncated, infos
 
-    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> tuple[Any, ...]:
-        """Call ``name`` on each sub-env, or read it when it is not callable."""
-        results = []
-        for env in self.envs:
-            attr = env.get_wrapper_attr(name)
-            results.append(attr(*args, **kwargs) if callable(attr) else attr)
-        return tuple(results)
+    def _targets(self, rows: Rows) -> list[Env[Any, Any]]:
+        return self.envs if rows is None else [self.envs[i] for i in rows]
 
-    def set_attr(self, name: str, values: Sequence[Any]) -> None:
+    def call(
+        self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any], rows: Rows = None
+    ) -> tuple[Any, ...]:
+        """Call ``name`` on each sub-env, or read it when it is not callable."""
+        return tuple(call_env(env, name, args, kwargs) for env in self._targets(rows))
+
+    def set_attr(self, name: str, values: Sequence[Any], rows: Rows = None) -> None:
         """Set ``name`` on each sub-env (on the outermost layer that has it)."""
-        for env, value in zip(self.envs, values):
+        for env, value in zip(self._targets(rows), values):
             env.set_wrapper_attr(name, value)
+
+    def is_wrapped(self, wrapper_class: type, rows: Rows = None) -> list[bool]:
+        """Whether each sub-env has a ``wrapper_class`` layer."""
+        return [is_wrapped(env, wrapper_class) for env in self._targets(rows)]
 
     def render(self) -> tuple[Any, ...]:
         """Each sub-env's frame."""

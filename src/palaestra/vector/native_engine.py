@@ -16,7 +16,7 @@ import numpy as np
 
 from palaestra.envs.classic_control.batched import BatchedEnv
 from palaestra.spaces.batching import batch_space
-from palaestra.vector.engine import Infos, StepResult
+from palaestra.vector.engine import Infos, Rows, StepResult
 
 
 class NativeEngine:
@@ -83,17 +83,26 @@ class NativeEngine:
             self._elapsed[reset_mask] = 0
         return self._rewards, self._terminated, self._truncated, None
 
-    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> tuple[Any, ...]:
+    def call(
+        self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any], rows: Rows = None
+    ) -> tuple[Any, ...]:
         """Call ``name`` on the batch (one result per row, as a loop over envs would give)."""
+        rows = range(self.num_envs) if rows is None else rows
         if name == "np_random_seed":
-            return tuple(-1 if s is None else s for s in self.batch.seeds)
+            return tuple(-1 if self.batch.seeds[i] is None else self.batch.seeds[i] for i in rows)
         if name == "np_random":
-            return tuple(self.batch._rngs)
+            return tuple(self.batch._rngs[i] for i in rows)
+        if name == "render_mode":
+            return tuple(None for _ in rows)
         attr = getattr(self.batch, name)
         result = attr(*args, **kwargs) if callable(attr) else attr
-        return tuple(result for _ in range(self.num_envs))
+        return tuple(result for _ in rows)
 
-    def set_attr(self, name: str, values: Sequence[Any]) -> None:
+    def is_wrapped(self, wrapper_class: type, rows: Rows = None) -> list[bool]:
+        """A native batch has no wrappers."""
+        return [False for _ in (range(self.num_envs) if rows is None else rows)]
+
+    def set_attr(self, name: str, values: Sequence[Any], rows: Rows = None) -> None:
         """Set ``name`` on the batch: all rows share one value, so the values must agree."""
         first = values[0]
         if any(v is not first and v != first for v in values[1:]):

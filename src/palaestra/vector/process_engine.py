@@ -9,10 +9,10 @@ worker's traceback text attached (``__notes__`` and ``__cause__``).
 from __future__ import annotations
 
 import multiprocessing as mp
+import pickle
 import signal
 import time
 from collections.abc import Callable, Sequence
-from multiprocessing.connection import wait
 from typing import Any
 
 import numpy as np
@@ -23,15 +23,17 @@ from palaestra.spaces.batched_samples import concatenate, create_empty_array, it
 from palaestra.spaces.batching import batch_space
 from palaestra.vector.engine import (
     Infos,
+    Rows,
     StepResult,
     batch_spaces,
     check_action_spaces,
     check_actions_batch,
 )
 from palaestra.vector.shared_memory import create_shared_memory, read_from_shared_memory
-from palaestra.vector.worker import Payload, run_worker
+from palaestra.vector.worker import STEP, Payload, decode, run_worker
 
 _ARRAY_SPACES = (Box, Discrete, MultiDiscrete, MultiBinary)
+_POLL_SLICE = 0.5  # seconds between liveness checks while a worker is busy
 
 
 class WorkerDiedError(RuntimeError):
@@ -157,9 +159,12 @@ class ProcessEngine:
 
     # -- talking to workers -------------------------------------------------------------------
     def _send(self, i: int, command: str, data: Any) -> None:
+        message = STEP if command == "step" and data is None and self.shared else None
+        if message is None:
+            message = pickle.dumps((command, data), protocol=pickle.HIGHEST_PROTOCOL)
         try:
-            self.conns[i].send((command, data))
-        except (BrokenPipeError, ConnectionResetError, EOFError) as e:
+            self.conns[i].send_bytes(message)
+        except (BrokenPipeError, ConnectionResetError, EOFError, OSError) as e:
             self._died(i, command, e)
 
     def _died(self, i: int, what: str, cause: BaseException | None = None) -> None:
@@ -172,43 +177,41 @@ class ProcessEngine:
             "vector environment has been closed."
         ) from cause
 
+    def _receive(self, i: int, what: str, deadline: float | None) -> tuple[bool, Any]:
+        """Worker i's answer. A dead worker closes its pipe end, so ``recv`` sees EOF at once;
+        polling in slices also catches a worker stuck without dying when a deadline is set."""
+        conn = self.conns[i]
+        while not conn.poll(
+            _POLL_SLICE
+            if deadline is None
+            else min(_POLL_SLICE, max(0.0, deadline - time.monotonic()))
+        ):
+            if not self.processes[i].is_alive() and not conn.poll():
+                self._died(i, what)
+            if deadline is not None and time.monotonic() >= deadline:
+                raise mp.TimeoutError(f"{self.who}: worker {i} did not answer {what!r} in time")
+        try:
+            return decode(conn.recv_bytes())
+        except (EOFError, ConnectionResetError, OSError) as e:
+            self._died(i, what, e)
+            raise  # unreachable: _died raises
+
     def _gather(self, rows: Any, what: str, timeout: float | None = None) -> list[Any]:
         """Every answer from ``rows`` (in order); raises the first worker error after all came."""
         rows = list(rows)
-        answers: dict[int, Any] = {}
-        errors: list[tuple[int, Any]] = []
-        waiting = {self.conns[i]: i for i in rows}
-        sentinels = {self.processes[i].sentinel: i for i in rows}
         deadline = None if timeout is None else time.monotonic() + timeout
-        while waiting:
-            left = None if deadline is None else max(0.0, deadline - time.monotonic())
-            ready = wait([*waiting, *sentinels], timeout=left)
-            if not ready:
-                raise mp.TimeoutError(
-                    f"{self.who}: {what!r} took longer than {timeout} seconds "
-                    f"(workers {sorted(waiting.values())} have not answered)"
-                )
-            for obj in ready:
-                i = waiting.get(obj) if obj in waiting else sentinels.get(obj)  # type: ignore[call-overload]
-                if i is None or i in answers:
-                    continue
-                conn = self.conns[i]
-                if obj is not conn and not conn.poll():
-                    self._died(i, what)  # the process ended and left no answer
-                try:
-                    ok, payload = conn.recv()
-                except (EOFError, ConnectionResetError, OSError) as e:
-                    self._died(i, what, e)
-                answers[i] = payload
-                if not ok:
-                    errors.append((i, payload))
-                del waiting[conn]
-                del sentinels[self.processes[i].sentinel]
-        if errors:
-            i, (exc, text) = errors[0]
+        answers = []
+        error: tuple[int, Any] | None = None
+        for i in rows:
+            ok, payload = self._receive(i, what, deadline)
+            answers.append(payload)
+            if not ok and error is None:
+                error = (i, payload)
+        if error is not None:
+            i, (exc, text) = error
             _attach_remote_traceback(exc, text, f"{self.who} worker {i}")
             raise exc
-        return [answers[i] for i in rows]
+        return answers
 
     def call_rows(self, rows: Any, command: str, data: Any) -> list[Any]:
         """Send ``command`` to each worker in ``rows`` and gather the answers."""
@@ -268,15 +271,24 @@ class ProcessEngine:
             self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
         return self._rewards, self._terminated, self._truncated, infos
 
-    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> tuple[Any, ...]:
-        """Call ``name`` in every worker."""
-        return tuple(self.call_rows(range(self.num_envs), "call", (name, args, kwargs)))
+    def call(
+        self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any], rows: Rows = None
+    ) -> tuple[Any, ...]:
+        """Call ``name`` in each worker of ``rows``."""
+        rows = range(self.num_envs) if rows is None else rows
+        return tuple(self.call_rows(rows, "call", (name, args, kwargs)))
 
-    def set_attr(self, name: str, values: Sequence[Any]) -> None:
-        """Set ``name`` in every worker."""
-        for i, value in enumerate(values):
+    def set_attr(self, name: str, values: Sequence[Any], rows: Rows = None) -> None:
+        """Set ``name`` in each worker of ``rows``."""
+        rows = list(range(self.num_envs) if rows is None else rows)
+        for i, value in zip(rows, values):
             self._send(i, "set_attr", (name, value))
-        self._gather(range(self.num_envs), "set_attr")
+        self._gather(rows, "set_attr")
+
+    def is_wrapped(self, wrapper_class: type, rows: Rows = None) -> list[bool]:
+        """Whether each worker's env has a ``wrapper_class`` layer."""
+        rows = range(self.num_envs) if rows is None else rows
+        return self.call_rows(rows, "is_wrapped", wrapper_class)
 
     def render(self) -> tuple[Any, ...]:
         """Every worker's frame."""
@@ -291,7 +303,7 @@ class ProcessEngine:
             for conn, proc in zip(self.conns, self.processes):
                 if proc.is_alive():
                     try:
-                        conn.send(("close", None))
+                        conn.send_bytes(pickle.dumps(("close", None)))
                     except (BrokenPipeError, ConnectionResetError, OSError):
                         pass
         deadline = time.monotonic() + (0.0 if terminate else timeout)

@@ -1,8 +1,10 @@
 """The worker process of :class:`~.process_engine.ProcessEngine`: one env, commands on a pipe.
 
-Observations (and rewards/dones, and array actions) travel through shared memory; the pipe
-carries a short command and the info dict. An exception in the env is sent back with its
-traceback text and the worker keeps serving; the parent re-raises it.
+Observations, rewards, dones and array actions travel through shared memory. The pipe carries
+raw bytes: a step is the one byte ``STEP`` and, when the env's info is empty (the usual case),
+the answer is zero bytes, so nothing is pickled per step. Other commands and answers are pickled
+``(command, data)`` / ``(ok, payload)`` tuples. An env exception is sent back with its traceback
+text and the worker keeps serving; the parent re-raises it.
 """
 
 from __future__ import annotations
@@ -13,7 +15,11 @@ from typing import Any
 
 import numpy as np
 
+from palaestra.vector.engine import call_env, is_wrapped
 from palaestra.vector.shared_memory import read_from_shared_memory, write_row
+
+STEP = b"s"  # step with the action in shared memory
+EMPTY_OK = b""  # (True, {}) without pickling
 
 
 class Payload:
@@ -44,6 +50,65 @@ def pack_exception(exc: BaseException) -> tuple[BaseException, str]:
         return RuntimeError(f"{type(exc).__name__}: {exc}"), text
 
 
+def encode(ok: bool, payload: Any) -> bytes:
+    """An answer as bytes: empty for ``(True, {})``, else a pickled ``(ok, payload)``."""
+    if ok and type(payload) is dict and not payload:
+        return EMPTY_OK
+    return pickle.dumps((ok, payload), protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def decode(message: bytes) -> tuple[bool, Any]:
+    """Inverse of :func:`encode`."""
+    return (True, {}) if not message else pickle.loads(message)
+
+
+class _Shared:
+    """The worker's views onto the shared buffers (row ``index`` is its own)."""
+
+    def __init__(self, buffers: dict[str, Any], spaces: tuple[Any, Any], n: int) -> None:
+        self.obs_space, act_space = spaces
+        self.obs = read_from_shared_memory(self.obs_space, buffers["obs"], n=n)
+        self.actions = None
+        if buffers.get("actions") is not None:
+            self.actions = read_from_shared_memory(act_space, buffers["actions"], n=n)
+        self.rewards = np.frombuffer(buffers["rewards"], dtype=np.float64, count=n)
+        self.terminated = np.frombuffer(buffers["terminated"], dtype=np.bool_, count=n)
+        self.truncated = np.frombuffer(buffers["truncated"], dtype=np.bool_, count=n)
+
+
+def _serve(env: Any, command: str, data: Any, index: int, shared: _Shared | None) -> Any:
+    """Run one command on ``env``; its answer's payload."""
+    if command == "step":
+        if shared is None:
+            return env.step(data)
+        action = shared.actions[index] if data is None else data  # type: ignore[index]
+        obs, reward, term, trunc, info = env.step(action)
+        write_row(shared.obs_space, shared.obs, index, obs)
+        shared.rewards[index], shared.terminated[index], shared.truncated[index] = (
+            reward,
+            term,
+            trunc,
+        )
+        return info
+    if command == "reset":
+        seed, options = data
+        obs, info = env.reset(seed=seed, options=options)
+        if shared is None:
+            return obs, info
+        write_row(shared.obs_space, shared.obs, index, obs)
+        return info
+    if command == "call":
+        return call_env(env, *data)
+    if command == "is_wrapped":
+        return is_wrapped(env, data)
+    if command == "set_attr":
+        env.set_wrapper_attr(*data)
+        return None
+    if command == "spaces":
+        return env.observation_space, env.action_space, env.metadata, env.render_mode
+    raise RuntimeError(f"Unknown worker command {command!r}")
+
+
 def run_worker(
     index: int,
     env_fn: Payload,
@@ -51,7 +116,7 @@ def run_worker(
     parent_conn: Any,
     buffers: dict[str, Any] | None,
     num_envs: int,
-    spaces: tuple[Any, Any] | None,
+    spaces: tuple[Any, Any],
 ) -> None:
     """Serve commands until "close" or until the parent goes away."""
     if parent_conn is not None:
@@ -59,70 +124,29 @@ def run_worker(
     env = None
     try:
         env = env_fn.fn()
-        obs_views = act_views = None
-        if buffers is not None and spaces is not None:
-            obs_space, act_space = spaces
-            obs_views = read_from_shared_memory(obs_space, buffers["obs"], n=num_envs)
-            if buffers.get("actions") is not None:
-                act_views = read_from_shared_memory(act_space, buffers["actions"], n=num_envs)
-            rewards = np.frombuffer(buffers["rewards"], dtype=np.float64, count=num_envs)
-            terminated = np.frombuffer(buffers["terminated"], dtype=np.bool_, count=num_envs)
-            truncated = np.frombuffer(buffers["truncated"], dtype=np.bool_, count=num_envs)
-        conn.send((True, None))
+        shared = None if buffers is None else _Shared(buffers, spaces, num_envs)
+        conn.send_bytes(encode(True, None))
     except Exception as e:
-        conn.send((False, pack_exception(e)))
+        conn.send_bytes(encode(False, pack_exception(e)))
         return
     try:
         while True:
             try:
-                command, data = conn.recv()
+                message = conn.recv_bytes()
             except (EOFError, OSError, KeyboardInterrupt):
                 return  # parent gone: nothing left to serve
+            if message == STEP:
+                command, data = "step", None
+            else:
+                command, data = pickle.loads(message)
+            if command == "close":
+                conn.send_bytes(encode(True, None))
+                return
             try:
-                if command == "step":
-                    action = act_views[index] if data is None else data  # type: ignore[index]
-                    obs, reward, term, trunc, info = env.step(action)
-                    if obs_views is None:
-                        conn.send((True, (obs, reward, term, trunc, info)))
-                        continue
-                    write_row(obs_space, obs_views, index, obs)
-                    rewards[index], terminated[index], truncated[index] = reward, term, trunc
-                    conn.send((True, info))
-                elif command == "reset":
-                    seed, options = data
-                    obs, info = env.reset(seed=seed, options=options)
-                    if obs_views is None:
-                        conn.send((True, (obs, info)))
-                        continue
-                    write_row(obs_space, obs_views, index, obs)
-                    conn.send((True, info))
-                elif command == "call":
-                    name, args, kwargs = data
-                    attr = env.get_wrapper_attr(name)
-                    conn.send((True, attr(*args, **kwargs) if callable(attr) else attr))
-                elif command == "set_attr":
-                    name, value = data
-                    env.set_wrapper_attr(name, value)
-                    conn.send((True, None))
-                elif command == "spaces":
-                    conn.send(
-                        (
-                            True,
-                            (
-                                env.observation_space,
-                                env.action_space,
-                                env.metadata,
-                                env.render_mode,
-                            ),
-                        )
-                    )
-                elif command == "close":
-                    conn.send((True, None))
-                    return
-                else:
-                    raise RuntimeError(f"Unknown worker command {command!r}")
+                answer = encode(True, _serve(env, command, data, index, shared))
             except Exception as e:
-                conn.send((False, pack_exception(e)))
+                answer = encode(False, pack_exception(e))
+            conn.send_bytes(answer)
     finally:
         if env is not None:
             try:

@@ -1,0 +1,25 @@
+"""Vector environments with Stable-Baselines3's API (``stable_baselines3.common.vec_env``).
+
+``DummyVecEnv``, ``SubprocVecEnv`` and the native ``BatchedVecEnv`` are thin faces over the
+engines of :mod:`palaestra.vector`; ``make_vec_env`` picks the native batch for built-in ids.
+"""
+
+from palaestra.vec_env.base import VecEnv, VecEnvWrapper
+from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
+from palaestra.vec_env.env_util import make_vec_env
+from palaestra.vec_env.image import VecFrameStack, VecTransposeImage
+from palaestra.vec_env.monitor import VecMonitor
+from palaestra.vec_env.normalize import VecNormalize
+
+__all__ = [
+    "BatchedVecEnv",
+    "DummyVecEnv",
+    "SubprocVecEnv",
+    "VecEnv",
+    "VecEnvWrapper",
+    "VecFrameStack",
+    "VecMonitor",
+    "VecNormalize",
+    "VecTransposeImage",
+    "make_vec_env",
+]

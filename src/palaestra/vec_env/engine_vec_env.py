@@ -1,0 +1,187 @@
+"""The SB3 face over the vector engines: ``DummyVecEnv``, ``SubprocVecEnv``, ``BatchedVecEnv``.
+
+Each is :class:`EngineVecEnv` over one engine of :mod:`palaestra.vector.engine`, driven in
+SAME_STEP autoreset mode by the same :class:`~palaestra.vector.autoreset.Autoresetter` the
+Gymnasium face uses; this module only reshapes a step into SB3's ``(obs, rewards, dones,
+infos)`` with ``terminal_observation`` and ``TimeLimit.truncated``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from copy import deepcopy
+from typing import Any
+
+import numpy as np
+
+from palaestra import error
+from palaestra.core import Env
+from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.vec_env.base import Indices, StepReturn, VecEnv
+from palaestra.vector.autoreset import Autoresetter, Transition
+from palaestra.vector.engine import Engine, LoopEngine
+from palaestra.vector.native_engine import NativeEngine
+from palaestra.vector.process_engine import ProcessEngine
+from palaestra.vector.vector_env import AutoresetMode
+
+__all__ = ["BatchedVecEnv", "DummyVecEnv", "EngineVecEnv", "SubprocVecEnv"]
+
+
+class EngineVecEnv(VecEnv):
+    """An SB3 ``VecEnv`` whose envs are run by ``engine``; rewards come as ``reward_dtype``."""
+
+    def __init__(self, engine: Engine, reward_dtype: Any = np.float32) -> None:
+        self.engine = engine
+        self.closed = False
+        self._driver = Autoresetter(engine, AutoresetMode.SAME_STEP)
+        self._reward_dtype = np.dtype(reward_dtype)
+        super().__init__(
+            engine.num_envs, engine.single_observation_space, engine.single_action_space
+        )
+
+    def _check_open(self) -> None:
+        if self.closed:
+            raise error.ClosedEnvironmentError(
+                f"Trying to operate on `{type(self).__name__}`, after a call to `close()`."
+            )
+
+    @staticmethod
+    def _copy(obs: Any) -> Any:
+        return obs.copy() if isinstance(obs, np.ndarray) else deepcopy(obs)
+
+    def reset(self) -> Any:
+        """Reset every env with the seeds/options set since the last reset."""
+        self._check_open()
+        n = self.num_envs
+        if all(opts == self._options[0] for opts in self._options):
+            obs, infos = self._driver.reset(self._seeds, self._options[0] or None)
+            self.reset_infos = list(infos) if infos is not None else [{} for _ in range(n)]
+        else:  # per-env options: one reset per env (rare, so the loop is fine)
+            self.reset_infos = [{} for _ in range(n)]
+            for i in range(n):
+                mask = np.zeros(n, dtype=bool)
+                mask[i] = True
+                opts = {**self._options[i], "reset_mask": mask}
+                obs, infos = self._driver.reset(self._seeds, opts)
+                self.reset_infos[i] = infos[i] if infos is not None else {}
+        self._reset_seeds()
+        self._reset_options()
+        return self._copy(obs)
+
+    def step_async(self, actions: np.ndarray) -> None:
+        """Send one action per env."""
+        self._check_open()
+        self._driver.begin_step(actions)
+
+    def step_wait(self) -> StepReturn:
+        """``(obs, rewards, dones, infos)``; finished envs are already reset."""
+        self._check_open()
+        t = self._driver.finish_step()
+        dones = t.terminated | t.truncated  # [N] bool, a new array
+        return (
+            self._copy(t.obs),
+            t.rewards.astype(self._reward_dtype),
+            dones,
+            self._sb3_infos(t),
+        )
+
+    def _sb3_infos(self, t: Transition) -> list[dict[str, Any]]:
+        # SB3 sets TimeLimit.truncated on every info: truncated and not terminated
+        # (the gym 0.26 split, openai/gym#3102).
+        time_limit = (t.truncated & ~t.terminated).tolist()
+        if t.infos is None:
+            infos = [{"TimeLimit.truncated": tl} for tl in time_limit]
+        else:
+            infos = [{**info, "TimeLimit.truncated": tl} for info, tl in zip(t.infos, time_limit)]
+        if t.final_rows is None:
+            return infos
+        assert t.final_obs is not None and t.final_infos is not None
+        for j, i in enumerate(t.final_rows.tolist()):
+            # The row's step info, not its reset info (that goes to reset_infos).
+            self.reset_infos[i] = t.infos[i] if t.infos is not None else {}
+            infos[i] = {
+                **t.final_infos[j],
+                "TimeLimit.truncated": time_limit[i],
+                "terminal_observation": t.final_obs[j],
+            }
+        return infos
+
+    def close(self) -> None:
+        """Close the envs (and stop workers); idempotent."""
+        if not self.closed:
+            self.closed = True
+            self.engine.close()
+
+    def get_attr(self, attr_name: str, indices: Indices = None) -> list[Any]:
+        """Attribute ``attr_name`` of each env in ``indices``."""
+        self._check_open()
+        return list(self.engine.call(attr_name, (), {}, self._get_indices(indices)))
+
+    def set_attr(self, attr_name: str, value: Any, indices: Indices = None) -> None:
+        """Set ``attr_name`` to ``value`` on each env in ``indices``."""
+        self._check_open()
+        rows = self._get_indices(indices)
+        self.engine.set_attr(attr_name, [value] * len(rows), rows)
+
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: Indices = None, **method_kwargs: Any
+    ) -> list[Any]:
+        """Call ``method_name(*method_args, **method_kwargs)`` on each env in ``indices``."""
+        self._check_open()
+        rows = self._get_indices(indices)
+        return list(self.engine.call(method_name, method_args, method_kwargs, rows))
+
+    def env_is_wrapped(self, wrapper_class: type, indices: Indices = None) -> list[bool]:
+        """Whether each env in ``indices`` has a ``wrapper_class`` layer."""
+        self._check_open()
+        return self.engine.is_wrapped(wrapper_class, self._get_indices(indices))
+
+    def __del__(self) -> None:
+        if not getattr(self, "closed", True):
+            try:
+                self.close()
+            except Exception:  # interpreter shutdown
+                pass
+
+
+class DummyVecEnv(EngineVecEnv):
+    """Envs in this process, stepped in a loop (SB3's signature; rewards float32)."""
+
+    def __init__(self, env_fns: Sequence[Callable[[], Env[Any, Any]]]) -> None:
+        engine = LoopEngine(env_fns, "same", "DummyVecEnv")
+        self.envs = engine.envs
+        super().__init__(engine, np.float32)
+
+
+class SubprocVecEnv(EngineVecEnv):
+    """One worker process per env (SB3's signature), observations in shared memory.
+
+    ``start_method`` is "forkserver" (default where available, as in SB3), "spawn" or "fork".
+    A worker exception re-raises here with its traceback; a dead worker raises
+    ``WorkerDiedError`` at once and closes the others.
+    """
+
+    def __init__(
+        self, env_fns: Sequence[Callable[[], Env[Any, Any]]], start_method: str | None = None
+    ) -> None:
+        if start_method is None:
+            import multiprocessing as mp
+
+            methods = mp.get_all_start_methods()
+            start_method = "forkserver" if "forkserver" in methods else "spawn"
+        engine = ProcessEngine(env_fns, context=start_method, who="SubprocVecEnv")
+        super().__init__(engine, np.float64)  # SB3 stacks Python floats: float64
+
+
+class BatchedVecEnv(EngineVecEnv):
+    """A built-in env's native batch with SB3's API: what ``make_vec_env`` returns for the
+    classic-control ids (no Python loop over envs per step)."""
+
+    def __init__(
+        self,
+        batch: BatchedEnv,
+        max_episode_steps: int | None = None,
+        metadata: dict[str, Any] | None = None,
+    ) -> None:
+        self.batch = batch
+        super().__init__(NativeEngine(batch, max_episode_steps, metadata), np.float32)

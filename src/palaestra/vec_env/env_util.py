@@ -1,0 +1,107 @@
+"""``make_vec_env``: SB3's helper, with the native batch as the default for built-in envs."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from typing import Any
+
+from palaestra.core import Env
+from palaestra.vec_env.base import VecEnv
+from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv
+from palaestra.vec_env.monitor import VecMonitor
+
+_NATIVE = "palaestra.vector.native:"
+
+
+def _native_batch(env_id: Any, env_kwargs: dict[str, Any], n_envs: int) -> BatchedVecEnv | None:
+    """The native batch for a built-in id, or None when the id has none."""
+    if not isinstance(env_id, str):
+        return None
+    from palaestra.envs.registration import load_env_creator, resolve_id
+
+    spec = resolve_id(env_id)
+    entry = spec.vector_entry_point
+    if not (isinstance(entry, str) and entry.startswith(_NATIVE)) or spec.additional_wrappers:
+        return None
+    kwargs = {**spec.kwargs, **env_kwargs}
+    if kwargs.pop("render_mode", None) is not None:
+        return None  # native batches do not render: build real envs instead
+    native = load_env_creator(entry)(
+        num_envs=n_envs, max_episode_steps=spec.max_episode_steps, **kwargs
+    )
+    return BatchedVecEnv(native.batch, spec.max_episode_steps, native.metadata)
+
+
+def make_vec_env(
+    env_id: str | Callable[..., Env[Any, Any]],
+    n_envs: int = 1,
+    seed: int | None = None,
+    start_index: int = 0,
+    monitor_dir: str | None = None,
+    wrapper_class: Callable[..., Env[Any, Any]] | None = None,
+    env_kwargs: dict[str, Any] | None = None,
+    vec_env_cls: type[VecEnv] | None = None,
+    vec_env_kwargs: dict[str, Any] | None = None,
+    monitor_kwargs: dict[str, Any] | None = None,
+    wrapper_kwargs: dict[str, Any] | None = None,
+) -> VecEnv:
+    """``n_envs`` monitored envs as one ``VecEnv`` (SB3's signature and behaviour).
+
+    A built-in id with no ``wrapper_class``, ``vec_env_cls`` or ``render_mode`` gets its native
+    batch (``BatchedVecEnv``) under a ``VecMonitor``: the same observations, rewards, dones and
+    ``infos[i]["episode"]`` as SB3's ``DummyVecEnv`` of ``Monitor``-wrapped envs, without a
+    Python loop per step. Env ``i`` is seeded ``seed + start_index + i`` at the first reset.
+
+    >>> vec_env = make_vec_env("MountainCar-v0", n_envs=4, seed=0)
+    >>> vec_env.reset().shape
+    (4, 2)
+    """
+    from palaestra.envs.registration import make
+    from palaestra.wrappers.monitor import Monitor
+
+    env_kwargs = env_kwargs or {}
+    vec_env_kwargs = vec_env_kwargs or {}
+    monitor_kwargs = monitor_kwargs or {}
+    wrapper_kwargs = wrapper_kwargs or {}
+
+    if vec_env_cls is None and wrapper_class is None:
+        native = _native_batch(env_id, env_kwargs, n_envs)
+        if native is not None:
+            filename = None
+            if monitor_dir is not None:
+                os.makedirs(monitor_dir, exist_ok=True)
+                filename = os.path.join(monitor_dir, str(start_index))
+            vec_env: VecEnv = VecMonitor(native, filename=filename, **monitor_kwargs)
+            if seed is not None:
+                native.action_space.seed(seed + start_index)
+            vec_env.seed(seed)  # SB3: env i gets seed + i (start_index only shifts ranks)
+            return vec_env
+
+    def make_env(rank: int) -> Callable[[], Env[Any, Any]]:
+        def init() -> Env[Any, Any]:
+            if isinstance(env_id, str):
+                # SB3 asks for rgb_array frames unless told otherwise.
+                try:
+                    env = make(env_id, **{"render_mode": "rgb_array", **env_kwargs})
+                except TypeError:
+                    env = make(env_id, **env_kwargs)
+            else:
+                env = env_id(**env_kwargs)
+            if seed is not None:
+                env.action_space.seed(seed + rank)
+            path = None
+            if monitor_dir is not None:
+                os.makedirs(monitor_dir, exist_ok=True)
+                path = os.path.join(monitor_dir, str(rank))
+            env = Monitor(env, filename=path, **monitor_kwargs)
+            if wrapper_class is not None:
+                env = wrapper_class(env, **wrapper_kwargs)
+            return env
+
+        return init
+
+    cls = DummyVecEnv if vec_env_cls is None else vec_env_cls
+    vec_env = cls([make_env(i + start_index) for i in range(n_envs)], **vec_env_kwargs)  # type: ignore[call-arg]
+    vec_env.seed(seed)
+    return vec_env

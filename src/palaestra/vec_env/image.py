@@ -1,0 +1,120 @@
+"""Observation-reshaping ``VecEnv`` wrappers: ``VecFrameStack`` and ``VecTransposeImage``."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from palaestra.spaces import Box
+from palaestra.vec_env.base import StepReturn, VecEnv, VecEnvWrapper
+
+
+def _is_image(space: Any) -> bool:
+    return isinstance(space, Box) and len(space.shape) == 3 and space.dtype == np.uint8
+
+
+class VecFrameStack(VecEnvWrapper):
+    """Stack the last ``n_stack`` observations of each env along the channel axis.
+
+    ``channels_order`` is "last" or "first"; None means "last" unless the observations are
+    channel-first images (SB3's rule). A finished env's stack restarts from zeros.
+    """
+
+    def __init__(self, venv: VecEnv, n_stack: int, channels_order: str | None = None) -> None:
+        space = venv.observation_space
+        if not isinstance(space, Box):
+            raise ValueError(f"VecFrameStack supports Box observations only, got {space}")
+        if channels_order is None:
+            channels_first = (
+                _is_image(space)
+                and space.shape[0] in (1, 3, 4)
+                and (space.shape[-1] not in (1, 3, 4))
+            )
+            channels_order = "first" if channels_first else "last"
+        if channels_order not in ("first", "last"):
+            raise ValueError(
+                f"channels_order must be 'first', 'last' or None, got {channels_order}"
+            )
+        self.n_stack = n_stack
+        self.axis = 0 if channels_order == "first" else -1
+        low = np.repeat(space.low, n_stack, axis=self.axis)
+        high = np.repeat(space.high, n_stack, axis=self.axis)
+        stacked_space = Box(low=low, high=high, dtype=space.dtype)
+        super().__init__(venv, observation_space=stacked_space)
+        self.channels = space.shape[self.axis]
+        # [N, *stacked_shape]
+        self.stacked = np.zeros((venv.num_envs, *stacked_space.shape), dtype=space.dtype)
+
+    def _push(self, obs: np.ndarray) -> None:
+        axis = self.axis if self.axis < 0 else 1  # batch axis comes first
+        self.stacked = np.roll(self.stacked, shift=-self.channels, axis=axis)
+        if axis == 1:
+            self.stacked[:, -self.channels :] = obs
+        else:
+            self.stacked[..., -self.channels :] = obs
+
+    def step_wait(self) -> StepReturn:
+        """Step and push the new observations onto each env's stack."""
+        obs, rewards, dones, infos = self.venv.step_wait()
+        for i in np.flatnonzero(dones).tolist():
+            if "terminal_observation" in infos[i]:
+                last = np.roll(self.stacked[i], -self.channels, axis=self.axis)
+                if self.axis == 0:
+                    last[-self.channels :] = infos[i]["terminal_observation"]
+                else:
+                    last[..., -self.channels :] = infos[i]["terminal_observation"]
+                infos[i] = {**infos[i], "terminal_observation": last}
+            self.stacked[i] = 0
+        self._push(obs)
+        return self.stacked.copy(), rewards, dones, infos
+
+    def reset(self) -> Any:
+        """Reset; each stack is zeros then the first observation."""
+        obs = self.venv.reset()
+        self.stacked[...] = 0
+        self._push(obs)
+        return self.stacked.copy()
+
+
+class VecTransposeImage(VecEnvWrapper):
+    """``(H, W, C)`` image observations to ``(C, H, W)`` (what PyTorch convolutions want)."""
+
+    def __init__(self, venv: VecEnv, skip: bool = False) -> None:
+        space = venv.observation_space
+        if not _is_image(space) and not skip:
+            raise ValueError(f"VecTransposeImage needs (H, W, C) uint8 images, got {space}")
+        self.skip = skip
+        if skip:
+            super().__init__(venv)
+            return
+        assert isinstance(space, Box)
+        new = Box(
+            low=np.transpose(space.low, (2, 0, 1)),
+            high=np.transpose(space.high, (2, 0, 1)),
+            dtype=space.dtype,
+        )
+        super().__init__(venv, observation_space=new)
+
+    @staticmethod
+    def transpose_image(image: np.ndarray) -> np.ndarray:
+        """``[..., H, W, C]`` to ``[..., C, H, W]``."""
+        if image.ndim == 3:
+            return np.transpose(image, (2, 0, 1))
+        return np.transpose(image, (0, 3, 1, 2))
+
+    def step_wait(self) -> StepReturn:
+        """Step and transpose (terminal observations too)."""
+        obs, rewards, dones, infos = self.venv.step_wait()
+        if self.skip:
+            return obs, rewards, dones, infos
+        for i in np.flatnonzero(dones).tolist():
+            if "terminal_observation" in infos[i]:
+                term = self.transpose_image(infos[i]["terminal_observation"])
+                infos[i] = {**infos[i], "terminal_observation": term}
+        return self.transpose_image(obs), rewards, dones, infos
+
+    def reset(self) -> Any:
+        """Reset and transpose."""
+        obs = self.venv.reset()
+        return obs if self.skip else self.transpose_image(obs)
