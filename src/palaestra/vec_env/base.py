@@ -117,7 +117,7 @@ class VecEnv:
     def seed(self, seed: int | None = None) -> Sequence[int | None]:
         """Seed env i with ``seed + i`` at the next ``reset()`` (random base when None)."""
         if seed is None:
-            seed = int(np.random.randint(0, np.iinfo(np.uint32).max, dtype=np.uint32))
+            seed = int(np.random.default_rng().integers(0, np.iinfo(np.uint32).max))
         self._seeds = [seed + i for i in range(self.num_envs)]
         return self._seeds
 
