@@ -169,6 +169,28 @@ def test_render_mode_handling(clean_registry: None) -> None:
         make("NoModes-v0", disable_env_checker=True)
 
 
+class _OldRenderApi(PalToy):  # type: ignore[misc,valid-type]
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
+
+    def __init__(self) -> None:
+        super().__init__()
+
+
+class _ModesNotIterable(PalToy):  # type: ignore[misc,valid-type]
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": 3, "render_fps": 4}
+
+
+def test_render_mode_edge_cases(clean_registry: None) -> None:
+    register("Old-v0", entry_point=_OldRenderApi)
+    with pytest.warns(UserWarning, match="HumanRendering wrapper is being applied"):
+        with pytest.raises(error.Error, match="doesn't implement human-rendering natively"):
+            make("Old-v0", render_mode="human")
+    register("Odd-v0", entry_point=_ModesNotIterable)
+    with pytest.warns(UserWarning, match="render_modes to be a Iterable"):
+        env = make("Odd-v0", render_mode="rgb_array", disable_env_checker=True)
+    assert env.unwrapped.render_mode == "rgb_array"
+
+
 def test_render_mode_wrappers(clean_registry: None) -> None:
     rendering = pytest.importorskip("palaestra.wrappers.rendering")
     register("Toy-v0", entry_point=PalToy)
