@@ -270,3 +270,16 @@ def test_make_vec_matches_gymnasium(toy_ids: tuple[str, ...], mode: str) -> None
     finally:
         env.close()
         gym_env.close()
+
+
+@pytest.mark.skipif(not registration._vector_available(), reason="palaestra.vector not there yet")
+def test_make_vec_warns_about_missing_autoreset_metadata(clean_registry: None) -> None:
+    register("Vec-v0", vector_entry_point=_FakeVectorEnv)
+    with pytest.warns(UserWarning, match="is missing AutoresetMode metadata"):
+        registration.make_vec("Vec-v0", num_envs=2)
+    _FakeVectorEnv.metadata = {"autoreset_mode": "next_step"}
+    try:
+        with pytest.warns(UserWarning, match=r"metadata\['autoreset_mode'\] is not an instance"):
+            registration.make_vec("Vec-v0", num_envs=2)
+    finally:
+        _FakeVectorEnv.metadata = {}
