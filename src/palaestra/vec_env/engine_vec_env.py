@@ -40,7 +40,8 @@ class EngineVecEnv(VecEnv):
         )
 
     def _check_open(self) -> None:
-        if self.closed:
+        # The engine closes itself when a worker dies: refuse from then on too.
+        if self.closed or getattr(self.engine, "closed", False):
             raise error.ClosedEnvironmentError(
                 f"Trying to operate on `{type(self).__name__}`, after a call to `close()`."
             )

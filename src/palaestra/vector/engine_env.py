@@ -46,7 +46,8 @@ class EngineVectorEnv(VectorEnv[Any, Any, np.ndarray]):
         self.action_space = engine.action_space
 
     def _check_open(self) -> None:
-        if self.closed:
+        # The engine closes itself when a worker dies: refuse from then on too.
+        if self.closed or getattr(self.engine, "closed", False):
             raise error.ClosedEnvironmentError(
                 f"Trying to operate on `{type(self).__name__}`, after a call to `close()`."
             )

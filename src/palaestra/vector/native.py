@@ -2,7 +2,8 @@
 
 ``make_vec("CartPole-v1", n)`` returns one by default (the ids' ``vector_entry_point``); it
 steps all ``n`` envs with one array op each and matches ``n`` single envs row for row: row i
-of ``reset(seed=s)`` is the env ``make(id)`` reset with ``seed=s + i``.
+of ``reset(seed=s)`` is the env ``make(id)`` reset with ``seed=s + i``. Batches do not draw, so
+with a ``render_mode`` the entry points return a ``SyncVectorEnv`` of real envs instead.
 """
 
 from __future__ import annotations
@@ -56,14 +57,9 @@ def _make(
     render_mode: str | None,
     vector_kwargs: dict[str, Any],
     env_kwargs: dict[str, Any],
-) -> BatchedVectorEnv:
+) -> EngineVectorEnv:
     from palaestra.envs import classic_control as cc
 
-    if render_mode is not None:
-        raise ValueError(
-            f"Native batches do not render (render_mode={render_mode!r}); use "
-            "make_vec(..., vectorization_mode='sync') to render each env."
-        )
     batch_cls, env_cls = {
         "cartpole": (cc.CartPoleBatch, cc.CartPoleEnv),
         "mountain_car": (cc.MountainCarBatch, cc.MountainCarEnv),
@@ -74,8 +70,31 @@ def _make(
         "pendulum": (cc.PendulumBatch, cc.PendulumEnv),
         "acrobot": (cc.AcrobotBatch, cc.AcrobotEnv),
     }[kind]
+    if render_mode is not None:
+        # Native batches do not draw: envs that must render run as real envs, in a loop.
+        return _rendering_envs(
+            env_cls, num_envs, max_episode_steps, render_mode, vector_kwargs, env_kwargs
+        )
     batch = batch_cls(num_envs, **env_kwargs)
     return BatchedVectorEnv(batch, max_episode_steps, metadata=env_cls.metadata, **vector_kwargs)
+
+
+def _rendering_envs(
+    env_cls: Any,
+    num_envs: int,
+    max_episode_steps: int | None,
+    render_mode: str,
+    vector_kwargs: dict[str, Any],
+    env_kwargs: dict[str, Any],
+) -> EngineVectorEnv:
+    from palaestra.vector.sync_vector_env import SyncVectorEnv
+    from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
+
+    def one() -> Any:
+        env = OrderEnforcing(PassiveEnvChecker(env_cls(render_mode=render_mode, **env_kwargs)))
+        return env if max_episode_steps is None else TimeLimit(env, max_episode_steps)
+
+    return SyncVectorEnv([one] * num_envs, **vector_kwargs)
 
 
 def _entry_point(kind: str) -> Any:
@@ -86,7 +105,7 @@ def _entry_point(kind: str) -> Any:
         copy: bool = True,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         **kwargs: Any,
-    ) -> BatchedVectorEnv:
+    ) -> EngineVectorEnv:
         vector_kwargs = {"copy": copy, "autoreset_mode": autoreset_mode}
         return _make(kind, num_envs, max_episode_steps, render_mode, vector_kwargs, kwargs)
 
