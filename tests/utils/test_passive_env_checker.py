@@ -24,7 +24,9 @@ def outcome(fn: Callable[[], Any]) -> tuple[list[str], str | None]:
         try:
             fn()
         except Exception as e:
-            raised = f"{type(e).__name__}: {e}"
+            # First line only: pytest's assertion rewriting (when a checker module is given
+            # on the command line) appends an introspection of the failed assert.
+            raised = f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}"
     messages = [str(w.message) for w in caught]
     unify = lambda text: text.replace("gymnasium", "palaestra")  # noqa: E731
     return [unify(m) for m in messages], None if raised is None else unify(raised)
