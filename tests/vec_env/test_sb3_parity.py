@@ -1,0 +1,96 @@
+"""The SB3 face against stable-baselines3 itself, on the same seeds and actions.
+
+``make_vec_env`` (native batch under a VecMonitor) and ``DummyVecEnv`` of palaestra envs must
+give SB3's ``make_vec_env`` / ``DummyVecEnv`` over gymnasium envs: observations, rewards and
+their dtype, dones, ``TimeLimit.truncated``, ``terminal_observation``, ``episode`` r/l, and
+``reset_infos``.
+"""
+
+from __future__ import annotations
+
+import gymnasium
+import numpy as np
+import pytest
+from stable_baselines3.common import env_util as sb3_util
+from stable_baselines3.common import vec_env as sb3
+
+import palaestra as gym
+from palaestra.vec_env import BatchedVecEnv, DummyVecEnv, VecMonitor, make_vec_env
+
+N = 4
+
+
+def _compare_steps(ours, theirs, actions_fn, steps):
+    np.testing.assert_array_equal(ours.reset(), theirs.reset())
+    assert ours.reset_infos == theirs.reset_infos
+    rng = np.random.default_rng(0)
+    ends = 0
+    for _ in range(steps):
+        actions = actions_fn(rng)
+        o1, r1, d1, i1 = ours.step(actions)
+        o2, r2, d2, i2 = theirs.step(actions)
+        np.testing.assert_array_equal(o1, o2)
+        np.testing.assert_array_equal(r1, r2)
+        assert r1.dtype == r2.dtype and d1.dtype == d2.dtype
+        np.testing.assert_array_equal(d1, d2)
+        assert len(i1) == len(i2) == len(o1)
+        for a, b in zip(i1, i2):
+            assert sorted(a) == sorted(b)  # VecMonitor adds "episode" last, Monitor first
+            assert a["TimeLimit.truncated"] == b["TimeLimit.truncated"]
+            if "terminal_observation" in b:
+                np.testing.assert_array_equal(a["terminal_observation"], b["terminal_observation"])
+            if "episode" in b:
+                ends += 1
+                assert a["episode"]["r"] == b["episode"]["r"]
+                assert a["episode"]["l"] == b["episode"]["l"]
+        assert ours.reset_infos == theirs.reset_infos
+    return ends
+
+
+@pytest.mark.parametrize(
+    ("env_id", "n_actions", "steps"), [("MountainCar-v0", 3, 450), ("CartPole-v1", 2, 200)]
+)
+def test_make_vec_env_native_matches_sb3(env_id, n_actions, steps):
+    ours = make_vec_env(env_id, n_envs=N, seed=11)
+    assert isinstance(ours, VecMonitor) and isinstance(ours.venv, BatchedVecEnv)
+    theirs = sb3_util.make_vec_env(env_id, n_envs=N, seed=11)
+    ends = _compare_steps(ours, theirs, lambda rng: rng.integers(0, n_actions, size=N), steps)
+    assert ends >= N  # every env finished at least one episode
+
+
+def test_dummy_vec_env_matches_sb3_with_monitor_and_start_index():
+    ours = make_vec_env("CartPole-v1", n_envs=N, seed=3, start_index=2, vec_env_cls=DummyVecEnv)
+    theirs = sb3_util.make_vec_env("CartPole-v1", n_envs=N, seed=3, start_index=2)
+    assert isinstance(ours, DummyVecEnv)
+    ends = _compare_steps(ours, theirs, lambda rng: rng.integers(0, 2, size=N), 120)
+    assert ends >= N
+    # Monitor-wrapped, like SB3's
+    from palaestra.wrappers.monitor import Monitor
+
+    assert ours.env_is_wrapped(Monitor) == [True] * N
+    assert ours.get_attr("render_mode") == theirs.get_attr("render_mode") == ["rgb_array"] * N
+
+
+def test_continuous_env_and_options_and_seed():
+    ours = DummyVecEnv([lambda: gym.make("Pendulum-v1")] * 2)
+    theirs = sb3.DummyVecEnv([lambda: gymnasium.make("Pendulum-v1")] * 2)
+    for venv in (ours, theirs):
+        venv.seed(5)
+        venv.set_options({"x_init": 0.5, "y_init": 0.5})
+    _compare_steps(
+        ours, theirs, lambda rng: rng.uniform(-2, 2, size=(2, 1)).astype(np.float32), 210
+    )
+
+
+def test_methods_with_indices():
+    venv = DummyVecEnv([lambda: gym.make("MountainCar-v0")] * 3)
+    venv.reset()
+    assert venv.get_attr("goal_position", indices=[0, 2]) == [0.5, 0.5]
+    venv.set_attr("goal_position", 0.2, indices=1)
+    assert venv.get_attr("goal_position") == [0.5, 0.2, 0.5]
+    assert venv.env_method("get_wrapper_attr", "max_speed", indices=0) == [0.07]
+    assert venv.has_attr("goal_position") and not venv.has_attr("nope")
+    native = make_vec_env("MountainCar-v0", n_envs=3)
+    assert native.get_attr("num_envs", indices=[0, 1]) == [3, 3]
+    native.close()
+    native.close()
