@@ -13,11 +13,15 @@ except ImportError as exc:  # pragma: no cover - exercised in a subprocess test
 
 # isort: skip_file
 from palaestra.algos import callbacks, schedules
+from palaestra.algos.dqn import DQN
+from palaestra.algos.ppo import PPO
 from palaestra.algos.evaluation import evaluate_policy
 from palaestra.algos.model_io import ModelFileError
 from palaestra.algos.schedules import ConstantSchedule, LinearSchedule
 
 __all__ = [
+    "DQN",
+    "PPO",
     "ConstantSchedule",
     "LinearSchedule",
     "ModelFileError",

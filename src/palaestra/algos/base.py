@@ -1,0 +1,347 @@
+"""What DQN and PPO share: env wrapping, device/threads, seeding, progress and schedules,
+episode statistics, logging, ``predict``'s shape rules, and save/load (through ``saving``).
+
+Progress and resuming: ``progress_remaining`` goes from 1 to 0 over a ``learn`` call, as in
+SB3. With ``reset_num_timesteps=False`` SB3 recomputes it over the summed budget, so after a
+reload schedules jump back (a finished linear learning rate restarts at half its initial
+value). Here a resumed call continues from the stored progress and reaches 0 at the end of
+the new call: a checkpoint taken at 25% and resumed for the remaining 75% of the steps
+follows exactly the schedules of an uninterrupted run, and a finished run stays at its final
+epsilon and learning rate.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from collections import deque
+from typing import Any
+
+import numpy as np
+import torch
+
+from palaestra import spaces
+from palaestra.algos import saving
+from palaestra.algos.callbacks import (
+    BaseCallback,
+    CallbackList,
+    ProgressBarCallback,
+    convert_callback,
+)
+from palaestra.algos.logger import Logger, configure
+from palaestra.algos.policies import extractor_class
+from palaestra.algos.schedules import Schedule
+from palaestra.algos.spaces_util import is_image_space, is_vectorized_observation
+from palaestra.core import Env, Wrapper
+
+__all__ = ["BaseAlgorithm"]
+
+
+def _safe_mean(values: list[float]) -> float:
+    return float("nan") if not values else float(np.mean(values))
+
+
+class BaseAlgorithm:
+    """Shared state and services; subclasses build networks in ``_setup_model`` and
+    implement ``learn`` and ``_predict``."""
+
+    supported_action_spaces: tuple[type, ...] = ()
+    _extra_counters: tuple[str, ...] = ()
+    policy: torch.nn.Module
+    optimizer: torch.optim.Optimizer
+    lr_schedule: Schedule
+
+    def _init_common(
+        self,
+        policy: str,
+        env: Any,
+        policy_kwargs: dict[str, Any] | None,
+        verbose: int,
+        seed: int | None,
+        device: torch.device | str,
+        tensorboard_log: str | None,
+        num_threads: int | None,
+        stats_window_size: int = 100,
+    ) -> None:
+        extractor_class(policy)  # unknown names fail here, before any env work
+        self.policy_name, self.policy_kwargs = policy, dict(policy_kwargs or {})
+        self.verbose, self.seed, self.tensorboard_log = verbose, seed, tensorboard_log
+        self.device = self._resolve_device(device, policy)
+        if verbose >= 1:
+            print(f"Using {self.device} device")
+        # Small nets are fastest on one thread; torch's default (all cores) only adds overhead.
+        threads = num_threads if num_threads is not None else (1 if policy == "MlpPolicy" else None)
+        if threads is not None and self.device.type == "cpu":
+            torch.set_num_threads(threads)
+        self.num_timesteps, self._episode_num, self._n_updates = 0, 0, 0
+        self._total_timesteps, self._num_timesteps_at_start = 0, 0
+        self._progress_remaining, self._progress_at_start = 1.0, 1.0
+        self._stats_window_size = stats_window_size
+        self.ep_info_buffer: deque[dict[str, Any]] = deque(maxlen=stats_window_size)
+        self.ep_success_buffer: deque[bool] = deque(maxlen=stats_window_size)
+        self._rng = np.random.default_rng(seed)
+        self._logger: Logger | None = None
+        self._custom_logger = False
+        self._last_obs: Any = None
+        self._last_episode_starts: np.ndarray | None = None
+        self.start_time = 0
+        self.env: Any = None
+        self.n_envs = 1
+        if env is not None:
+            self.env = self._wrap_env(env)
+            self.observation_space, self.action_space = (
+                self.env.observation_space,
+                self.env.action_space,
+            )
+            self.n_envs = self.env.num_envs
+            if not isinstance(self.action_space, self.supported_action_spaces):
+                names = ", ".join(s.__name__ for s in self.supported_action_spaces)
+                raise TypeError(
+                    f"{type(self).__name__} does not support {self.action_space} "
+                    f"action spaces; supported: {names}"
+                )
+
+    # -- environment ---------------------------------------------------------------------------
+    def _wrap_env(self, env: Any) -> Any:
+        """Id string / Env / VecEnv -> a monitored VecEnv (SB3's ``_wrap_env``)."""
+        from palaestra.vec_env import DummyVecEnv, VecEnv, make_vec_env
+        from palaestra.wrappers.monitor import Monitor
+
+        if isinstance(env, str):
+            return make_vec_env(env, n_envs=1)  # the native batch of a built-in id, monitored
+        if isinstance(env, VecEnv):
+            return env
+        if not isinstance(env, Env):
+            raise TypeError(
+                f"env must be an id string, an Env or a VecEnv, got {type(env).__name__}"
+            )
+        inner: Any = env
+        while isinstance(inner, Wrapper) and not isinstance(inner, Monitor):
+            inner = inner.env
+        if not isinstance(inner, Monitor):
+            if self.verbose >= 1:
+                print("Wrapping the env with a `Monitor` wrapper")
+            env = Monitor(env)
+        if self.verbose >= 1:
+            print("Wrapping the env in a DummyVecEnv.")
+        return DummyVecEnv([lambda: env])
+
+    def get_env(self) -> Any:
+        """The VecEnv being trained on (None for a model loaded without one)."""
+        return self.env
+
+    def set_env(self, env: Any, force_reset: bool = True) -> None:
+        """Train on another env with the same spaces (SB3: ``ValueError`` when they differ)."""
+        venv = self._wrap_env(env)
+        for name, ours, theirs in [
+            ("Observation", self.observation_space, venv.observation_space),
+            ("Action", self.action_space, venv.action_space),
+        ]:
+            if ours != theirs:
+                raise ValueError(f"{name} spaces do not match: {theirs} != {ours}")
+        n_changed = venv.num_envs != self.n_envs
+        self.env, self.n_envs = venv, venv.num_envs
+        if n_changed:
+            self._on_n_envs_changed()
+        if force_reset or n_changed:
+            self._last_obs = None
+
+    def _on_n_envs_changed(self) -> None:
+        """Rebuild per-env buffers (subclasses)."""
+
+    # -- device, seeding ---------------------------------------------------------------------
+    def _resolve_device(self, device: torch.device | str, policy: str) -> torch.device:
+        if device == "auto":
+            # CNNs gain from a GPU; small MLPs are faster on the CPU (no transfers per step).
+            wants_gpu = policy in ("CnnPolicy", "MultiInputPolicy")
+            return torch.device("cuda" if wants_gpu and torch.cuda.is_available() else "cpu")
+        return torch.device(device)
+
+    def set_random_seed(self, seed: int | None = None) -> None:
+        """Seed torch, this model's generator, the action space and the env's next reset."""
+        if seed is None:
+            return
+        torch.manual_seed(seed)
+        self._rng = np.random.default_rng(seed)
+        self.action_space.seed(seed)
+        if self.env is not None:
+            self.env.seed(seed)
+
+    # -- learn bookkeeping ---------------------------------------------------------------------
+    def _setup_learn(
+        self,
+        total_timesteps: int,
+        callback: Any,
+        reset_num_timesteps: bool,
+        tb_log_name: str,
+        progress_bar: bool,
+    ) -> BaseCallback:
+        if isinstance(total_timesteps, bool) or not isinstance(total_timesteps, (int, np.integer)):
+            raise TypeError(f"total_timesteps must be an int, got {total_timesteps!r}")
+        if total_timesteps <= 0:
+            raise ValueError(f"total_timesteps must be positive, got {total_timesteps}")
+        if self.env is None:
+            raise ValueError("This model has no environment: pass env= to load() or call set_env()")
+        self.start_time = time.time_ns()
+        if reset_num_timesteps or self._last_obs is None:
+            if reset_num_timesteps:
+                self.num_timesteps, self._episode_num = 0, 0
+                self.ep_info_buffer.clear()
+                self.ep_success_buffer.clear()
+                self._progress_remaining = 1.0
+            self._last_obs = self.env.reset()
+            self._last_episode_starts = np.ones((self.env.num_envs,), dtype=bool)
+        self._progress_at_start = self._progress_remaining
+        self._num_timesteps_at_start = self.num_timesteps
+        self._total_timesteps = self.num_timesteps + int(total_timesteps)
+        if not self._custom_logger:
+            self._logger = self._make_logger(tb_log_name, reset_num_timesteps)
+        cb = convert_callback(callback)
+        if progress_bar:
+            cb = CallbackList([cb, ProgressBarCallback()])
+        cb.init_callback(self)
+        return cb
+
+    def _update_progress(self) -> None:
+        """Linear in env steps from the progress at the start of this call down to 0."""
+        span = max(self._total_timesteps - self._num_timesteps_at_start, 1)
+        done = (self.num_timesteps - self._num_timesteps_at_start) / span
+        self._progress_remaining = max(self._progress_at_start * (1.0 - done), 0.0)
+
+    def _update_learning_rate(self) -> float:
+        lr = self.lr_schedule(self._progress_remaining)
+        for group in self.optimizer.param_groups:
+            group["lr"] = lr
+        self.logger.record("train/learning_rate", lr)
+        return lr
+
+    def _update_info_buffer(self, infos: list[dict[str, Any]], dones: np.ndarray) -> None:
+        for info, done in zip(infos, dones):
+            episode = info.get("episode")
+            if episode is not None:
+                self.ep_info_buffer.append(episode)
+            if done and info.get("is_success") is not None:
+                self.ep_success_buffer.append(bool(info["is_success"]))
+
+    # -- logging -------------------------------------------------------------------------------
+    @property
+    def logger(self) -> Logger:
+        if self._logger is None:
+            self._logger = Logger(None, [])
+        return self._logger
+
+    def set_logger(self, logger: Logger) -> None:
+        """Use ``logger`` (e.g. ``configure(folder, ["stdout", "csv"])``) for every ``learn``."""
+        self._logger, self._custom_logger = logger, True
+
+    def _make_logger(self, tb_log_name: str, reset_num_timesteps: bool) -> Logger:
+        formats = ["stdout"] if self.verbose >= 1 else []
+        if self.tensorboard_log is None:
+            return configure(None, formats) if formats else Logger(None, [])
+        runs = (
+            [d for d in os.listdir(self.tensorboard_log)]
+            if os.path.isdir(self.tensorboard_log)
+            else []
+        )
+        ids = [
+            int(d.rsplit("_", 1)[1])
+            for d in runs
+            if d.startswith(tb_log_name + "_") and d.rsplit("_", 1)[1].isdigit()
+        ]
+        run_id = max(ids, default=0) + (1 if reset_num_timesteps or not ids else 0)
+        folder = os.path.join(self.tensorboard_log, f"{tb_log_name}_{run_id}")
+        return configure(folder, [*formats, "tensorboard"])
+
+    def _record_episode_stats(self) -> None:
+        elapsed = max((time.time_ns() - self.start_time) / 1e9, sys.float_info.epsilon)
+        fps = int((self.num_timesteps - self._num_timesteps_at_start) / elapsed)
+        if self.ep_info_buffer:
+            self.logger.record(
+                "rollout/ep_rew_mean", _safe_mean([e["r"] for e in self.ep_info_buffer])
+            )
+            self.logger.record(
+                "rollout/ep_len_mean", _safe_mean([e["l"] for e in self.ep_info_buffer])
+            )
+        self.logger.record("time/fps", fps)
+        self.logger.record("time/time_elapsed", int(elapsed), exclude="tensorboard")
+        self.logger.record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
+        if self.ep_success_buffer:
+            self.logger.record(
+                "rollout/success_rate", _safe_mean([float(s) for s in self.ep_success_buffer])
+            )
+
+    def _callback_locals(self, **values: Any) -> dict[str, Any]:
+        return {"total_timesteps": self._total_timesteps, **values}
+
+    # -- predict -------------------------------------------------------------------------------
+    def _obs_to_tensor(self, obs: Any) -> Any:
+        if isinstance(obs, dict):
+            return {k: torch.as_tensor(np.asarray(v), device=self.device) for k, v in obs.items()}
+        return torch.as_tensor(np.asarray(obs), device=self.device)
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = False,
+    ) -> tuple[np.ndarray, Any]:
+        """Actions for one observation or a batch ``[n_env, *obs_shape]`` (SB3's rules)."""
+        if (
+            isinstance(observation, tuple)
+            and len(observation) == 2
+            and isinstance(observation[1], dict)
+        ):
+            raise ValueError(
+                "You have passed a tuple to the predict() function instead of a Numpy array or a "
+                "Dict. You are probably mixing Gym API with SB3 VecEnv API: `obs, info = "
+                "env.reset()` (Gym) vs `obs = vec_env.reset()` (SB3 VecEnv)."
+            )
+        vectorized = is_vectorized_observation(observation, self.observation_space)
+        if not vectorized:
+            if isinstance(observation, dict):
+                observation = {k: np.asarray(v)[None] for k, v in observation.items()}
+            else:
+                observation = np.asarray(observation)[None]
+        actions = self._predict(observation, deterministic)
+        actions = actions.reshape((-1, *(self.action_space.shape or ())))
+        if isinstance(self.action_space, spaces.Box):
+            actions = np.clip(actions, self.action_space.low, self.action_space.high)
+        else:
+            actions = actions.astype(self.action_space.dtype, copy=False)
+        return (actions if vectorized else actions.squeeze(axis=0)), state
+
+    def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
+        raise NotImplementedError
+
+    # -- persistence: see saving.py ------------------------------------------------------------
+    def save(self, path: Any, exclude: Any = None, include: Any = None) -> None:
+        """Write the model (hyperparameters, spaces, weights, optimizer, counters) as a zip."""
+        saving.save_model(self, path)
+
+    @classmethod
+    def load(
+        cls,
+        path: Any,
+        env: Any = None,
+        device: torch.device | str = "auto",
+        custom_objects: dict[str, Any] | None = None,
+        **kwargs: Any,
+    ) -> Any:
+        """Rebuild a saved model; never unpickles. ``custom_objects`` overrides stored values."""
+        return saving.load_model(cls, path, env, device, custom_objects or {}, kwargs)
+
+    def get_parameters(self) -> dict[str, dict[str, Any]]:
+        """``{"policy": state_dict, "policy.optimizer": optimizer state_dict}`` (SB3's keys)."""
+        return {"policy": self.policy.state_dict(), "policy.optimizer": self.optimizer.state_dict()}
+
+    def set_parameters(
+        self, load_path_or_dict: Any, exact_match: bool = True, device: torch.device | str = "auto"
+    ) -> None:
+        """Load parameters from ``get_parameters()`` output or from a model file."""
+        saving.set_parameters(self, load_path_or_dict, exact_match)
+
+    def _uses_images(self) -> bool:
+        sub = getattr(self.observation_space, "spaces", {"": self.observation_space})
+        return any(is_image_space(s) for s in sub.values())

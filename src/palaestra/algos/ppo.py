@@ -1,0 +1,349 @@
+"""PPO (Schulman et al. 2017) with Stable-Baselines3's parameters, defaults and update rules."""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+import torch
+
+from palaestra import spaces
+from palaestra.algos.base import BaseAlgorithm
+from palaestra.algos.policies import ActorCritic, extractor_class
+from palaestra.algos.ppo_math import explained_variance, ppo_loss
+from palaestra.algos.rollout_buffer import RolloutBuffer
+from palaestra.algos.schedules import Schedule, as_schedule
+
+__all__ = ["PPO"]
+
+
+class PPO(BaseAlgorithm):
+    """Proximal Policy Optimization with the clipped surrogate: ``PPO("MlpPolicy", env, ...)``.
+
+    As SB3: rollouts of ``n_steps`` per env, GAE, ``n_epochs`` passes of shuffled minibatches,
+    per-minibatch advantage normalisation, optional value clipping, entropy bonus, early stop
+    when the approximate KL exceeds ``1.5 * target_kl``, truncated episodes bootstrapped with
+    the value of their terminal observation. Box actions are sampled from a Gaussian and
+    clipped to the bounds only when sent to the env. ``num_threads``: torch CPU threads
+    (default 1 for MlpPolicy).
+    """
+
+    supported_action_spaces = (
+        spaces.Discrete,
+        spaces.Box,
+        spaces.MultiDiscrete,
+        spaces.MultiBinary,
+    )
+    _extra_counters: tuple[str, ...] = ()
+    policy: ActorCritic
+
+    def __init__(
+        self,
+        policy: str,
+        env: Any,
+        learning_rate: float | Schedule = 3e-4,
+        n_steps: int = 2048,
+        batch_size: int = 64,
+        n_epochs: int = 10,
+        gamma: float = 0.99,
+        gae_lambda: float = 0.95,
+        clip_range: float | Schedule = 0.2,
+        clip_range_vf: float | Schedule | None = None,
+        normalize_advantage: bool = True,
+        ent_coef: float = 0.0,
+        vf_coef: float = 0.5,
+        max_grad_norm: float = 0.5,
+        use_sde: bool = False,
+        sde_sample_freq: int = -1,
+        rollout_buffer_class: None = None,
+        rollout_buffer_kwargs: dict[str, Any] | None = None,
+        target_kl: float | None = None,
+        stats_window_size: int = 100,
+        tensorboard_log: str | None = None,
+        policy_kwargs: dict[str, Any] | None = None,
+        verbose: int = 0,
+        seed: int | None = None,
+        device: torch.device | str = "auto",
+        num_threads: int | None = None,
+        _init_setup_model: bool = True,
+    ) -> None:
+        if use_sde or rollout_buffer_class is not None:
+            raise NotImplementedError("use_sde and rollout_buffer_class are not supported yet")
+        if normalize_advantage and batch_size <= 1:
+            raise ValueError(
+                "`batch_size` must be greater than 1 when normalize_advantage=True "
+                "(see https://github.com/DLR-RM/stable-baselines3/issues/440)"
+            )
+        self.learning_rate, self.lr_schedule = learning_rate, as_schedule(learning_rate)
+        self.n_steps, self.batch_size, self.n_epochs = n_steps, batch_size, n_epochs
+        self.gamma, self.gae_lambda = gamma, gae_lambda
+        self.clip_range = as_schedule(clip_range)
+        self.clip_range_vf = None if clip_range_vf is None else as_schedule(clip_range_vf)
+        self.normalize_advantage, self.ent_coef, self.vf_coef = (
+            normalize_advantage,
+            ent_coef,
+            vf_coef,
+        )
+        self.max_grad_norm, self.target_kl = max_grad_norm, target_kl
+        self._init_common(
+            policy,
+            env,
+            policy_kwargs,
+            verbose,
+            seed,
+            device,
+            tensorboard_log,
+            num_threads,
+            stats_window_size,
+        )
+        if self.env is not None:
+            self._check_rollout_size()
+        if _init_setup_model:
+            if self.env is None:
+                raise ValueError("PPO needs an env (an id string, an Env or a VecEnv)")
+            self._setup_model()
+
+    def _check_rollout_size(self) -> None:
+        size = self.n_steps * self.n_envs
+        if size <= 1:
+            raise ValueError(
+                f"`n_steps * n_envs` must be greater than 1. Currently n_steps="
+                f"{self.n_steps} and n_envs={self.n_envs}"
+            )
+        if size % self.batch_size:
+            warnings.warn(
+                f"You have specified a mini-batch size of {self.batch_size}, but because "
+                f"the rollout buffer is of size `n_steps * n_envs = {size}`, after every "
+                f"{size // self.batch_size} untruncated mini-batches, there will be a "
+                f"truncated mini-batch of size {size % self.batch_size}",
+                stacklevel=3,
+            )
+
+    def _setup_model(self) -> None:
+        self.set_random_seed(self.seed)
+        kwargs = dict(self.policy_kwargs)
+        optimizer_class = kwargs.pop("optimizer_class", torch.optim.Adam)
+        optimizer_kwargs = dict(kwargs.pop("optimizer_kwargs", None) or {})
+        if optimizer_class is torch.optim.Adam:
+            optimizer_kwargs.setdefault("eps", 1e-5)  # SB3's ActorCriticPolicy default
+        kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
+        self.policy = ActorCritic(self.observation_space, self.action_space, **kwargs).to(
+            self.device
+        )
+        self.optimizer = optimizer_class(
+            self.policy.parameters(), lr=self.lr_schedule(1.0), **optimizer_kwargs
+        )
+        self._make_rollout_buffer()
+
+    def _make_rollout_buffer(self) -> None:
+        self.rollout_buffer = RolloutBuffer(
+            self.n_steps,
+            self.observation_space,
+            self.action_space,
+            self.n_envs,
+            self.gamma,
+            self.gae_lambda,
+            self.device,
+        )
+
+    def _on_n_envs_changed(self) -> None:
+        self._check_rollout_size()
+        self._make_rollout_buffer()
+
+    def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
+        with torch.no_grad():
+            return self.policy.act(self._obs_to_tensor(observation), deterministic).cpu().numpy()
+
+    # -- learning ----------------------------------------------------------------------------
+    def learn(
+        self,
+        total_timesteps: int,
+        callback: Any = None,
+        log_interval: int | None = 1,
+        tb_log_name: str = "PPO",
+        reset_num_timesteps: bool = True,
+        progress_bar: bool = False,
+    ) -> PPO:
+        """Alternate ``n_steps``-per-env rollouts and ``n_epochs`` of minibatch updates."""
+        callback = self._setup_learn(
+            total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
+        )
+        callback.on_training_start(self._callback_locals(), {})
+        iteration = 0
+        while self.num_timesteps < self._total_timesteps:
+            if not self._collect_rollout(callback):
+                break
+            iteration += 1
+            self._update_progress()
+            if log_interval is not None and iteration % log_interval == 0:
+                self.logger.record("time/iterations", iteration, exclude="tensorboard")
+                self._record_episode_stats()
+                self.logger.dump(step=self.num_timesteps)
+            self.train()
+        callback.on_training_end()
+        return self
+
+    def _collect_rollout(self, callback: Any) -> bool:
+        """Fill the rollout buffer; False if a callback asked to stop."""
+        env, buf = self.env, self.rollout_buffer
+        box = self.action_space if isinstance(self.action_space, spaces.Box) else None
+        buf.reset()
+        callback.on_rollout_start()
+        dones = np.zeros(self.n_envs, dtype=bool)
+        while not buf.full:
+            with torch.no_grad():
+                actions_t, values_t, log_probs_t = self.policy(self._obs_to_tensor(self._last_obs))
+            actions = actions_t.cpu().numpy()
+            if isinstance(self.action_space, spaces.MultiBinary):
+                actions = actions.astype(self.action_space.dtype)  # Bernoulli samples are floats
+            env_actions = np.clip(actions, box.low, box.high) if box is not None else actions
+            new_obs, rewards, dones, infos = env.step(env_actions)
+            self.num_timesteps += self.n_envs
+            callback.update_locals(
+                {
+                    "actions": actions,
+                    "new_obs": new_obs,
+                    "rewards": rewards,
+                    "dones": dones,
+                    "infos": infos,
+                }
+            )
+            if not callback.on_step():
+                return False
+            self._update_info_buffer(infos, dones)
+            rewards = np.asarray(rewards, dtype=np.float32)
+            if dones.any():
+                rewards = self._bootstrap_truncated(rewards, dones, infos)
+            buf.add(
+                self._last_obs,
+                actions,
+                rewards,
+                self._last_episode_starts,  # type: ignore[arg-type]
+                values_t.cpu().numpy(),
+                log_probs_t.cpu().numpy(),
+            )
+            self._last_obs, self._last_episode_starts = new_obs, dones
+        with torch.no_grad():
+            last_values = self.policy.predict_values(self._obs_to_tensor(self._last_obs))
+        buf.compute_returns_and_advantage(last_values.cpu().numpy(), dones)
+        callback.update_locals({"rollout_buffer": buf})
+        callback.on_rollout_end()
+        return True
+
+    def _bootstrap_truncated(
+        self, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]]
+    ) -> np.ndarray:
+        """Add ``gamma * V(terminal_obs)`` where an episode was cut by a time limit (SB3)."""
+        idx = [
+            i
+            for i in np.flatnonzero(dones)
+            if infos[i].get("TimeLimit.truncated", False)
+            and infos[i].get("terminal_observation") is not None
+        ]
+        if not idx:
+            return rewards
+        terminal = [infos[i]["terminal_observation"] for i in idx]
+        if isinstance(terminal[0], dict):
+            batch: Any = {k: np.stack([t[k] for t in terminal]) for k in terminal[0]}
+        else:
+            batch = np.stack(terminal)
+        with torch.no_grad():
+            values = self.policy.predict_values(self._obs_to_tensor(batch)).cpu().numpy()
+        rewards = rewards.copy()
+        rewards[idx] += self.gamma * values
+        return rewards
+
+    def train(self) -> None:
+        """``n_epochs`` passes of minibatch updates over the current rollout."""
+        self._update_learning_rate()
+        clip_range = self.clip_range(self._progress_remaining)
+        clip_range_vf = (
+            None if self.clip_range_vf is None else self.clip_range_vf(self._progress_remaining)
+        )
+        pg_losses, value_losses, entropy_losses, clip_fractions, approx_kls = [], [], [], [], []
+        continue_training = True
+        loss = torch.zeros(())
+        for epoch in range(self.n_epochs):
+            for mb in self.rollout_buffer.minibatches(self.batch_size, self._rng):
+                values, log_prob, entropy = self.policy.evaluate_actions(
+                    mb.observations, mb.actions
+                )
+                out = ppo_loss(
+                    log_prob,
+                    mb.old_log_prob,
+                    mb.advantages,
+                    values,
+                    mb.old_values,
+                    mb.returns,
+                    entropy,
+                    clip_range,
+                    clip_range_vf,
+                    self.ent_coef,
+                    self.vf_coef,
+                    self.normalize_advantage,
+                )
+                loss = out.loss
+                pg_losses.append(out.policy_loss)
+                value_losses.append(out.value_loss)
+                entropy_losses.append(out.entropy_loss)
+                clip_fractions.append(out.clip_fraction)
+                approx_kls.append(out.approx_kl)
+                if self.target_kl is not None and float(out.approx_kl) > 1.5 * self.target_kl:
+                    continue_training = False
+                    if self.verbose >= 1:
+                        print(
+                            f"Early stopping at step {epoch} due to reaching max kl: "
+                            f"{float(out.approx_kl):.2f}"
+                        )
+                    break
+                self.optimizer.zero_grad()
+                loss.backward()
+                torch.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
+                self.optimizer.step()
+            self._n_updates += 1
+            if not continue_training:
+                break
+        buf = self.rollout_buffer
+        log = self.logger
+        log.record("train/entropy_loss", float(torch.stack(entropy_losses).mean()))
+        log.record("train/policy_gradient_loss", float(torch.stack(pg_losses).mean()))
+        log.record("train/value_loss", float(torch.stack(value_losses).mean()))
+        log.record("train/approx_kl", float(torch.stack(approx_kls).mean()))
+        log.record("train/clip_fraction", float(torch.stack(clip_fractions).mean()))
+        log.record("train/loss", float(loss.detach()))
+        log.record(
+            "train/explained_variance", explained_variance(buf.values.ravel(), buf.returns.ravel())
+        )
+        log_std = getattr(self.policy.action_head, "log_std", None)
+        if log_std is not None:
+            log.record("train/std", float(log_std.detach().exp().mean()))
+        log.record("train/n_updates", self._n_updates, exclude="tensorboard")
+        log.record("train/clip_range", clip_range)
+        if clip_range_vf is not None:
+            log.record("train/clip_range_vf", clip_range_vf)
+
+    # -- persistence ---------------------------------------------------------------------------
+    def _hyperparameters(self) -> dict[str, Any]:
+        return {
+            "n_steps": self.n_steps,
+            "batch_size": self.batch_size,
+            "n_epochs": self.n_epochs,
+            "gamma": self.gamma,
+            "gae_lambda": self.gae_lambda,
+            "normalize_advantage": self.normalize_advantage,
+            "ent_coef": self.ent_coef,
+            "vf_coef": self.vf_coef,
+            "max_grad_norm": self.max_grad_norm,
+            "target_kl": self.target_kl,
+            "verbose": self.verbose,
+            "seed": self.seed,
+            "stats_window_size": self._stats_window_size,
+        }
+
+    def _schedules(self) -> dict[str, Any]:
+        return {
+            "learning_rate": self.lr_schedule,
+            "clip_range": self.clip_range,
+            "clip_range_vf": self.clip_range_vf,
+        }
