@@ -185,4 +185,5 @@ class BatchedVecEnv(EngineVecEnv):
         metadata: dict[str, Any] | None = None,
     ) -> None:
         self.batch = batch
+        self.spec: Any = None  # the EnvSpec when made from an id (make_vec_env sets it)
         super().__init__(NativeEngine(batch, max_episode_steps, metadata), np.float32)

@@ -30,7 +30,9 @@ def _native_batch(env_id: Any, env_kwargs: dict[str, Any], n_envs: int) -> Batch
     native = load_env_creator(entry)(
         num_envs=n_envs, max_episode_steps=spec.max_episode_steps, **kwargs
     )
-    return BatchedVecEnv(native.batch, spec.max_episode_steps, native.metadata)
+    venv = BatchedVecEnv(native.batch, spec.max_episode_steps, native.metadata)
+    venv.spec = spec
+    return venv
 
 
 def make_vec_env(

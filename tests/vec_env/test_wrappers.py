@@ -1,0 +1,150 @@
+"""VecNormalize, VecFrameStack, VecTransposeImage and VecMonitor against SB3's."""
+
+from __future__ import annotations
+
+import gymnasium
+import numpy as np
+import pytest
+from stable_baselines3.common import vec_env as sb3
+
+import palaestra as gym
+from palaestra.vec_env import (
+    DummyVecEnv,
+    VecFrameStack,
+    VecMonitor,
+    VecNormalize,
+    VecTransposeImage,
+    make_vec_env,
+)
+
+
+def _pair(env_id: str, n: int = 3):
+    ours = DummyVecEnv([lambda: gym.make(env_id)] * n)
+    theirs = sb3.DummyVecEnv([lambda: gymnasium.make(env_id)] * n)
+    ours.seed(0)
+    theirs.seed(0)
+    return ours, theirs
+
+
+def _run_pair(ours, theirs, steps, n_actions=2, n=3, check_terminal=True):
+    np.testing.assert_allclose(ours.reset(), theirs.reset(), rtol=1e-6, atol=1e-6)
+    rng = np.random.default_rng(0)
+    for _ in range(steps):
+        actions = rng.integers(0, n_actions, size=n)
+        o1, r1, d1, i1 = ours.step(actions)
+        o2, r2, d2, i2 = theirs.step(actions)
+        np.testing.assert_allclose(o1, o2, rtol=1e-5, atol=1e-6)
+        np.testing.assert_allclose(r1, r2, rtol=1e-5, atol=1e-7)
+        np.testing.assert_array_equal(d1, d2)
+        for a, b in zip(i1, i2):
+            if check_terminal and "terminal_observation" in b:
+                np.testing.assert_allclose(
+                    a["terminal_observation"], b["terminal_observation"], rtol=1e-5, atol=1e-6
+                )
+
+
+def test_vec_normalize_matches_sb3():
+    ours, theirs = _pair("CartPole-v1")
+    ours = VecNormalize(ours, gamma=0.9, clip_obs=5.0)
+    theirs = sb3.VecNormalize(theirs, gamma=0.9, clip_obs=5.0)
+    _run_pair(ours, theirs, 150)
+    np.testing.assert_allclose(ours.obs_rms.mean, theirs.obs_rms.mean, rtol=1e-9)
+    np.testing.assert_allclose(ours.ret_rms.var, theirs.ret_rms.var, rtol=1e-9)
+    np.testing.assert_allclose(ours.get_original_obs(), theirs.get_original_obs())
+    np.testing.assert_allclose(ours.get_original_reward(), theirs.get_original_reward())
+
+
+def test_vec_normalize_save_load_without_pickle(tmp_path):
+    venv = VecNormalize(make_vec_env("MountainCar-v0", n_envs=2, seed=0), norm_reward=False)
+    venv.reset()
+    for _ in range(50):
+        venv.step(np.array([2, 0]))
+    path = tmp_path / "vecnormalize.npz"
+    venv.save(path)
+    loaded = VecNormalize.load(path, make_vec_env("MountainCar-v0", n_envs=2, seed=0))
+    np.testing.assert_array_equal(loaded.obs_rms.mean, venv.obs_rms.mean)
+    np.testing.assert_array_equal(loaded.obs_rms.var, venv.obs_rms.var)
+    assert loaded.obs_rms.count == venv.obs_rms.count
+    assert (loaded.norm_reward, loaded.gamma) == (False, venv.gamma)
+    obs = np.array([[-0.5, 0.01]], dtype=np.float32)
+    np.testing.assert_array_equal(loaded.normalize_obs(obs), venv.normalize_obs(obs))
+    with np.load(path, allow_pickle=False) as data:  # plain arrays only
+        assert set(data.files) == {"settings", "obs_mean", "obs_var", "ret_mean", "ret_var"}
+
+
+def test_vec_normalize_refuses_bad_files(tmp_path):
+    bad = tmp_path / "x.npz"
+    bad.write_bytes(b"\x80\x04not a numpy file")
+    with pytest.raises(ValueError, match="not a palaestra VecNormalize file"):
+        VecNormalize.load(bad, make_vec_env("MountainCar-v0", n_envs=1))
+    other = tmp_path / "y.npz"
+    VecNormalize(make_vec_env("CartPole-v1", n_envs=1)).save(other)
+    with pytest.raises(ValueError, match="shape"):
+        VecNormalize.load(other, make_vec_env("MountainCar-v0", n_envs=1))
+
+
+def test_vec_frame_stack_matches_sb3():
+    ours, theirs = _pair("CartPole-v1")
+    ours, theirs = VecFrameStack(ours, 3), sb3.VecFrameStack(theirs, 3)
+    assert ours.observation_space.shape == theirs.observation_space.shape == (12,)
+    _run_pair(ours, theirs, 80)
+
+
+def test_vec_frame_stack_channels_first_images():
+    venv = DummyVecEnv([lambda: gym.make("CartPole-v1")] * 2)
+    with pytest.raises(ValueError, match="channels_order"):
+        VecFrameStack(venv, 2, channels_order="middle")
+
+
+class _ImageEnv(gym.Env):
+    def __init__(self):
+        from palaestra import spaces
+
+        self.observation_space = spaces.Box(0, 255, (6, 5, 3), np.uint8)
+        self.action_space = spaces.Discrete(2)
+        self.t = 0
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.t = 0
+        return np.full((6, 5, 3), self.t, np.uint8), {}
+
+    def step(self, action):
+        self.t += 1
+        obs = np.arange(90, dtype=np.uint8).reshape(6, 5, 3) + self.t
+        return obs, 1.0, self.t >= 3, False, {}
+
+
+def test_vec_transpose_image_and_image_frame_stack():
+    venv = VecTransposeImage(DummyVecEnv([_ImageEnv] * 2))
+    assert venv.observation_space.shape == (3, 6, 5)
+    assert venv.reset().shape == (2, 3, 6, 5)
+    for _ in range(3):
+        obs, _, dones, infos = venv.step(np.array([0, 1]))
+    assert dones.all() and infos[0]["terminal_observation"].shape == (3, 6, 5)
+    stacked = VecFrameStack(DummyVecEnv([_ImageEnv] * 2), 4)
+    assert stacked.observation_space.shape == (6, 5, 12)
+    assert stacked.reset().shape == (2, 6, 5, 12)
+    with pytest.raises(ValueError, match="uint8 images"):
+        VecTransposeImage(DummyVecEnv([lambda: gym.make("CartPole-v1")]))
+
+
+def test_vec_monitor_writes_episodes(tmp_path):
+    from palaestra.wrappers.monitor import get_monitor_files, read_monitor_file
+
+    venv = make_vec_env("CartPole-v1", n_envs=2, seed=0, monitor_dir=str(tmp_path))
+    assert isinstance(venv, VecMonitor)
+    venv.reset()
+    episodes = 0
+    for _ in range(100):
+        _, _, dones, infos = venv.step(np.array([1, 1]))
+        for done, info in zip(dones, infos):
+            if done:
+                episodes += 1
+                assert set(info["episode"]) == {"r", "l", "t"}
+                assert info["episode"]["r"] == info["episode"]["l"]
+    venv.close()
+    assert episodes >= 2
+    (path,) = get_monitor_files(str(tmp_path))
+    header, columns = read_monitor_file(path)
+    assert header["env_id"] == "CartPole-v1" and len(columns["r"]) == episodes
