@@ -120,7 +120,7 @@ def test_vec_transpose_image_and_image_frame_stack():
     assert venv.observation_space.shape == (3, 6, 5)
     assert venv.reset().shape == (2, 3, 6, 5)
     for _ in range(3):
-        obs, _, dones, infos = venv.step(np.array([0, 1]))
+        _, _, dones, infos = venv.step(np.array([0, 1]))
     assert dones.all() and infos[0]["terminal_observation"].shape == (3, 6, 5)
     stacked = VecFrameStack(DummyVecEnv([_ImageEnv] * 2), 4)
     assert stacked.observation_space.shape == (6, 5, 12)
