@@ -25,7 +25,7 @@ def test_wrong_action_batches(mode):
         envs.step(np.array([1, 0]))  # 2 actions for 3 envs
     with pytest.raises(InvalidAction, match=r"shape|\(3,\)"):
         envs.step(np.ones((3, 1), dtype=np.int64))
-    with pytest.raises(InvalidAction, match="integer|int"):
+    with pytest.raises(InvalidAction, match=r"integer|int"):
         envs.step(np.array([0.5, 1.0, 0.0]))
     with pytest.raises(InvalidAction):
         envs.step(np.array([0, 1, 7]))  # out of range for Discrete(2)
@@ -77,7 +77,7 @@ def test_bad_constructor_arguments():
         SyncVectorEnv([lambda: gym.make("CartPole-v1")], autoreset_mode="Sometimes")
     with pytest.raises(ValueError, match="Invalid vectorization mode"):
         gym.make_vec("CartPole-v1", 2, vectorization_mode="threads")
-    with pytest.raises(TypeError, match="not a palaestra.Env"):
+    with pytest.raises(TypeError, match=r"not a palaestra\.Env"):
         SyncVectorEnv([lambda: object()])
 
 

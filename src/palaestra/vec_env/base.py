@@ -151,9 +151,8 @@ class VecEnv:
     def __enter__(self) -> VecEnv:
         return self
 
-    def __exit__(self, *args: object) -> bool:
+    def __exit__(self, *args: object) -> None:
         self.close()
-        return False
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(num_envs={self.num_envs})"
@@ -244,7 +243,7 @@ class VecEnvWrapper(VecEnv):
         return self.venv.env_is_wrapped(wrapper_class, indices)
 
     @property
-    def reset_infos(self) -> list[dict[str, Any]]:  # type: ignore[override]
+    def reset_infos(self) -> list[dict[str, Any]]:
         """The inner vector env's reset infos."""
         return self.venv.reset_infos
 

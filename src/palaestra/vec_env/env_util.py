@@ -103,7 +103,7 @@ def make_vec_env(
 
         return init
 
-    cls = DummyVecEnv if vec_env_cls is None else vec_env_cls
-    vec_env = cls([make_env(i + start_index) for i in range(n_envs)], **vec_env_kwargs)  # type: ignore[call-arg]
+    cls: Any = DummyVecEnv if vec_env_cls is None else vec_env_cls
+    vec_env = cls([make_env(i + start_index) for i in range(n_envs)], **vec_env_kwargs)
     vec_env.seed(seed)
     return vec_env

@@ -127,7 +127,9 @@ class AsyncVectorEnv(EngineVectorEnv):
         name, args, kwargs = self._call
         return self.engine.call(name, args, kwargs)
 
-    def close_extras(self, timeout: float | None = None, terminate: bool = False) -> None:
+    def close_extras(
+        self, timeout: float | None = None, terminate: bool = False, **kwargs: Any
+    ) -> None:
         """Stop the workers: politely (waiting up to ``timeout`` s), or at once with
         ``terminate``; no child process outlives this call."""
         engine = getattr(self, "engine", None)

@@ -108,7 +108,7 @@ class EngineVectorEnv(VectorEnv[Any, Any, np.ndarray]):
         """The sub-envs' seeds."""
         return self.get_attr("np_random_seed")
 
-    @property
+    @property  # type: ignore[misc]
     def np_random(self) -> tuple[Any, ...]:  # type: ignore[override]
         """The sub-envs' generators."""
         return self.get_attr("np_random")

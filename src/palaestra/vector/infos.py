@@ -53,8 +53,8 @@ def stack_transition_infos(t: Transition, n: int) -> dict[str, Any]:
         finals = {row: j for j, row in enumerate(t.final_rows.tolist())}
     if t.infos is None:
         # Fast path (native engines): only the rows that ended carry anything.
-        for row, j in finals.items():
-            add_info(infos, _final(t, j), row, n)
+        for row, k in finals.items():
+            add_info(infos, _final(t, k), row, n)
         return infos
     for i, env_info in enumerate(t.infos):
         j = finals.get(i)

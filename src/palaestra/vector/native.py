@@ -60,7 +60,7 @@ def _make(
 ) -> EngineVectorEnv:
     from palaestra.envs import classic_control as cc
 
-    batch_cls, env_cls = {
+    classes: dict[str, tuple[Any, Any]] = {
         "cartpole": (cc.CartPoleBatch, cc.CartPoleEnv),
         "mountain_car": (cc.MountainCarBatch, cc.MountainCarEnv),
         "continuous_mountain_car": (
@@ -69,7 +69,8 @@ def _make(
         ),
         "pendulum": (cc.PendulumBatch, cc.PendulumEnv),
         "acrobot": (cc.AcrobotBatch, cc.AcrobotEnv),
-    }[kind]
+    }
+    batch_cls, env_cls = classes[kind]
     if render_mode is not None:
         # Native batches do not draw: envs that must render run as real envs, in a loop.
         return _rendering_envs(

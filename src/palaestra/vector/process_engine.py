@@ -136,7 +136,7 @@ class ProcessEngine:
         try:
             for i, fn in enumerate(env_fns):
                 parent, child = ctx.Pipe()
-                proc = ctx.Process(
+                proc = ctx.Process(  # type: ignore[attr-defined]
                     target=run_worker,
                     name=f"Worker<{who}>-{i}",
                     args=(i, Payload(fn), child, parent, buffers, n, spaces),

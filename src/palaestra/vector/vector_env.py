@@ -126,9 +126,8 @@ class VectorEnv(Generic[ObsType, ActType, ArrayType]):
     def __enter__(self) -> Self:
         return self
 
-    def __exit__(self, *args: object) -> bool:
+    def __exit__(self, *args: object) -> None:
         self.close()
-        return False
 
     def __del__(self) -> None:
         # Worker processes and shared memory must not outlive a forgotten vector env.
@@ -167,7 +166,7 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[WrapperObsType, dict[str, Any]]:
         """Reset the inner vector env."""
-        return self.env.reset(seed=seed, options=options)  # type: ignore[return-value]
+        return self.env.reset(seed=seed, options=options)
 
     def step(self, actions: WrapperActType) -> StepReturn:
         """Step the inner vector env."""
@@ -196,7 +195,7 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     def __repr__(self) -> str:
         return f"<{type(self).__name__}, {self.env}>"
 
-    @property  # type: ignore[override]
+    @property
     def observation_space(self) -> Space[Any]:
         """The wrapper's batched observation space, or the inner one."""
         if self._observation_space is None:
@@ -207,7 +206,7 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     def observation_space(self, space: Space[Any]) -> None:
         self._observation_space = space
 
-    @property  # type: ignore[override]
+    @property
     def action_space(self) -> Space[Any]:
         """The wrapper's batched action space, or the inner one."""
         return self.env.action_space if self._action_space is None else self._action_space
@@ -216,7 +215,7 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     def action_space(self, space: Space[Any]) -> None:
         self._action_space = space
 
-    @property  # type: ignore[override]
+    @property
     def single_observation_space(self) -> Space[Any]:
         """The wrapper's per-env observation space, or the inner one."""
         if self._single_observation_space is None:
@@ -227,7 +226,7 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     def single_observation_space(self, space: Space[Any]) -> None:
         self._single_observation_space = space
 
-    @property  # type: ignore[override]
+    @property
     def single_action_space(self) -> Space[Any]:
         """The wrapper's per-env action space, or the inner one."""
         if self._single_action_space is None:
@@ -238,8 +237,8 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     def single_action_space(self, space: Space[Any]) -> None:
         self._single_action_space = space
 
-    @property  # type: ignore[override]
-    def num_envs(self) -> int:
+    @property
+    def num_envs(self) -> int:  # type: ignore[override]
         """The inner env's number of sub-envs."""
         return self.env.num_envs
 
@@ -257,7 +256,7 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
         """The inner env's seed."""
         return self.env.np_random_seed
 
-    @property  # type: ignore[override]
+    @property
     def metadata(self) -> dict[str, Any]:
         """The wrapper's metadata, or the inner one."""
         return self.env.metadata if self._metadata is None else self._metadata
@@ -266,17 +265,17 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     def metadata(self, value: dict[str, Any]) -> None:
         self._metadata = value
 
-    @property  # type: ignore[override]
-    def spec(self) -> EnvSpec | None:
+    @property
+    def spec(self) -> EnvSpec | None:  # type: ignore[override]
         """The inner env's spec."""
         return self.env.spec
 
-    @property  # type: ignore[override]
-    def render_mode(self) -> str | None:
+    @property
+    def render_mode(self) -> str | None:  # type: ignore[override]
         """The inner env's render mode."""
         return self.env.render_mode
 
-    @property  # type: ignore[override]
+    @property
     def closed(self) -> bool:
         """Whether the inner env is closed."""
         return self.env.closed
