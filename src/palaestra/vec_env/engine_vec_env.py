@@ -10,19 +10,21 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from copy import deepcopy
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from palaestra import error
 from palaestra.core import Env
-from palaestra.envs.classic_control.batched import BatchedEnv
 from palaestra.vec_env.base import Indices, StepReturn, VecEnv
 from palaestra.vector.autoreset import Autoresetter, Transition
 from palaestra.vector.engine import Engine, LoopEngine
 from palaestra.vector.native_engine import NativeEngine
 from palaestra.vector.process_engine import ProcessEngine
 from palaestra.vector.vector_env import AutoresetMode
+
+if TYPE_CHECKING:  # the classic-control modules load only when a batch is made
+    from palaestra.envs.classic_control.batched import BatchedEnv
 
 __all__ = ["BatchedVecEnv", "DummyVecEnv", "EngineVecEnv", "SubprocVecEnv"]
 

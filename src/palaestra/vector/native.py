@@ -8,12 +8,14 @@ with a ``render_mode`` the entry points return a ``SyncVectorEnv`` of real envs 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from palaestra.envs.classic_control.batched import BatchedEnv
 from palaestra.vector.engine_env import EngineVectorEnv
 from palaestra.vector.native_engine import NativeEngine
 from palaestra.vector.vector_env import AutoresetMode
+
+if TYPE_CHECKING:  # the classic-control modules load only when a batch is made
+    from palaestra.envs.classic_control.batched import BatchedEnv
 
 __all__ = [
     "BatchedVectorEnv",

@@ -10,13 +10,15 @@ what a single env seeded ``s + i`` draws).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from palaestra.envs.classic_control.batched import BatchedEnv
 from palaestra.spaces.batching import batch_space
 from palaestra.vector.engine import Infos, Rows, StepResult
+
+if TYPE_CHECKING:  # the classic-control modules load only when a batch is made
+    from palaestra.envs.classic_control.batched import BatchedEnv
 
 
 class NativeEngine:
