@@ -64,3 +64,31 @@ def test_missing_torch_names_the_extra() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert 'pip install "palaestra[train]"' in out.stdout, out.stderr
+
+
+def test_vec_env_evaluation_spreads_episodes() -> None:
+    import warnings
+
+    from palaestra.vec_env import DummyVecEnv, make_vec_env
+
+    class Batch(AlwaysRight):
+        def predict(
+            self,
+            obs: Any,
+            state: Any = None,
+            episode_start: Any = None,
+            deterministic: bool = False,
+        ) -> tuple[np.ndarray, Any]:
+            return np.ones(len(obs), dtype=np.int64), state
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a VecMonitor counts as monitored: no warning
+        rewards, lengths = evaluate_policy(
+            Batch(),
+            make_vec_env("CartPole-v1", n_envs=3, seed=0),
+            n_eval_episodes=5,
+            return_episode_rewards=True,
+        )
+    assert len(rewards) == 5 and rewards == [float(n) for n in lengths]
+    with pytest.warns(UserWarning, match="Monitor"):
+        evaluate_policy(Batch(), DummyVecEnv([lambda: gym.make("CartPole-v1")]), n_eval_episodes=1)

@@ -24,6 +24,18 @@ def _has_monitor(env: Any) -> bool:
     return False
 
 
+def _vec_monitored(venv: Any) -> bool:
+    """A ``VecMonitor`` layer, or ``Monitor``-wrapped sub-envs (SB3's two checks)."""
+    from palaestra.vec_env import VecMonitor
+
+    layer = venv
+    while layer is not None:
+        if isinstance(layer, VecMonitor):
+            return True
+        layer = getattr(layer, "venv", None)
+    return bool(venv.env_is_wrapped(Monitor)[0]) if hasattr(venv, "env_is_wrapped") else False
+
+
 def evaluate_policy(
     model: Any,
     env: Any,
@@ -125,7 +137,7 @@ def _evaluate_vec(
     warn: bool,
 ) -> tuple[list[float], list[int]]:
     n_envs = env.num_envs
-    monitored = bool(env.env_is_wrapped(Monitor)[0]) if hasattr(env, "env_is_wrapped") else False
+    monitored = _vec_monitored(env)
     if not monitored and warn:
         warnings.warn(
             "Evaluation environment is not wrapped with a ``Monitor`` wrapper. This may result in "
