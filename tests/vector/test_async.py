@@ -145,3 +145,35 @@ def test_mismatched_sub_env_spaces_are_refused():
     with pytest.raises(RuntimeError, match="observation spaces are not equivalent"):
         AsyncVectorEnv(fns, context="fork")
     assert _children() <= before
+
+
+class _Slow(gym.Env):
+    def __init__(self):
+        from palaestra import spaces
+
+        self.observation_space = spaces.Box(-1, 1, (1,), np.float32)
+        self.action_space = spaces.Discrete(2)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(1, np.float32), {}
+
+    def step(self, action):
+        time.sleep(30 if action else 0)
+        return np.zeros(1, np.float32), 0.0, False, False, {}
+
+
+def test_step_wait_timeout_closes_instead_of_desynchronising():
+    import multiprocessing as mp
+
+    before = _children()
+    envs = AsyncVectorEnv([_Slow] * 2, context="fork")
+    envs.reset(seed=0)
+    envs.step_async(np.array([0, 1]))
+    start = time.monotonic()
+    with pytest.raises(mp.TimeoutError, match="worker 1 did not answer 'step' in time"):
+        envs.step_wait(timeout=0.3)
+    assert time.monotonic() - start < 5
+    with pytest.raises(ClosedEnvironmentError):
+        envs.step(np.array([0, 0]))
+    assert _children() <= before

@@ -8,11 +8,13 @@ worker's traceback text attached (``__notes__`` and ``__cause__``).
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
+import os
 import pickle
 import signal
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -34,6 +36,17 @@ from palaestra.vector.worker import STEP, Payload, decode, run_worker
 
 _ARRAY_SPACES = (Box, Discrete, MultiDiscrete, MultiBinary)
 _POLL_SLICE = 0.5  # seconds between liveness checks while a worker is busy
+
+
+@contextlib.contextmanager
+def clear_mpi_env_vars() -> Iterator[None]:
+    """Hide MPI's environment variables while workers start: an MPI-launched parent would
+    otherwise make each worker's MPI import think it is part of the parent's job."""
+    removed = {k: os.environ.pop(k) for k in list(os.environ) if k.startswith(("OMPI_", "PMI_"))}
+    try:
+        yield
+    finally:
+        os.environ.update(removed)
 
 
 class WorkerDiedError(RuntimeError):
@@ -144,7 +157,8 @@ class ProcessEngine:
                 )
                 self.conns.append(parent)
                 self.processes.append(proc)
-                proc.start()
+                with clear_mpi_env_vars():
+                    proc.start()
                 child.close()
             self._gather(range(n), "start")
             self._check_spaces()
@@ -193,7 +207,13 @@ class ProcessEngine:
             if not self.processes[i].is_alive() and not conn.poll():
                 self._died(i, what)
             if deadline is not None and time.monotonic() >= deadline:
-                raise mp.TimeoutError(f"{self.who}: worker {i} did not answer {what!r} in time")
+                # Its late answer would be read as the answer to the next command: stop the
+                # workers rather than let the pipes fall out of step.
+                self.close(terminate=True)
+                raise mp.TimeoutError(
+                    f"{self.who}: worker {i} did not answer {what!r} in time; the vector "
+                    "environment has been closed."
+                )
         try:
             return decode(conn.recv_bytes())
         except (EOFError, ConnectionResetError, OSError) as e:

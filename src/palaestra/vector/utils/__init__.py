@@ -2,6 +2,7 @@
 
 from palaestra.spaces.batched_samples import concatenate, create_empty_array, iterate
 from palaestra.spaces.batching import batch_differing_spaces, batch_space
+from palaestra.vector.process_engine import clear_mpi_env_vars
 from palaestra.vector.shared_memory import (
     create_shared_memory,
     read_from_shared_memory,
@@ -13,6 +14,7 @@ __all__ = [
     "CloudpickleWrapper",
     "batch_differing_spaces",
     "batch_space",
+    "clear_mpi_env_vars",
     "concatenate",
     "create_empty_array",
     "create_shared_memory",
