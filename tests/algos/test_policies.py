@@ -121,3 +121,40 @@ def test_unknown_policy_and_bad_arch() -> None:
         ActorCritic(BOX4, spaces.Tuple([spaces.Discrete(2)]))
     with pytest.raises(ValueError, match="image observation"):
         QNetwork(BOX4, spaces.Discrete(2), NatureCNN)
+
+
+@pytest.mark.parametrize(
+    "space",
+    [
+        spaces.Discrete(3, start=1),
+        spaces.MultiDiscrete([3, 2]),
+        spaces.MultiBinary(3),
+        spaces.Box(-1, 1, (2,)),
+    ],
+)
+def test_numpy_acting_matches_torch(space: spaces.Space) -> None:
+    torch.manual_seed(0)
+    ac = ActorCritic(BOX4, space, ortho_init=False)
+    pair = ac.numpy_acting()
+    assert pair is not None
+    pi, vf = pair
+    obs = np.random.default_rng(0).normal(size=(7, 4)).astype(np.float32)
+    actions, log_prob = ac.action_head.act_numpy(pi(obs), np.random.default_rng(1), False)
+    values_t, log_prob_t, _ = ac.evaluate_actions(torch.as_tensor(obs), torch.as_tensor(actions))
+    np.testing.assert_allclose(log_prob, log_prob_t.detach().numpy(), rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(vf(obs)[:, 0], values_t.detach().numpy(), rtol=1e-5, atol=1e-6)
+    mode_np, _ = ac.action_head.act_numpy(pi(obs), np.random.default_rng(1), True)
+    mode_t = ac.act(torch.as_tensor(obs), deterministic=True)
+    np.testing.assert_allclose(mode_np, mode_t.detach().numpy(), rtol=1e-5, atol=1e-6)
+    # the numpy views follow in-place parameter updates
+    with torch.no_grad():
+        ac.value_head.bias.add_(1.0)
+    np.testing.assert_allclose(vf(obs)[:, 0], values_t.detach().numpy() + 1, rtol=1e-5, atol=1e-5)
+
+
+def test_numpy_acting_declines_what_it_cannot_do() -> None:
+    assert QNetwork(BOX4, spaces.Discrete(2)).numpy_acting() is not None
+    assert QNetwork(spaces.Discrete(5), spaces.Discrete(2)).numpy_acting() is None  # one-hot
+    img = spaces.Box(0, 255, (36, 36, 1), np.uint8)
+    assert QNetwork(img, spaces.Discrete(2), NatureCNN).numpy_acting() is None
+    assert ActorCritic(BOX4, spaces.Discrete(2), activation_fn=torch.nn.ELU).numpy_acting() is None

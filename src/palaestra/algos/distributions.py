@@ -16,6 +16,7 @@ import torch
 from torch import nn
 
 from palaestra import spaces
+from palaestra.algos.numpy_acting import log_softmax, sample_categorical
 
 __all__ = ["ActionHead"]
 
@@ -114,6 +115,42 @@ class ActionHead(nn.Module):
             log_prob = log_prob + logp.gather(1, idx[:, i : i + 1]).squeeze(1)
             entropy = entropy - (logp.exp() * logp).sum(dim=1)
         return log_prob, entropy
+
+    def act_numpy(
+        self, params: np.ndarray, rng: np.random.Generator, deterministic: bool
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``act`` on head outputs computed in numpy (see ``numpy_acting``): same
+        distributions, drawn from ``rng``; returns ``(actions, log_probs [B] float32)``."""
+        n = params.shape[0]
+        if self.kind == "gaussian":
+            log_std = self.log_std.detach().numpy()
+            noise = (
+                np.zeros_like(params)
+                if deterministic
+                else rng.standard_normal(params.shape, np.float32)
+            )
+            actions = params + noise * np.exp(log_std)
+            log_prob = (-0.5 * noise**2 - log_std - _LOG_SQRT_2PI).sum(axis=1)
+            return actions.reshape(n, *self.action_shape), log_prob.astype(np.float32)
+        if self.kind == "bernoulli":
+            if deterministic:
+                bits = params > 0.0
+            else:
+                bits = rng.random(params.shape) < 1.0 / (1.0 + np.exp(-params))
+            log_prob = -np.logaddexp(0.0, np.where(bits, -params, params)).sum(axis=1)
+            return bits.astype(np.float32).reshape(n, *self.action_shape), log_prob.astype(
+                np.float32
+            )
+        picks, log_prob = [], np.zeros(n, dtype=np.float32)
+        for logits in np.split(params, np.cumsum(self.sizes)[:-1], axis=1):
+            logp = log_softmax(logits)
+            idx = sample_categorical(logp, rng, deterministic)
+            picks.append(idx)
+            log_prob += logp[np.arange(n), idx]
+        actions = picks[0] if self.kind == "categorical" else np.stack(picks, axis=1)
+        if self.offset is not None:
+            actions = actions + self.offset.numpy()
+        return actions, log_prob
 
     def _gaussian_log_prob(self, mean: torch.Tensor, actions: torch.Tensor) -> torch.Tensor:
         z = (actions - mean) * torch.exp(-self.log_std)

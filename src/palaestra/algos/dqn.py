@@ -143,7 +143,9 @@ class DQN(BaseAlgorithm):
         self.policy = torch.nn.ModuleDict({"q_net": q_net, "q_net_target": q_net_target}).to(
             self.device
         )
-        self.q_net, self.q_net_target = self.policy["q_net"], self.policy["q_net_target"]
+        self.q_net, self.q_net_target = q_net, q_net_target  # .to() moved them in place
+        self._q_params = list(q_net.parameters())
+        self._q_numpy = q_net.numpy_acting()  # cheap batch-1 acting on CPU MLPs
         self.optimizer = optimizer_class(
             self.q_net.parameters(), lr=self.lr_schedule(1.0), **optimizer_kwargs
         )
@@ -166,6 +168,8 @@ class DQN(BaseAlgorithm):
 
     # -- acting ------------------------------------------------------------------------------
     def _greedy(self, obs: Any) -> np.ndarray:
+        if self._q_numpy is not None and isinstance(obs, np.ndarray):
+            return self._q_numpy(obs).argmax(axis=1) + int(self.action_space.start)
         with torch.no_grad():
             q = self.q_net(self._obs_to_tensor(obs))
         return q.argmax(dim=1).cpu().numpy() + int(self.action_space.start)
@@ -240,7 +244,7 @@ class DQN(BaseAlgorithm):
                 self._update_progress()
                 self._n_calls += 1
                 if self._n_calls % target_every == 0:
-                    polyak_update(self.q_net.parameters(), self.q_net_target.parameters(), self.tau)
+                    polyak_update(self._q_params, self.q_net_target.parameters(), self.tau)
                 self.exploration_rate = self.exploration_schedule(self._progress_remaining)
                 self.logger.record("rollout/exploration_rate", self.exploration_rate)
                 for _ in range(int(dones.sum())):
@@ -294,7 +298,7 @@ class DQN(BaseAlgorithm):
             )
             self.optimizer.zero_grad()
             loss.backward()
-            torch.nn.utils.clip_grad_norm_(self.q_net.parameters(), self.max_grad_norm)
+            torch.nn.utils.clip_grad_norm_(self._q_params, self.max_grad_norm)
             self.optimizer.step()
             losses.append(loss.detach())
         self._n_updates += gradient_steps

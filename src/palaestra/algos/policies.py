@@ -19,6 +19,8 @@ from palaestra.algos.networks import (
     mlp,
     preprocess_obs,
 )
+from palaestra.algos.numpy_acting import numpy_mlp
+from palaestra.algos.spaces_util import is_image_space
 
 __all__ = ["POLICY_EXTRACTORS", "ActorCritic", "QNetwork", "extractor_class"]
 
@@ -66,6 +68,17 @@ class QNetwork(nn.Module):
     def forward(self, obs: Any) -> torch.Tensor:
         x = preprocess_obs(obs, self.observation_space, self.normalize_images)
         return self.head(self.mlp(self.features_extractor(x)))
+
+    def numpy_acting(self) -> Any:
+        """A numpy forward to the Q-values, or None (see ``numpy_acting``)."""
+        space = self.observation_space
+        if (
+            not isinstance(self.features_extractor, FlattenExtractor)
+            or not isinstance(space, spaces.Box)
+            or (is_image_space(space) and self.normalize_images)
+        ):
+            return None
+        return numpy_mlp([self.features_extractor, self.mlp, self.head])
 
 
 def _split_arch(net_arch: Any, features_extractor_class: type) -> tuple[list[int], list[int]]:
@@ -133,6 +146,21 @@ class ActorCritic(nn.Module):
             ]:
                 if part is not None:
                     _ortho_init(part, gain)
+
+    def numpy_acting(self) -> tuple[Any, Any] | None:
+        """``(pi_fn, vf_fn)``: numpy forwards to the action-head outputs and the values, or
+        None when the networks are not plain CPU MLPs on vector observations."""
+        space = self.observation_space
+        if (
+            not isinstance(self.features_extractor, FlattenExtractor)
+            or not isinstance(space, spaces.Box)
+            or (is_image_space(space) and self.normalize_images)
+        ):
+            return None
+        vf_extractor = self.vf_features_extractor or self.features_extractor
+        pi = numpy_mlp([self.features_extractor, self.pi_net, self.action_head.net])
+        vf = numpy_mlp([vf_extractor, self.vf_net, self.value_head])
+        return None if pi is None or vf is None else (pi, vf)
 
     def _latents(self, obs: Any) -> tuple[torch.Tensor, torch.Tensor]:
         x = preprocess_obs(obs, self.observation_space, self.normalize_images)

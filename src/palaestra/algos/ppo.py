@@ -131,6 +131,8 @@ class PPO(BaseAlgorithm):
         self.policy = ActorCritic(self.observation_space, self.action_space, **kwargs).to(
             self.device
         )
+        self._numpy = self.policy.numpy_acting()  # cheap acting on CPU MLPs; None otherwise
+        self._params = list(self.policy.parameters())
         self.optimizer = optimizer_class(
             self.policy.parameters(), lr=self.lr_schedule(1.0), **optimizer_kwargs
         )
@@ -151,7 +153,26 @@ class PPO(BaseAlgorithm):
         self._check_rollout_size()
         self._make_rollout_buffer()
 
+    def _act(self, obs: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(actions, values, log_probs)`` for a batch of raw observations (no grad)."""
+        if self._numpy is not None and isinstance(obs, np.ndarray):
+            pi, vf = self._numpy
+            actions, log_probs = self.policy.action_head.act_numpy(pi(obs), self._rng, False)
+            return actions, vf(obs)[:, 0], log_probs
+        with torch.no_grad():
+            actions_t, values_t, log_probs_t = self.policy(self._obs_to_tensor(obs))
+        return actions_t.cpu().numpy(), values_t.cpu().numpy(), log_probs_t.cpu().numpy()
+
+    def _values(self, obs: Any) -> np.ndarray:
+        if self._numpy is not None and isinstance(obs, np.ndarray):
+            return self._numpy[1](obs)[:, 0]
+        with torch.no_grad():
+            return self.policy.predict_values(self._obs_to_tensor(obs)).cpu().numpy()
+
     def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
+        if self._numpy is not None and isinstance(observation, np.ndarray):
+            params = self._numpy[0](observation)
+            return self.policy.action_head.act_numpy(params, self._rng, deterministic)[0]
         with torch.no_grad():
             return self.policy.act(self._obs_to_tensor(observation), deterministic).cpu().numpy()
 
@@ -192,9 +213,7 @@ class PPO(BaseAlgorithm):
         callback.on_rollout_start()
         dones = np.zeros(self.n_envs, dtype=bool)
         while not buf.full:
-            with torch.no_grad():
-                actions_t, values_t, log_probs_t = self.policy(self._obs_to_tensor(self._last_obs))
-            actions = actions_t.cpu().numpy()
+            actions, values, log_probs = self._act(self._last_obs)
             if isinstance(self.action_space, spaces.MultiBinary):
                 actions = actions.astype(self.action_space.dtype)  # Bernoulli samples are floats
             env_actions = np.clip(actions, box.low, box.high) if box is not None else actions
@@ -220,13 +239,11 @@ class PPO(BaseAlgorithm):
                 actions,
                 rewards,
                 self._last_episode_starts,  # type: ignore[arg-type]
-                values_t.cpu().numpy(),
-                log_probs_t.cpu().numpy(),
+                values,
+                log_probs,
             )
             self._last_obs, self._last_episode_starts = new_obs, dones
-        with torch.no_grad():
-            last_values = self.policy.predict_values(self._obs_to_tensor(self._last_obs))
-        buf.compute_returns_and_advantage(last_values.cpu().numpy(), dones)
+        buf.compute_returns_and_advantage(self._values(self._last_obs), dones)
         callback.update_locals({"rollout_buffer": buf})
         callback.on_rollout_end()
         return True
@@ -248,10 +265,8 @@ class PPO(BaseAlgorithm):
             batch: Any = {k: np.stack([t[k] for t in terminal]) for k in terminal[0]}
         else:
             batch = np.stack(terminal)
-        with torch.no_grad():
-            values = self.policy.predict_values(self._obs_to_tensor(batch)).cpu().numpy()
         rewards = rewards.copy()
-        rewards[idx] += self.gamma * values
+        rewards[idx] += self.gamma * self._values(batch)
         return rewards
 
     def train(self) -> None:
@@ -299,7 +314,7 @@ class PPO(BaseAlgorithm):
                     break
                 self.optimizer.zero_grad()
                 loss.backward()
-                torch.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
+                torch.nn.utils.clip_grad_norm_(self._params, self.max_grad_norm)
                 self.optimizer.step()
             self._n_updates += 1
             if not continue_training:
