@@ -94,3 +94,26 @@ def test_methods_with_indices():
     assert native.get_attr("num_envs", indices=[0, 1]) == [3, 3]
     native.close()
     native.close()
+
+
+def test_make_vec_env_paths():
+    from palaestra.wrappers.monitor import Monitor
+    from palaestra.wrappers.transform_reward import ClipReward
+
+    native = make_vec_env("MountainCar-v0", n_envs=2, env_kwargs={"goal_velocity": 0.01})
+    assert isinstance(native.venv, BatchedVecEnv)
+    assert native.venv.batch.params.goal_velocity == 0.01
+    rendering = make_vec_env("CartPole-v1", n_envs=2, env_kwargs={"render_mode": "rgb_array"})
+    assert isinstance(rendering, DummyVecEnv)
+    rendering.reset()
+    assert rendering.get_images()[0].shape == (400, 600, 3)
+    assert rendering.render().shape == (800, 600, 3)  # 2 frames tiled as SB3 tiles them
+    wrapped = make_vec_env(
+        "CartPole-v1", n_envs=2, wrapper_class=ClipReward, wrapper_kwargs={"max_reward": 0.5}
+    )
+    assert isinstance(wrapped, DummyVecEnv) and wrapped.env_is_wrapped(Monitor) == [True, True]
+    wrapped.reset()
+    assert wrapped.step(np.array([0, 1]))[1].tolist() == [0.5, 0.5]
+    from_callable = make_vec_env(lambda: gym.make("Pendulum-v1"), n_envs=2, seed=0)
+    assert isinstance(from_callable, DummyVecEnv)
+    assert from_callable.reset().shape == (2, 3)
