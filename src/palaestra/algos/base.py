@@ -150,6 +150,23 @@ class BaseAlgorithm:
     def _on_n_envs_changed(self) -> None:
         """Rebuild per-env buffers (subclasses)."""
 
+    def _make_optimizer(
+        self,
+        params: list[torch.nn.Parameter],
+        optimizer_class: type,
+        optimizer_kwargs: dict[str, Any],
+    ) -> torch.optim.Optimizer:
+        """SB3's optimizer choice; Adam on the CPU runs fused (one kernel for all tensors:
+        the per-tensor loop costs more than the math for small nets) unless told otherwise."""
+        kwargs = dict(optimizer_kwargs)
+        fusable = optimizer_class is torch.optim.Adam and self.device.type == "cpu"
+        if fusable and "fused" not in kwargs and "foreach" not in kwargs:
+            try:
+                return optimizer_class(params, lr=self.lr_schedule(1.0), fused=True, **kwargs)
+            except (RuntimeError, TypeError, ValueError):  # older torch: no fused CPU Adam
+                pass
+        return optimizer_class(params, lr=self.lr_schedule(1.0), **kwargs)
+
     # -- device, seeding ---------------------------------------------------------------------
     def _resolve_device(self, device: torch.device | str, policy: str) -> torch.device:
         if device == "auto":

@@ -141,6 +141,10 @@ class ActionHead(nn.Module):
             return bits.astype(np.float32).reshape(n, *self.action_shape), log_prob.astype(
                 np.float32
             )
+        if self.kind == "categorical" and self.offset is None:  # the common case, no split
+            logp = log_softmax(params)
+            idx = sample_categorical(logp, rng, deterministic)
+            return idx, logp[np.arange(n), idx]
         picks, log_prob = [], np.zeros(n, dtype=np.float32)
         for logits in np.split(params, np.cumsum(self.sizes)[:-1], axis=1):
             logp = log_softmax(logits)

@@ -146,9 +146,7 @@ class DQN(BaseAlgorithm):
         self.q_net, self.q_net_target = q_net, q_net_target  # .to() moved them in place
         self._q_params = list(q_net.parameters())
         self._q_numpy = q_net.numpy_acting()  # cheap batch-1 acting on CPU MLPs
-        self.optimizer = optimizer_class(
-            self.q_net.parameters(), lr=self.lr_schedule(1.0), **optimizer_kwargs
-        )
+        self.optimizer = self._make_optimizer(self._q_params, optimizer_class, optimizer_kwargs)
         self._make_replay_buffer()
 
     def _make_replay_buffer(self) -> None:

@@ -133,9 +133,7 @@ class PPO(BaseAlgorithm):
         )
         self._numpy = self.policy.numpy_acting()  # cheap acting on CPU MLPs; None otherwise
         self._params = list(self.policy.parameters())
-        self.optimizer = optimizer_class(
-            self.policy.parameters(), lr=self.lr_schedule(1.0), **optimizer_kwargs
-        )
+        self.optimizer = self._make_optimizer(self._params, optimizer_class, optimizer_kwargs)
         self._make_rollout_buffer()
 
     def _make_rollout_buffer(self) -> None:
