@@ -29,7 +29,7 @@ from palaestra.algos.callbacks import (
     ProgressBarCallback,
     convert_callback,
 )
-from palaestra.algos.logger import Logger, configure
+from palaestra.algos.logger import HumanOutputFormat, Logger, configure
 from palaestra.algos.policies import extractor_class
 from palaestra.algos.schedules import Schedule
 from palaestra.algos.spaces_util import is_image_space, is_vectorized_observation
@@ -255,7 +255,8 @@ class BaseAlgorithm:
     def _make_logger(self, tb_log_name: str, reset_num_timesteps: bool) -> Logger:
         formats = ["stdout"] if self.verbose >= 1 else []
         if self.tensorboard_log is None:
-            return configure(None, formats) if formats else Logger(None, [])
+            # stdout only: no folder to create (SB3 makes an empty temp dir here)
+            return Logger(None, [HumanOutputFormat(sys.stdout)] if formats else [])
         runs = (
             [d for d in os.listdir(self.tensorboard_log)]
             if os.path.isdir(self.tensorboard_log)
