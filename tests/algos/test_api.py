@@ -119,3 +119,29 @@ def test_callbacks_see_documented_locals_and_can_stop() -> None:
     model = DQN("MlpPolicy", "CartPole-v1", **SMALL_DQN).learn(1000, callback=stop_after_ten)
     assert model.num_timesteps == 10
     assert {"actions", "dones", "infos", "new_obs", "rewards", "total_timesteps"} <= set(seen[0])
+
+
+def test_dqn_train_freq_variants() -> None:
+    per_episode = DQN(
+        "MlpPolicy", Toy(horizon=5), train_freq=(1, "episode"), gradient_steps=-1, **SMALL_DQN
+    ).learn(30)
+    # one update round per 5-step episode once learning starts: gradient_steps = steps collected
+    assert per_episode._n_updates == 5 * (per_episode.num_timesteps // 5 - 1)
+    with pytest.raises(ValueError, match="train_freq"):
+        DQN("MlpPolicy", Toy(), train_freq=(2, "epoch"))
+
+
+def test_ppo_target_kl_and_value_clipping(capsys: pytest.CaptureFixture[str]) -> None:
+    model = PPO(
+        "MlpPolicy",
+        "CartPole-v1",
+        target_kl=1e-9,
+        clip_range_vf=0.2,
+        verbose=1,
+        learning_rate=1e-2,
+        **SMALL_PPO,
+    )
+    model.learn(32)
+    out = capsys.readouterr().out
+    assert "Early stopping at step 0 due to reaching max kl" in out
+    assert "clip_range_vf" in out and model._n_updates == 2  # one epoch per train() call
