@@ -151,3 +151,37 @@ def test_set_env_with_toy_env_after_load(tmp_path: Path) -> None:
     loaded = PPO.load(tmp_path / "toy", env=Toy())
     loaded.learn(16)
     assert loaded.num_timesteps == 16
+
+
+class TinyExtractor(torch.nn.Module):
+    """A user features extractor (outside palaestra.algos): needs custom_objects on load."""
+
+    def __init__(self, observation_space: object, features_dim: int = 8) -> None:
+        super().__init__()
+        self.features_dim = features_dim
+        self.net = torch.nn.Linear(4, features_dim)
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        return torch.relu(self.net(obs))
+
+
+def test_policy_kwargs_roundtrip_and_custom_classes(tmp_path: Path) -> None:
+    kwargs = {
+        "net_arch": {"pi": [16], "vf": [8, 8]},
+        "activation_fn": torch.nn.ReLU,
+        "ortho_init": False,
+        "optimizer_class": torch.optim.RMSprop,
+        "optimizer_kwargs": {"alpha": 0.9},
+        "features_extractor_class": TinyExtractor,
+    }
+    model = _ppo(policy_kwargs=kwargs)
+    assert isinstance(model.optimizer, torch.optim.RMSprop)
+    model.learn(64)
+    model.save(tmp_path / "custom")
+    with pytest.raises(ModelFileError, match="custom_objects"):
+        PPO.load(tmp_path / "custom")
+    loaded = PPO.load(tmp_path / "custom", custom_objects={"TinyExtractor": TinyExtractor})
+    assert loaded.policy_kwargs["activation_fn"] is torch.nn.ReLU
+    np.testing.assert_array_equal(
+        model.predict(OBS, deterministic=True)[0], loaded.predict(OBS, deterministic=True)[0]
+    )
