@@ -96,6 +96,8 @@ def test_bad_input_errors() -> None:
         PPO("MlpPolicy", Toy(), **SMALL_PPO).set_env(Toy(action="box"))
     with pytest.raises(ValueError, match="batch_size"):
         PPO("MlpPolicy", "CartPole-v1", batch_size=1)
+    with pytest.raises(ValueError, match="clip_range_vf"):
+        PPO("MlpPolicy", "CartPole-v1", clip_range_vf=0.0)
     with pytest.raises(TypeError, match="env must be"):
         DQN("MlpPolicy", 42)
 

@@ -75,6 +75,10 @@ class PPO(BaseAlgorithm):
                 "`batch_size` must be greater than 1 when normalize_advantage=True "
                 "(see https://github.com/DLR-RM/stable-baselines3/issues/440)"
             )
+        if isinstance(clip_range_vf, (int, float)) and clip_range_vf <= 0:
+            raise ValueError(
+                "`clip_range_vf` must be positive, pass `None` to deactivate vf clipping"
+            )
         self.learning_rate, self.lr_schedule = learning_rate, as_schedule(learning_rate)
         self.n_steps, self.batch_size, self.n_epochs = n_steps, batch_size, n_epochs
         self.gamma, self.gae_lambda = gamma, gae_lambda
