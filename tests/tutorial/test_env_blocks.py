@@ -50,6 +50,8 @@ print("Lower Bound for Env Observation:", env.observation_space.low)
 STEP_BLOCK = """
 import gymnasium as gym
 env = gym.make('MountainCar-v0')
+# (seeded here, and the action space below, so both libraries print the same numbers)
+env.action_space.seed(0)
 # Reset the environment and see the initial observation
 obs, info = env.reset(seed=0)
 print("The initial observation is {}".format(obs))
