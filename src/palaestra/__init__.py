@@ -17,7 +17,7 @@ from palaestra.envs.registration import (
     registry,
     spec,
 )
-from palaestra import error, logger, spaces, utils, wrappers
+from palaestra import error, logger, spaces, utils, vector, wrappers
 from palaestra import envs  # registers the built-in environments
 
 __version__ = "0.1.0"
@@ -42,5 +42,6 @@ __all__ = [
     "spaces",
     "spec",
     "utils",
+    "vector",
     "wrappers",
 ]

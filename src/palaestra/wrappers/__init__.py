@@ -15,12 +15,50 @@ _LAZY: dict[str, str] = {
     "TimeLimit": "common",
     "OrderEnforcing": "common",
     "PassiveEnvChecker": "common",
+    # episode bookkeeping
+    "Autoreset": "episode_stats",
+    "RecordEpisodeStatistics": "episode_stats",
+    "Monitor": "monitor",
+    # observations
+    "TransformObservation": "transform_observation",
+    "FilterObservation": "transform_observation",
+    "FlattenObservation": "transform_observation",
+    "GrayscaleObservation": "transform_observation",
+    "ReshapeObservation": "transform_observation",
+    "RescaleObservation": "transform_observation",
+    "DtypeObservation": "transform_observation",
+    "DiscretizeObservation": "discretize",
+    "ResizeObservation": "resize",
+    "DelayObservation": "stateful_observation",
+    "TimeAwareObservation": "stateful_observation",
+    "NormalizeObservation": "stateful_observation",
+    "MaxAndSkipObservation": "stateful_observation",
+    "FrameStackObservation": "frame_stack",
+    # actions
+    "TransformAction": "transform_action",
+    "ClipAction": "transform_action",
+    "RescaleAction": "transform_action",
+    "DiscretizeAction": "discretize",
+    "StickyAction": "stateful_action",
+    "RepeatAction": "stateful_action",
+    # rewards
+    "TransformReward": "transform_reward",
+    "ClipReward": "transform_reward",
+    "NormalizeReward": "stateful_reward",
+    # rendering
+    "RecordVideo": "record_video",
+    "RenderCollection": "rendering",
+    "HumanRendering": "rendering",
 }
 
 __all__ = sorted(_LAZY)
 
 
 def __getattr__(name: str) -> Any:  # PEP 562 module attribute, not wrapper forwarding
+    if name == "vector":  # gymnasium.wrappers.vector -> palaestra.vector.wrappers
+        value = importlib.import_module("palaestra.vector.wrappers")
+        globals()[name] = value
+        return value
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'palaestra.wrappers' has no attribute {name!r}")
@@ -30,4 +68,4 @@ def __getattr__(name: str) -> Any:  # PEP 562 module attribute, not wrapper forw
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(set(globals()) | set(_LAZY) | {"vector"})
