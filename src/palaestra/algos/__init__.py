@@ -2,6 +2,25 @@
 
 This subpackage needs torch (``pip install "palaestra[train]"``); ``import palaestra`` alone
 never imports it.
+
+Same names, defaults, log keys and learning rules as SB3 2.x. Where SB3 is unsafe or
+surprising, palaestra differs on purpose:
+
+- model and replay-buffer files are a zip of JSON and ``.npy`` arrays; loading never
+  unpickles (SB3 model files are refused with an explanation); classes named in
+  ``policy_kwargs`` resolve only in ``torch.nn``/``torch.optim``/``palaestra.algos`` unless
+  passed through ``custom_objects``; callables (schedules) are stored exactly when they are
+  ``ConstantSchedule``/``LinearSchedule``, as a 1001-point table otherwise;
+- ``load`` + ``learn(reset_num_timesteps=False)`` continues epsilon and the learning rate
+  where they stopped (SB3 recomputes progress over the summed budget and jumps back);
+- DQN draws one epsilon coin per env (SB3: one for all envs);
+- a function callback returning ``None`` keeps training (SB3 stops);
+- ``progress_bar=True`` needs tqdm only; channel-last images need no ``VecTransposeImage``;
+- small MLP policies act in numpy and train with one torch thread and fused Adam.
+
+Not supported yet: ``use_sde``, DQN's ``n_steps``/``optimize_memory_usage``, custom buffer
+classes, recurrent policies, VecNormalize-aware replay (observations are stored as the env
+returns them).
 """
 
 from palaestra.error import dependency_not_installed
