@@ -233,6 +233,14 @@ def make(
     return env
 
 
+# Vector options that palaestra's native batches (palaestra.vector.native) accept directly.
+_NATIVE_VECTOR_KWARGS = {"copy", "autoreset_mode"}
+
+
+def _is_native(entry_point: Any) -> bool:
+    return isinstance(entry_point, str) and entry_point.startswith("palaestra.vector.native:")
+
+
 def _vector_available() -> bool:
     # origin is None for a bare directory (namespace package): palaestra.vector while it is
     # still being written, without the __init__ that exports the vector envs.
@@ -271,11 +279,15 @@ def make_vec(
     env_kwargs.update(kwargs)
 
     if vectorization_mode is None:
-        mode = (
-            VectorizeMode.SYNC
-            if env_spec.vector_entry_point is None
-            else VectorizeMode.VECTOR_ENTRY_POINT
-        )
+        # palaestra gives ids a native vector entry point where Gymnasium has none (MountainCar,
+        # Pendulum, ...). Code written for Gymnasium passes per-env `wrappers` or `vector_kwargs`
+        # to such ids, which only a SyncVectorEnv takes: keep that code working.
+        entry = env_spec.vector_entry_point
+        sync_args = bool(wrappers) or not set(vector_kwargs) <= _NATIVE_VECTOR_KWARGS
+        if entry is None or (_is_native(entry) and sync_args):
+            mode = VectorizeMode.SYNC
+        else:
+            mode = VectorizeMode.VECTOR_ENTRY_POINT
     else:
         try:
             mode = VectorizeMode(vectorization_mode)
@@ -331,6 +343,9 @@ def _make_with_vector_entry_point(
     wrappers: Sequence[Any],
     env_kwargs: dict[str, Any],
 ) -> Any:
+    if set(vector_kwargs) <= _NATIVE_VECTOR_KWARGS and _is_native(env_spec.vector_entry_point):
+        env_kwargs = {**env_kwargs, **vector_kwargs}
+        vector_kwargs = {}
     if vector_kwargs:
         raise error.Error(
             "Custom vector environment can be passed arguments only through kwargs and "

@@ -1,0 +1,42 @@
+"""make_vec picks the native batch by default, and falls back to sync for Gymnasium-style args."""
+
+import numpy as np
+import pytest
+
+import palaestra as gym
+from palaestra.vector import AutoresetMode, SyncVectorEnv
+from palaestra.vector.native import BatchedVectorEnv
+from palaestra.wrappers import ClipReward
+
+
+def test_default_is_the_native_batch() -> None:
+    assert isinstance(gym.make_vec("MountainCar-v0", 4), BatchedVectorEnv)
+
+
+def test_native_batch_takes_its_own_vector_kwargs() -> None:
+    envs = gym.make_vec("CartPole-v1", 2, vector_kwargs={"autoreset_mode": "SameStep"})
+    assert isinstance(envs, BatchedVectorEnv)
+    assert envs.metadata["autoreset_mode"] is AutoresetMode.SAME_STEP
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"wrappers": [lambda env: ClipReward(env, -0.5, 0.5)]},
+        {"vector_kwargs": {"copy": False, "observation_mode": "same"}},
+    ],
+)
+def test_gymnasium_style_arguments_fall_back_to_sync(kwargs: dict) -> None:
+    envs = gym.make_vec("MountainCar-v0", 3, **kwargs)
+    assert isinstance(envs, SyncVectorEnv)
+    envs.reset(seed=0)
+    _, rewards, *_ = envs.step(np.zeros(3, dtype=np.int64))
+    expected = -0.5 if "wrappers" in kwargs else -1.0
+    assert rewards.tolist() == [expected] * 3
+
+
+def test_explicit_vector_entry_point_still_refuses_wrappers() -> None:
+    with pytest.raises(gym.error.Error, match="wrappers argument"):
+        gym.make_vec(
+            "MountainCar-v0", 2, vectorization_mode="vector_entry_point", wrappers=[ClipReward]
+        )
