@@ -12,6 +12,7 @@ from palaestra import spaces
 from palaestra.algos import model_io
 from palaestra.algos.base import BaseAlgorithm
 from palaestra.algos.dqn_math import dqn_loss, polyak_update
+from palaestra.algos.numpy_dqn import NumpyDQNTrainer
 from palaestra.algos.policies import QNetwork, extractor_class
 from palaestra.algos.replay_buffer import ReplayBuffer
 from palaestra.algos.schedules import LinearSchedule, Schedule, as_schedule
@@ -147,6 +148,10 @@ class DQN(BaseAlgorithm):
         self._q_params = list(q_net.parameters())
         self._q_numpy = q_net.numpy_acting()  # cheap batch-1 acting on CPU MLPs
         self.optimizer = self._make_optimizer(self._q_params, optimizer_class, optimizer_kwargs)
+        # Plain CPU MLPs with Adam train in numpy (same math, a fraction of torch's overhead).
+        self._numpy_trainer = (
+            NumpyDQNTrainer.build(q_net, q_net_target, self.optimizer) if self._q_numpy else None
+        )
         self._make_replay_buffer()
 
     def _make_replay_buffer(self) -> None:
@@ -285,6 +290,20 @@ class DQN(BaseAlgorithm):
         assert self.replay_buffer is not None
         self._update_learning_rate()
         start = int(self.action_space.start)
+        if self._numpy_trainer is not None:
+            mean_loss = self._numpy_trainer.train(
+                self.replay_buffer,
+                gradient_steps,
+                batch_size,
+                self._rng,
+                self.gamma,
+                self.max_grad_norm,
+                start,
+            )
+            self._n_updates += gradient_steps
+            self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
+            self.logger.record("train/loss", mean_loss)
+            return
         losses = []
         for _ in range(gradient_steps):
             batch = self.replay_buffer.sample(batch_size, self._rng)

@@ -117,6 +117,20 @@ class ReplayBuffer:
             torch.as_tensor(self.terminated[rows, cols], device=dev),
         )
 
+    def sample_arrays(self, batch_size: int, rng: np.random.Generator) -> tuple[np.ndarray, ...]:
+        """Like ``sample`` for array observations, as numpy arrays (same draws from ``rng``):
+        ``(obs, actions, next_obs, rewards, terminated)``."""
+        rows = rng.integers(0, self.size(), size=batch_size)
+        cols = rng.integers(0, self.n_envs, size=batch_size)
+        assert isinstance(self.observations, np.ndarray)
+        return (
+            self.observations[rows, cols],
+            self.actions[rows, cols],
+            self.next_observations[rows, cols],
+            self.rewards[rows, cols],
+            self.terminated[rows, cols],
+        )
+
     # -- persistence (plain arrays + JSON metadata; see model_io.save_arrays) -----------------
     def state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         """JSON metadata and the filled part of every array."""
