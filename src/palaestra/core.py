@@ -8,12 +8,13 @@ Gymnasium 1.x.
 from __future__ import annotations
 
 from copy import deepcopy
-from typing import TYPE_CHECKING, Any, Generic, SupportsFloat, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, Literal, SupportsFloat, TypeVar
 
 import numpy as np
 
 from palaestra import logger
 from palaestra.utils.record_constructor import RecordConstructorArgs
+from palaestra.utils.seeding import LazyRandom
 from palaestra.utils.seeding import np_random as _make_rng
 
 if TYPE_CHECKING:
@@ -30,7 +31,7 @@ WrapperActType = TypeVar("WrapperActType")
 RenderFrame = Any  # np.ndarray frame, ANSI string, or a list of either
 
 
-class Env(Generic[ObsType, ActType]):
+class Env(LazyRandom, Generic[ObsType, ActType]):
     """An environment: ``reset`` starts an episode, ``step`` advances it by one action.
 
     Subclasses set ``action_space``, ``observation_space`` and ``metadata``, and call
@@ -61,9 +62,6 @@ class Env(Generic[ObsType, ActType]):
     action_space: Space[ActType]
     observation_space: Space[ObsType]
 
-    _np_random: np.random.Generator | None = None
-    _np_random_seed: int | None = None
-
     def step(self, action: ActType) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
         """Advance one step: ``(observation, reward, terminated, truncated, info)``."""
         raise NotImplementedError
@@ -88,26 +86,6 @@ class Env(Generic[ObsType, ActType]):
         """The innermost environment, below every wrapper."""
         return self
 
-    @property
-    def np_random(self) -> np.random.Generator:
-        """The environment's generator, created from fresh entropy on first use."""
-        if self._np_random is None:
-            self._np_random, self._np_random_seed = _make_rng()
-        return self._np_random
-
-    @np_random.setter
-    def np_random(self, value: np.random.Generator) -> None:
-        self._np_random = value
-        # A generator does not reveal its seed; -1 says "unknown" (Gymnasium's convention).
-        self._np_random_seed = -1
-
-    @property
-    def np_random_seed(self) -> int:
-        """The seed behind ``np_random`` (-1 if a generator was assigned directly)."""
-        if self._np_random_seed is None:
-            self._np_random, self._np_random_seed = _make_rng()
-        return self._np_random_seed
-
     def has_wrapper_attr(self, name: str) -> bool:
         """Whether ``name`` exists on this environment."""
         return hasattr(self, name)
@@ -131,7 +109,7 @@ class Env(Generic[ObsType, ActType]):
     def __enter__(self) -> Self:
         return self
 
-    def __exit__(self, *args: object) -> bool:
+    def __exit__(self, *args: object) -> Literal[False]:
         self.close()
         return False
 
@@ -179,7 +157,7 @@ class Wrapper(
         return self.env.unwrapped
 
     @property
-    def action_space(self) -> Space[Any]:  # type: ignore[override]
+    def action_space(self) -> Space[Any]:
         """The wrapper's action space, or the inner one if the wrapper set none."""
         return self.env.action_space if self._action_space is None else self._action_space
 
@@ -188,7 +166,7 @@ class Wrapper(
         self._action_space = space
 
     @property
-    def observation_space(self) -> Space[Any]:  # type: ignore[override]
+    def observation_space(self) -> Space[Any]:
         """The wrapper's observation space, or the inner one if the wrapper set none."""
         if self._observation_space is None:
             return self.env.observation_space
@@ -198,7 +176,7 @@ class Wrapper(
     def observation_space(self, space: Space[Any]) -> None:
         self._observation_space = space
 
-    @property  # type: ignore[override]
+    @property
     def metadata(self) -> dict[str, Any]:
         """The wrapper's metadata, or the inner one if the wrapper set none."""
         return self.env.metadata if self._metadata is None else self._metadata
@@ -207,8 +185,8 @@ class Wrapper(
     def metadata(self, value: dict[str, Any]) -> None:
         self._metadata = value
 
-    @property  # type: ignore[override]
-    def render_mode(self) -> str | None:
+    @property
+    def render_mode(self) -> str | None:  # type: ignore[override]
         """The inner environment's render mode."""
         return self.env.render_mode
 
@@ -232,8 +210,8 @@ class Wrapper(
             "Can't access `_np_random` of a wrapper, use `.unwrapped._np_random` or `.np_random`."
         )
 
-    @property  # type: ignore[override]
-    def spec(self) -> EnvSpec | None:
+    @property
+    def spec(self) -> EnvSpec | None:  # type: ignore[override]
         """The inner spec plus this wrapper, so that ``make(env.spec)`` rebuilds the stack."""
         if self._cached_spec is not None:
             return self._cached_spec

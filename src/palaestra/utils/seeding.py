@@ -26,3 +26,34 @@ def np_random(seed: int | None = None) -> tuple[np.random.Generator, int]:
         raise error.Error(f"Seed must be greater or equal to zero, actual value: {seed}")
     seed_seq = np.random.SeedSequence(seed)
     return np.random.Generator(np.random.PCG64(seed_seq)), int(seed_seq.entropy)  # type: ignore[arg-type]
+
+
+class LazyRandom:
+    """``np_random`` / ``np_random_seed`` created from fresh entropy on first use.
+
+    Shared by :class:`palaestra.Env` and :class:`palaestra.vector.VectorEnv`; ``reset(seed=...)``
+    assigns ``_np_random`` and ``_np_random_seed`` directly.
+    """
+
+    _np_random: np.random.Generator | None = None
+    _np_random_seed: int | None = None
+
+    @property
+    def np_random(self) -> np.random.Generator:
+        """The generator, created from fresh entropy on first use."""
+        if self._np_random is None:
+            self._np_random, self._np_random_seed = np_random()
+        return self._np_random
+
+    @np_random.setter
+    def np_random(self, value: np.random.Generator) -> None:
+        self._np_random = value
+        # A generator does not reveal its seed; -1 says "unknown" (Gymnasium's convention).
+        self._np_random_seed = -1
+
+    @property
+    def np_random_seed(self) -> int:
+        """The seed behind ``np_random`` (-1 if a generator was assigned directly)."""
+        if self._np_random_seed is None:
+            self._np_random, self._np_random_seed = np_random()
+        return self._np_random_seed

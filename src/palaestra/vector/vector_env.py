@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 import numpy as np
 
 from palaestra import logger
+from palaestra.utils.seeding import LazyRandom
 from palaestra.utils.seeding import np_random as _make_rng
 
 if TYPE_CHECKING:
@@ -52,7 +53,7 @@ class AutoresetMode(Enum):
     DISABLED = "Disabled"
 
 
-class VectorEnv(Generic[ObsType, ActType, ArrayType]):
+class VectorEnv(LazyRandom, Generic[ObsType, ActType, ArrayType]):
     """Base of all vector environments: ``num_envs`` copies stepped with batched actions.
 
     Subclasses set ``num_envs``, the single and batched spaces and ``metadata`` (with an
@@ -69,9 +70,6 @@ class VectorEnv(Generic[ObsType, ActType, ArrayType]):
     single_observation_space: Space[Any]
     single_action_space: Space[Any]
     num_envs: int
-
-    _np_random: np.random.Generator | None = None
-    _np_random_seed: int | None = None
 
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
@@ -98,25 +96,6 @@ class VectorEnv(Generic[ObsType, ActType, ArrayType]):
 
     def close_extras(self, **kwargs: Any) -> None:
         """What ``close`` releases; subclasses override it."""
-
-    @property
-    def np_random(self) -> np.random.Generator:
-        """The vector env's own generator (the sub-envs keep theirs)."""
-        if self._np_random is None:
-            self._np_random, self._np_random_seed = _make_rng()
-        return self._np_random
-
-    @np_random.setter
-    def np_random(self, value: np.random.Generator) -> None:
-        self._np_random = value
-        self._np_random_seed = -1
-
-    @property
-    def np_random_seed(self) -> int | None:
-        """The seed behind ``np_random``."""
-        if self._np_random_seed is None:
-            self._np_random, self._np_random_seed = _make_rng()
-        return self._np_random_seed
 
     @property
     def unwrapped(self) -> Self:
@@ -252,7 +231,7 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
         self.env.np_random = value
 
     @property
-    def np_random_seed(self) -> int | None:
+    def np_random_seed(self) -> int:
         """The inner env's seed."""
         return self.env.np_random_seed
 
