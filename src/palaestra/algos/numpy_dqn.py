@@ -23,6 +23,7 @@ from palaestra.algos.numpy_nn import (
     clip_grads,
     forward,
     linear_chain,
+    one_blas_thread,
     views,
 )
 from palaestra.algos.replay_buffer import ReplayBuffer
@@ -68,18 +69,19 @@ class NumpyDQNTrainer:
         online, target = views(self.chain), views(self.target_chain)
         idx = np.arange(batch_size)
         losses = []
-        for _ in range(gradient_steps):
-            obs, actions, next_obs, rewards, terminated = buffer.sample_arrays(batch_size, rng)
-            next_q = forward(target, next_obs.reshape(batch_size, -1).astype(np.float32))[-1]
-            y = rewards + (1.0 - terminated) * gamma * next_q.max(axis=1)
-            acts = forward(online, obs.reshape(batch_size, -1).astype(np.float32))
-            a = actions.astype(np.int64) - action_start
-            diff = acts[-1][idx, a] - y
-            absd = np.abs(diff)
-            losses.append(float(np.where(absd < 1.0, 0.5 * diff * diff, absd - 0.5).mean()))
-            grad_out = np.zeros_like(acts[-1])
-            grad_out[idx, a] = np.clip(diff, -1.0, 1.0) / batch_size  # d(mean Huber)/dQ
-            grads, _ = backward(online, acts, grad_out)
-            clip_grads(grads, max_grad_norm)
-            adam_step(self.optimizer, self.params, grads)
+        with one_blas_thread():
+            for _ in range(gradient_steps):
+                obs, actions, next_obs, rewards, terminated = buffer.sample_arrays(batch_size, rng)
+                next_q = forward(target, next_obs.reshape(batch_size, -1).astype(np.float32))[-1]
+                y = rewards + (1.0 - terminated) * gamma * next_q.max(axis=1)
+                acts = forward(online, obs.reshape(batch_size, -1).astype(np.float32))
+                a = actions.astype(np.int64) - action_start
+                diff = acts[-1][idx, a] - y
+                absd = np.abs(diff)
+                losses.append(float(np.where(absd < 1.0, 0.5 * diff * diff, absd - 0.5).mean()))
+                grad_out = np.zeros_like(acts[-1])
+                grad_out[idx, a] = np.clip(diff, -1.0, 1.0) / batch_size  # d(mean Huber)/dQ
+                grads, _ = backward(online, acts, grad_out)
+                clip_grads(grads, max_grad_norm)
+                adam_step(self.optimizer, self.params, grads)
         return float(np.mean(losses))

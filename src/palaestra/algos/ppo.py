@@ -10,6 +10,8 @@ import torch
 
 from palaestra import spaces
 from palaestra.algos.base import BaseAlgorithm
+from palaestra.algos.numpy_nn import one_blas_thread
+from palaestra.algos.numpy_ppo import NumpyPPOTrainer
 from palaestra.algos.policies import ActorCritic, extractor_class
 from palaestra.algos.ppo_math import explained_variance, ppo_loss
 from palaestra.algos.rollout_buffer import RolloutBuffer
@@ -138,6 +140,8 @@ class PPO(BaseAlgorithm):
         self._numpy = self.policy.numpy_acting()  # cheap acting on CPU MLPs; None otherwise
         self._params = list(self.policy.parameters())
         self.optimizer = self._make_optimizer(self._params, optimizer_class, optimizer_kwargs)
+        # Plain CPU MLPs with Adam train in numpy (same loss, a fraction of torch's overhead).
+        self._numpy_trainer = NumpyPPOTrainer.build(self.policy, self.optimizer)
         self._make_rollout_buffer()
 
     def _make_rollout_buffer(self) -> None:
@@ -278,57 +282,71 @@ class PPO(BaseAlgorithm):
         clip_range_vf = (
             None if self.clip_range_vf is None else self.clip_range_vf(self._progress_remaining)
         )
-        pg_losses, value_losses, entropy_losses, clip_fractions, approx_kls = [], [], [], [], []
-        continue_training = True
-        loss = torch.zeros(())
+        kl_limit = None if self.target_kl is None else 1.5 * self.target_kl
+        logs: dict[str, list[float]] = {
+            k: []
+            for k in (
+                "policy_loss",
+                "value_loss",
+                "entropy_loss",
+                "clip_fraction",
+                "approx_kl",
+                "loss",
+            )
+        }
+        args = (clip_range, clip_range_vf, self.ent_coef, self.vf_coef, self.normalize_advantage)
+        stopped = False
         for epoch in range(self.n_epochs):
-            for mb in self.rollout_buffer.minibatches(self.batch_size, self._rng):
-                values, log_prob, entropy = self.policy.evaluate_actions(
-                    mb.observations, mb.actions
-                )
-                out = ppo_loss(
-                    log_prob,
-                    mb.old_log_prob,
-                    mb.advantages,
-                    values,
-                    mb.old_values,
-                    mb.returns,
-                    entropy,
-                    clip_range,
-                    clip_range_vf,
-                    self.ent_coef,
-                    self.vf_coef,
-                    self.normalize_advantage,
-                )
-                loss = out.loss
-                pg_losses.append(out.policy_loss)
-                value_losses.append(out.value_loss)
-                entropy_losses.append(out.entropy_loss)
-                clip_fractions.append(out.clip_fraction)
-                approx_kls.append(out.approx_kl)
-                if self.target_kl is not None and float(out.approx_kl) > 1.5 * self.target_kl:
-                    continue_training = False
-                    if self.verbose >= 1:
-                        print(
-                            f"Early stopping at step {epoch} due to reaching max kl: "
-                            f"{float(out.approx_kl):.2f}"
+            if self._numpy_trainer is not None:
+                for arrays in self.rollout_buffer.minibatch_arrays(self.batch_size, self._rng):
+                    with one_blas_thread():
+                        metrics, stopped = self._numpy_trainer.step(
+                            *arrays, *args, self.max_grad_norm, kl_limit
                         )
-                    break
-                self.optimizer.zero_grad()
-                loss.backward()
-                torch.nn.utils.clip_grad_norm_(self._params, self.max_grad_norm)
-                self.optimizer.step()
+                    for key, value in metrics.items():
+                        logs[key].append(value)
+                    if stopped:
+                        break
+            else:
+                for mb in self.rollout_buffer.minibatches(self.batch_size, self._rng):
+                    values, log_prob, entropy = self.policy.evaluate_actions(
+                        mb.observations, mb.actions
+                    )
+                    out = ppo_loss(
+                        log_prob,
+                        mb.old_log_prob,
+                        mb.advantages,
+                        values,
+                        mb.old_values,
+                        mb.returns,
+                        entropy,
+                        *args,
+                    )
+                    for key, value in out._asdict().items():
+                        logs[key].append(float(value.detach()))
+                    if kl_limit is not None and float(out.approx_kl) > kl_limit:
+                        stopped = True
+                        break
+                    self.optimizer.zero_grad()
+                    out.loss.backward()
+                    torch.nn.utils.clip_grad_norm_(self._params, self.max_grad_norm)
+                    self.optimizer.step()
             self._n_updates += 1
-            if not continue_training:
+            if stopped:
+                if self.verbose >= 1:
+                    print(
+                        f"Early stopping at step {epoch} due to reaching max kl: "
+                        f"{logs['approx_kl'][-1]:.2f}"
+                    )
                 break
         buf = self.rollout_buffer
         log = self.logger
-        log.record("train/entropy_loss", float(torch.stack(entropy_losses).mean()))
-        log.record("train/policy_gradient_loss", float(torch.stack(pg_losses).mean()))
-        log.record("train/value_loss", float(torch.stack(value_losses).mean()))
-        log.record("train/approx_kl", float(torch.stack(approx_kls).mean()))
-        log.record("train/clip_fraction", float(torch.stack(clip_fractions).mean()))
-        log.record("train/loss", float(loss.detach()))
+        log.record("train/entropy_loss", float(np.mean(logs["entropy_loss"])))
+        log.record("train/policy_gradient_loss", float(np.mean(logs["policy_loss"])))
+        log.record("train/value_loss", float(np.mean(logs["value_loss"])))
+        log.record("train/approx_kl", float(np.mean(logs["approx_kl"])))
+        log.record("train/clip_fraction", float(np.mean(logs["clip_fraction"])))
+        log.record("train/loss", logs["loss"][-1])
         log.record(
             "train/explained_variance", explained_variance(buf.values.ravel(), buf.returns.ravel())
         )

@@ -15,6 +15,7 @@ from palaestra.algos.spaces_util import allocate
 __all__ = ["RolloutBatch", "RolloutBuffer"]
 
 TensorObs = torch.Tensor | dict[str, torch.Tensor]
+ArrayBatch = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 class RolloutBatch(NamedTuple):
@@ -126,3 +127,24 @@ class RolloutBuffer:
         for start in range(0, total, batch_size):
             idx = perm[start : start + batch_size]
             yield RolloutBatch(_index(obs, idx), *(c[idx] for c in cols))
+
+    def minibatch_arrays(self, batch_size: int, rng: np.random.Generator) -> Iterator[ArrayBatch]:
+        """``minibatches`` as numpy arrays (array observations; same draws from ``rng``):
+        ``(obs, actions, old_values, old_log_prob, advantages, returns)``."""
+        assert isinstance(self.observations, np.ndarray)
+        obs, act, val, logp, adv, ret = (
+            a.reshape(-1, *a.shape[2:])
+            for a in (
+                self.observations,
+                self.actions,
+                self.values,
+                self.log_probs,
+                self.advantages,
+                self.returns,
+            )
+        )
+        total = self.n_steps * self.n_envs
+        perm = rng.permutation(total)
+        for start in range(0, total, batch_size):
+            i = perm[start : start + batch_size]
+            yield obs[i], act[i], val[i], logp[i], adv[i], ret[i]

@@ -1,0 +1,143 @@
+"""PPO minibatch updates in numpy for small MLP actor-critics on the CPU (Discrete and Box
+actions), with the same loss as ``ppo_math.ppo_loss`` and its gradient written out.
+
+Gradient conventions copied from torch so both paths agree to float32 rounding (tested):
+``torch.minimum`` splits the gradient evenly on ties, ``clamp`` passes it on its closed
+interval, advantages are normalised with the unbiased std. Adam and clipping come from
+``numpy_nn`` and work on views of the torch parameters and optimizer state.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import torch
+
+from palaestra.algos.numpy_acting import log_softmax
+from palaestra.algos.numpy_nn import (
+    adam_ok,
+    adam_step,
+    backward,
+    clip_grads,
+    forward,
+    linear_chain,
+    views,
+)
+
+__all__ = ["NumpyPPOTrainer"]
+
+_LOG_SQRT_2PI = 0.5 * math.log(2 * math.pi)
+
+
+class NumpyPPOTrainer:
+    """Clipped-surrogate updates on numpy views of an ``ActorCritic`` and its Adam."""
+
+    def __init__(self, policy: Any, optimizer: torch.optim.Optimizer, pi_chain: Any, vf_chain: Any):
+        self.policy, self.optimizer = policy, optimizer
+        self.pi_chain, self.vf_chain = pi_chain, vf_chain
+        self.head = policy.action_head
+        self.params = [p for lin, _ in pi_chain + vf_chain for p in (lin.weight, lin.bias)]
+        if self.head.kind == "gaussian":
+            self.params.append(self.head.log_std)
+
+    @classmethod
+    def build(cls, policy: Any, optimizer: Any) -> NumpyPPOTrainer | None:
+        """A trainer for numpy-actable policies with a Categorical or Gaussian head and Adam."""
+        if policy.numpy_acting() is None or policy.action_head.kind not in (
+            "categorical",
+            "gaussian",
+        ):
+            return None
+        pi_chain = linear_chain([policy.pi_net, policy.action_head.net])
+        vf_chain = linear_chain([policy.vf_net, policy.value_head])
+        if not pi_chain or not vf_chain or not adam_ok(optimizer):
+            return None
+        trainer = cls(policy, optimizer, pi_chain, vf_chain)
+        if len(trainer.params) != len(list(policy.parameters())):
+            return None
+        return trainer
+
+    def step(
+        self,
+        obs: np.ndarray,
+        actions: np.ndarray,
+        old_values: np.ndarray,
+        old_log_prob: np.ndarray,
+        advantages: np.ndarray,
+        returns: np.ndarray,
+        clip_range: float,
+        clip_range_vf: float | None,
+        ent_coef: float,
+        vf_coef: float,
+        normalize_advantage: bool,
+        max_grad_norm: float,
+        kl_limit: float | None,
+    ) -> tuple[dict[str, float], bool]:
+        """One minibatch: the logged values and whether the KL limit stopped it (no update)."""
+        n = obs.shape[0]
+        x = obs.reshape(n, -1).astype(np.float32)
+        pi_layers, vf_layers = views(self.pi_chain), views(self.vf_chain)
+        pi_acts, vf_acts = forward(pi_layers, x), forward(vf_layers, x)
+        out, values = pi_acts[-1], vf_acts[-1][:, 0]
+        if self.head.kind == "categorical":
+            idx = actions.reshape(n).astype(np.int64)
+            if self.head.offset is not None:
+                idx = idx - int(self.head.offset)
+            logp_all = log_softmax(out)
+            probs = np.exp(logp_all)
+            log_prob = logp_all[np.arange(n), idx]
+            entropy = -(probs * logp_all).sum(axis=1)
+        else:
+            log_std = self.head.log_std.detach().numpy()
+            z = (actions.reshape(out.shape) - out) * np.exp(-log_std)
+            log_prob = (-0.5 * z * z - log_std - _LOG_SQRT_2PI).sum(axis=1)
+            entropy = np.full(n, (0.5 + _LOG_SQRT_2PI + log_std).sum(), dtype=np.float32)
+        adv = advantages
+        if normalize_advantage and n > 1:
+            adv = (adv - adv.mean()) / (adv.std(ddof=1) + 1e-8)
+        log_ratio = log_prob - old_log_prob
+        ratio = np.exp(log_ratio)
+        clipped = np.clip(ratio, 1 - clip_range, 1 + clip_range)
+        s1, s2 = adv * ratio, adv * clipped
+        v_pred = values
+        if clip_range_vf is not None:
+            v_pred = old_values + np.clip(values - old_values, -clip_range_vf, clip_range_vf)
+        metrics = {
+            "policy_loss": float(-np.minimum(s1, s2).mean()),
+            "value_loss": float(np.mean((returns - v_pred) ** 2)),
+            "entropy_loss": float(-entropy.mean()),
+            "clip_fraction": float(np.mean(np.abs(ratio - 1) > clip_range)),
+            "approx_kl": float(np.mean((ratio - 1) - log_ratio)),
+        }
+        metrics["loss"] = (
+            metrics["policy_loss"]
+            + ent_coef * metrics["entropy_loss"]
+            + vf_coef * metrics["value_loss"]
+        )
+        if kl_limit is not None and metrics["approx_kl"] > kl_limit:
+            return metrics, True
+        # d(min(s1, s2))/d(ratio), with torch.minimum's even split on ties
+        tie = 0.5 * (s1 == s2)
+        inside = (ratio >= 1 - clip_range) & (ratio <= 1 + clip_range)
+        d_min = adv * ((s1 < s2) + tie + ((s2 < s1) + tie) * inside)
+        d_lp = -d_min * ratio / n  # d(policy_loss)/d(log_prob)
+        if self.head.kind == "categorical":
+            one_hot = np.zeros_like(probs)
+            one_hot[np.arange(n), idx] = 1.0
+            d_out = d_lp[:, None] * (one_hot - probs)
+            d_out += (ent_coef / n) * probs * (logp_all + entropy[:, None])  # -dH/dlogits
+            extra: list[np.ndarray] = []
+        else:
+            d_out = d_lp[:, None] * z * np.exp(-log_std)
+            extra = [(d_lp[:, None] * (z * z - 1.0)).sum(axis=0) - ent_coef]
+        d_v = (2.0 * vf_coef / n) * (v_pred - returns)
+        if clip_range_vf is not None:
+            d_v = d_v * (np.abs(values - old_values) <= clip_range_vf)
+        pi_grads, _ = backward(pi_layers, pi_acts, d_out.astype(np.float32))
+        vf_grads, _ = backward(vf_layers, vf_acts, d_v[:, None].astype(np.float32))
+        grads = [g.astype(np.float32, copy=False) for g in pi_grads + vf_grads + extra]
+        clip_grads(grads, max_grad_norm)
+        adam_step(self.optimizer, self.params, grads)
+        return metrics, False
