@@ -13,7 +13,7 @@ from palaestra.algos.base import BaseAlgorithm
 from palaestra.algos.numpy_nn import one_blas_thread
 from palaestra.algos.numpy_ppo import NumpyPPOTrainer
 from palaestra.algos.policies import ActorCritic, extractor_class
-from palaestra.algos.ppo_math import explained_variance, ppo_loss
+from palaestra.algos.ppo_math import PPOLoss, explained_variance, ppo_loss
 from palaestra.algos.rollout_buffer import RolloutBuffer
 from palaestra.algos.schedules import Schedule, as_schedule
 
@@ -283,17 +283,7 @@ class PPO(BaseAlgorithm):
             None if self.clip_range_vf is None else self.clip_range_vf(self._progress_remaining)
         )
         kl_limit = None if self.target_kl is None else 1.5 * self.target_kl
-        logs: dict[str, list[float]] = {
-            k: []
-            for k in (
-                "policy_loss",
-                "value_loss",
-                "entropy_loss",
-                "clip_fraction",
-                "approx_kl",
-                "loss",
-            )
-        }
+        logs: dict[str, list[float]] = {key: [] for key in PPOLoss._fields}
         args = (clip_range, clip_range_vf, self.ent_coef, self.vf_coef, self.normalize_advantage)
         stopped = False
         for epoch in range(self.n_epochs):
