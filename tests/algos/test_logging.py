@@ -50,7 +50,9 @@ def test_csv_header_grows_and_exclusions(tmp_path: Path) -> None:
     log.record_mean("m", 1.0)
     log.record_mean("m", 2.0)
     log.dump()
-    rows = list(csv.DictReader(open(tmp_path / "progress.csv")))
+    log.close()
+    with open(tmp_path / "progress.csv") as f:
+        rows = list(csv.DictReader(f))
     assert rows == [{"a": "1", "b": "", "m": ""}, {"a": "2", "b": "x,y", "m": "1.5"}]
 
 

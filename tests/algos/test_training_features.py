@@ -105,7 +105,9 @@ def test_verbose_table_and_csv(tmp_path: Path, capsys: pytest.CaptureFixture[str
     model = DQN("MlpPolicy", "CartPole-v1", learning_starts=10, seed=0)
     model.set_logger(configure(str(tmp_path), ["csv"]))
     model.learn(400, log_interval=1)
-    rows = list(csv.DictReader(open(tmp_path / "progress.csv")))
+    model.logger.close()
+    with open(tmp_path / "progress.csv") as f:
+        rows = list(csv.DictReader(f))
     assert rows and "rollout/exploration_rate" in rows[0] and "train/loss" in rows[-1]
 
 
