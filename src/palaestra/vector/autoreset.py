@@ -53,7 +53,11 @@ def parse_reset_mask(options: dict[str, Any] | None, num_envs: int) -> np.ndarra
 
 
 def take_rows(space: Any, obs: Any, rows: np.ndarray) -> list[Any]:
-    """Copies of the single observations in ``rows`` of a batch (loops over those rows only)."""
+    """Copies of the single observations in ``rows`` of a batch (loops over those rows only).
+
+    ``space`` is the *batched* observation space: only it knows how to split ``obs`` into rows
+    (a batched ``Discrete`` is a ``MultiDiscrete``, a batched ``Text`` a tuple of strings).
+    """
     if isinstance(space, Box) and isinstance(obs, np.ndarray):
         return list(obs[rows])  # fancy indexing copies: [R, *shape] -> R row arrays
     wanted = set(rows.tolist())
@@ -138,7 +142,7 @@ class Autoresetter:
         if not done.any():
             return Transition(engine.obs, rewards, terminated, truncated, infos, None, None, None)
         rows = np.flatnonzero(done)
-        final_obs = take_rows(engine.single_observation_space, engine.obs, rows)
+        final_obs = take_rows(engine.observation_space, engine.obs, rows)
         final_infos = [{} for _ in rows] if infos is None else [infos[i] for i in rows]
         reset_infos = engine.reset(done, self._no_seeds, None)
         if reset_infos is not None:
