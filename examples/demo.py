@@ -1,11 +1,12 @@
 """Train an agent on MountainCar-v0 and show the result (the README's `make demo`).
 
 The agent is tabular Q-learning on a 40x40 grid of (position, velocity), chosen because it
-solves MountainCar on every seed in seconds (the tutorial's DQN settings solve it on some seeds
-only, in SB3 and here alike; tuned DQN presets come with the command line). It is trained on palaestra's native batch of 32 MountainCars: every step of all
-32 cars is one set of numpy operations. It then plays 100 greedy episodes on the ordinary
-``palaestra.make("MountainCar-v0")`` env, prints the success rate and mean episode length, and
-writes a learning curve (PNG) and a GIF of one episode to ``runs/demo/``.
+solves MountainCar reliably in seconds (98-100% greedy success on seeds 0-2 here; the tutorial's
+DQN settings solve it on some seeds only, in SB3 and here alike). It is trained on palaestra's
+native batch of 32 MountainCars: every step of all 32 cars is one set of numpy operations. It
+then plays 100 greedy episodes on the ordinary ``palaestra.make("MountainCar-v0")`` env, prints
+the success rate and mean episode length, and writes a learning curve (PNG) and a GIF of one
+episode to ``runs/demo/``.
 
 Run: ``make demo`` or ``.venv/bin/python examples/demo.py [--steps N] [--out DIR]``.
 """
