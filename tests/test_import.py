@@ -3,7 +3,8 @@
 import subprocess
 import sys
 
-HEAVY = ["torch", "pygame", "matplotlib", "PIL", "imageio", "ale_py", "gymnasium", "scipy"]
+HEAVY = ["torch", "pygame", "matplotlib", "PIL", "imageio", "ale_py", "gymnasium", "scipy",
+         "multiprocessing", "palaestra.vector", "palaestra.utils.video"]  # fmt: skip
 
 
 def test_import_loads_no_heavy_dependency() -> None:
@@ -23,3 +24,11 @@ def test_tutorial_names_exist() -> None:
     for name in [*names, "make_vec", "register", "registry", "spec", "pprint_registry"]:
         assert hasattr(gym, name), name
     assert gym.spaces.Discrete(3) == gym.spaces.Discrete(3)
+
+
+def test_lazy_modules_resolve_on_first_use() -> None:
+    import palaestra as gym
+
+    assert gym.vector.SyncVectorEnv.__module__ == "palaestra.vector.sync_vector_env"
+    assert gym.vec_env.DummyVecEnv is not None
+    assert callable(gym.utils.save_video)

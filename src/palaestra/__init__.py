@@ -17,10 +17,20 @@ from palaestra.envs.registration import (
     registry,
     spec,
 )
-from palaestra import error, logger, spaces, utils, vector, wrappers
+from palaestra import error, logger, spaces, utils, wrappers
 from palaestra import envs  # registers the built-in environments
 
 __version__ = "0.1.0"
+
+
+def __getattr__(name: str) -> object:
+    # `gym.vector` is imported on first use: its worker machinery (multiprocessing, shared
+    # memory) would otherwise cost every `import palaestra` ~30 ms.
+    if name in ("vector", "vec_env"):
+        import importlib
+
+        return importlib.import_module(f"palaestra.{name}")
+    raise AttributeError(f"module 'palaestra' has no attribute {name!r}")
 
 __all__ = [
     "ActionWrapper",
