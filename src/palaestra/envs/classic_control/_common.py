@@ -93,7 +93,12 @@ def check_discrete_batch(actions: Any, space: Discrete, num_envs: int) -> np.nda
             f"got shape {arr.shape} dtype {arr.dtype}"
         )
     lo, hi = int(space.start), int(space.start) + int(space.n)
-    if num_envs and (arr.min() < lo or arr.max() >= hi):
+    if lo == 0 and num_envs:
+        # One reduction for both bounds: seen as unsigned, negative values are huge.
+        out_of_range = bool(np.maximum.reduce(arr.view(arr.dtype.str.replace("i", "u"))) >= hi)
+    else:
+        out_of_range = num_envs > 0 and bool(arr.min() < lo or arr.max() >= hi)
+    if out_of_range:
         bad = np.flatnonzero((arr < lo) | (arr >= hi))
         raise error.InvalidAction(
             f"Invalid actions at rows {bad[:10].tolist()}: {arr[bad[:10]].tolist()} "
