@@ -1,0 +1,83 @@
+"""The batched engines' fast paths agree with the single envs where the parity runs do not reach.
+
+``test_batched.py`` covers the default CartPole; these cover the other CartPole variants (the
+generic semi-implicit path, Sutton-Barto rewards), many buffer refills per row, and the
+one-reduction bounds check of discrete actions on unusual integer dtypes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from tests.envs.cases import CLASSES
+
+from palaestra import error
+
+N = 6
+
+
+def _run_cartpole(batch: object, singles: list, steps: int = 300) -> None:
+    obs = batch.reset(seed=11)  # type: ignore[attr-defined]
+    ref = np.stack([env.reset(seed=11 + i)[0] for i, env in enumerate(singles)])
+    assert obs.tobytes() == ref.tobytes()
+    rng = np.random.default_rng(5)
+    for t in range(steps):
+        actions = rng.integers(0, 2, N)
+        obs, reward, terminated = batch.step(actions)  # type: ignore[attr-defined]
+        results = [env.step(int(a)) for env, a in zip(singles, actions)]
+        assert obs.tobytes() == np.stack([r[0] for r in results]).tobytes(), t
+        np.testing.assert_array_equal(reward, [r[1] for r in results], err_msg=str(t))
+        np.testing.assert_array_equal(terminated, [r[2] for r in results], err_msg=str(t))
+        done = terminated & (rng.random(N) < 0.7)  # some rows step on past termination
+        if done.any():
+            obs = batch.reset(mask=done)  # type: ignore[attr-defined]
+            for i in np.flatnonzero(done):
+                singles[i].reset()
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+@pytest.mark.parametrize("sutton_barto", [False, True])
+def test_cartpole_rewards_after_termination_match(sutton_barto: bool) -> None:
+    single_cls, batch_cls = CLASSES["CartPole-v1"]
+    batch = batch_cls(N, sutton_barto_reward=sutton_barto)
+    _run_cartpole(batch, [single_cls(sutton_barto_reward=sutton_barto) for _ in range(N)])
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_cartpole_semi_implicit_rows_match() -> None:
+    single_cls, batch_cls = CLASSES["CartPole-v1"]
+    batch = batch_cls(N)
+    batch.params = type(batch.params)(kinematics_integrator="semi-implicit euler")
+    singles = [single_cls() for _ in range(N)]
+    for env in singles:
+        env.kinematics_integrator = "semi-implicit euler"
+    _run_cartpole(batch, singles)
+
+
+@pytest.mark.parametrize("env_id", ["CartPole-v1", "MountainCar-v0"])
+def test_hundreds_of_resets_draw_like_single_envs(env_id: str) -> None:
+    """Several refills of every row's pre-drawn uniforms (MountainCar holds 128 resets)."""
+    single_cls, batch_cls = CLASSES[env_id]
+    singles = [single_cls() for _ in range(2)]
+    batch = batch_cls(2)
+    batch.reset(seed=3)
+    for i, env in enumerate(singles):
+        env.reset(seed=3 + i)
+    all_rows = np.ones(2, dtype=bool)
+    for k in range(400):
+        obs = batch.reset(mask=all_rows)
+        ref = np.stack([env.reset()[0] for env in singles])
+        assert obs.tobytes() == ref.tobytes(), k
+
+
+@pytest.mark.parametrize("dtype", ["<i8", ">i8", "i1", "<i4", ">i4", "u2", ">u8"])
+def test_discrete_batch_check_on_integer_dtypes(dtype: str) -> None:
+    _, batch_cls = CLASSES["CartPole-v1"]
+    batch = batch_cls(3)
+    batch.reset(seed=0)
+    batch.step(np.array([0, 1, 1], dtype=dtype))
+    with pytest.raises(error.InvalidAction, match=r"rows \[1\]"):
+        batch.step(np.array([0, 2, 1], dtype=dtype))
+    if np.dtype(dtype).kind == "i":
+        with pytest.raises(error.InvalidAction, match=r"rows \[2\]"):
+            batch.step(np.array([0, 1, -1], dtype=dtype))
