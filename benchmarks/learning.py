@@ -1,0 +1,225 @@
+"""Does training learn? palaestra's DQN and PPO against Stable-Baselines3's, seed by seed.
+
+Run from the repository root::
+
+    .venv/bin/python benchmarks/learning.py                          # everything (long)
+    .venv/bin/python benchmarks/learning.py --algo ppo --lib palaestra
+    .venv/bin/python benchmarks/learning.py --algo dqn --lib sb3 --seeds 0 1 --jobs 2
+
+* ``dqn``: MountainCar-v0, the tutorial settings (``learning_rate=1e-3, buffer_size=50000,
+  learning_starts=1000, batch_size=128, tau=1.0, gamma=0.99, train_freq=4,
+  gradient_steps=1, target_update_interval=250, exploration_fraction=0.2,
+  exploration_final_eps=0.05``), ``--steps`` env steps (default 200k). Reported: success rate
+  (episodes that reach the flag, i.e. terminate before the 200-step limit) and mean episode
+  length over 100 deterministic episodes.
+* ``ppo``: CartPole-v1, 8 envs, ``n_steps=32, batch_size=256, gae_lambda=0.8, gamma=0.98,
+  n_epochs=20, ent_coef=0.0``, learning rate and clip range decayed linearly from 1e-3 / 0.2 to
+  0, ``--ppo-steps`` env steps (default 100k). Reported: mean return over 100 deterministic
+  episodes.
+
+Both libraries run with ``torch.set_num_threads(1)`` and the same env construction: SB3 gets
+``gymnasium.make`` / SB3's ``make_vec_env``, palaestra gets ``palaestra.make`` /
+``palaestra.vec_env.make_vec_env``. The evaluation env is made the same way, reset with seed
+``10_000 + seed`` once and then unseeded. One line per (algo, lib, seed), then a summary.
+``--jobs 2`` runs seeds in two processes (wall times then share the machine).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from typing import Any
+
+DQN_KWARGS: dict[str, Any] = dict(
+    learning_rate=1e-3,
+    buffer_size=50_000,
+    learning_starts=1000,
+    batch_size=128,
+    tau=1.0,
+    gamma=0.99,
+    train_freq=4,
+    gradient_steps=1,
+    target_update_interval=250,
+    exploration_fraction=0.2,
+    exploration_final_eps=0.05,
+)
+PPO_N_ENVS = 8
+EVAL_EPISODES = 100
+
+
+@dataclass
+class Result:
+    algo: str
+    lib: str
+    seed: int
+    steps: int
+    success: float  # DQN: fraction of episodes reaching the goal; PPO: nan
+    mean_length: float
+    mean_return: float
+    train_wall_s: float
+    train_cpu_s: float
+
+    def line(self) -> str:
+        head = f"{self.algo} {self.lib:9s} seed={self.seed} steps={self.steps}"
+        if self.algo == "dqn":
+            score = f"success={self.success:6.1%} mean_len={self.mean_length:6.1f}"
+        else:
+            score = f"mean_return={self.mean_return:6.1f} mean_len={self.mean_length:6.1f}"
+        timing = f"train wall={self.train_wall_s:6.1f}s cpu={self.train_cpu_s:6.1f}s"
+        return f"{head} {score} {timing}"
+
+
+def linear(start: float) -> Any:
+    """``progress_remaining * start``: 0 at the end of training (the zoo's ``lin_`` schedule)."""
+
+    def schedule(progress_remaining: float) -> float:
+        return progress_remaining * start
+
+    return schedule
+
+
+def make_env(lib: str, env_id: str) -> Any:
+    if lib == "sb3":
+        import gymnasium
+
+        return gymnasium.make(env_id)
+    import palaestra
+
+    return palaestra.make(env_id)
+
+
+def make_vec(lib: str, env_id: str, n_envs: int, seed: int) -> Any:
+    if lib == "sb3":
+        from stable_baselines3.common.env_util import make_vec_env
+    else:
+        from palaestra.vec_env import make_vec_env
+    return make_vec_env(env_id, n_envs=n_envs, seed=seed)
+
+
+def algo_classes(lib: str) -> tuple[Any, Any]:
+    if lib == "sb3":
+        from stable_baselines3 import DQN, PPO
+    else:
+        from palaestra.algos import DQN, PPO
+    return DQN, PPO
+
+
+def evaluate(model: Any, env: Any, seed: int, episodes: int) -> tuple[float, float, float]:
+    """(success rate, mean length, mean return) over deterministic episodes."""
+    successes, lengths, returns = 0, [], []
+    obs, _ = env.reset(seed=10_000 + seed)
+    for _ in range(episodes):
+        length, total, done = 0, 0.0, False
+        while not done:
+            action, _ = model.predict(obs, deterministic=True)
+            obs, reward, terminated, truncated, _ = env.step(int(action))
+            length += 1
+            total += float(reward)
+            done = terminated or truncated
+        successes += int(terminated)
+        lengths.append(length)
+        returns.append(total)
+        obs, _ = env.reset()
+    return successes / episodes, statistics.fmean(lengths), statistics.fmean(returns)
+
+
+def build(algo: str, lib: str, seed: int) -> tuple[Any, str]:
+    dqn_cls, ppo_cls = algo_classes(lib)
+    if algo == "dqn":
+        env_id = "MountainCar-v0"
+        model = dqn_cls("MlpPolicy", make_env(lib, env_id), seed=seed, **DQN_KWARGS)
+        return model, env_id
+    env_id = "CartPole-v1"
+    model = ppo_cls(
+        "MlpPolicy",
+        make_vec(lib, env_id, PPO_N_ENVS, seed),
+        n_steps=32,
+        batch_size=256,
+        gae_lambda=0.8,
+        gamma=0.98,
+        n_epochs=20,
+        ent_coef=0.0,
+        learning_rate=linear(1e-3),
+        clip_range=linear(0.2),
+        seed=seed,
+    )
+    return model, env_id
+
+
+def run_one(algo: str, lib: str, seed: int, steps: int) -> Result:
+    import torch
+
+    torch.set_num_threads(1)
+    model, env_id = build(algo, lib, seed)
+    wall, cpu = time.perf_counter(), time.process_time()
+    model.learn(total_timesteps=steps)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    success, length, ret = evaluate(model, make_env(lib, env_id), seed, EVAL_EPISODES)
+    return Result(algo, lib, seed, steps, success, length, ret, wall, cpu)
+
+
+def _run_task(task: tuple[str, str, int, int]) -> Result:
+    return run_one(*task)
+
+
+def summarise(results: list[Result]) -> None:
+    print("\nsummary (median over seeds)")
+    for algo in ("dqn", "ppo"):
+        for lib in ("palaestra", "sb3"):
+            rows = [r for r in results if r.algo == algo and r.lib == lib]
+            if not rows:
+                continue
+            seeds = ",".join(str(r.seed) for r in rows)
+            wall = statistics.median(r.train_wall_s for r in rows)
+            if algo == "dqn":
+                rates = [r.success for r in rows]
+                per_seed = "/".join(f"{x:.0%}" for x in rates)
+                score = f"median success {statistics.median(rates):.0%} ({per_seed})"
+            else:
+                rets = [r.mean_return for r in rows]
+                good = sum(x >= 475 for x in rets)
+                per_seed = "/".join(f"{x:.1f}" for x in rets)
+                score = f"{good}/{len(rets)} seeds >= 475 ({per_seed})"
+            print(f"{algo} {lib:9s} seeds {seeds}: {score}; median train wall {wall:.1f}s")
+
+
+def parse_args() -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
+    parser.add_argument("--steps", type=int, default=200_000, help="DQN env steps")
+    parser.add_argument("--ppo-steps", type=int, default=100_000, help="PPO env steps")
+    parser.add_argument("--algo", choices=["dqn", "ppo", "both"], default="both")
+    parser.add_argument("--lib", choices=["palaestra", "sb3", "both"], default="both")
+    parser.add_argument("--jobs", type=int, default=1, help="processes (seeds in parallel)")
+    return parser.parse_args()
+
+
+def main() -> None:
+    args = parse_args()
+    algos = ["dqn", "ppo"] if args.algo == "both" else [args.algo]
+    libs = ["palaestra", "sb3"] if args.lib == "both" else [args.lib]
+    tasks = [
+        (algo, lib, seed, args.steps if algo == "dqn" else args.ppo_steps)
+        for algo in algos
+        for seed in args.seeds
+        for lib in libs
+    ]
+    results: list[Result] = []
+    if args.jobs > 1:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            for result in pool.map(_run_task, tasks):
+                print(result.line(), flush=True)
+                results.append(result)
+    else:
+        for task in tasks:
+            result = _run_task(task)
+            print(result.line(), flush=True)
+            results.append(result)
+    summarise(results)
+
+
+if __name__ == "__main__":
+    main()
