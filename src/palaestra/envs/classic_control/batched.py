@@ -101,7 +101,7 @@ class BatchedEnv:
             mask = np.asarray(mask)
             if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
                 raise ValueError(f"mask must be a bool array of shape ({self.num_envs},)")
-            rows = np.flatnonzero(mask)  # [R]
+            rows = mask.nonzero()[0]  # [R] (np.flatnonzero, without its wrappers)
         bounds = self._parse_options(options)  # once for all rows, so bad options fail early
         if seed is not None or not self._all_seeded:
             self._seed_rows(rows, self._row_seeds(seed))
@@ -117,8 +117,8 @@ class BatchedEnv:
     def _take_uniforms(self, rows: np.ndarray) -> np.ndarray:
         """Each row's next pre-drawn reset uniforms ``[R, draws]``; empty buffers refill first."""
         nxt = self._next[rows]  # [R] index of each row's next unused reset
-        empty = nxt == self._per_buffer
-        if empty.any():
+        if np.maximum.reduce(nxt, initial=0) == self._per_buffer:  # some buffer is empty
+            empty = nxt == self._per_buffer
             for i in rows[empty].tolist():  # once per _per_buffer resets of a row
                 rng = self._rngs[i]
                 assert rng is not None
