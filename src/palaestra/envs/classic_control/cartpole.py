@@ -184,7 +184,7 @@ expose_params(
 
 
 class CartPoleBatch(BatchedEnv):
-    """N CartPoles stepped in place on ``[N]`` arrays (:func:`step_state`, operation by operation).
+    """N CartPoles stepped by :func:`step_state` on ``[N]`` arrays.
 
     Rewards follow the single env, including 0 (or -1) for steps after termination.
     """
@@ -201,13 +201,6 @@ class CartPoleBatch(BatchedEnv):
         n = self.num_envs
         self._done = np.zeros(n, dtype=bool)  # [N] terminated before this step
         self._reward = np.zeros(n)  # [N] float64, rewritten every step
-        self._terminated = np.zeros(n, dtype=bool)  # [N], rewritten every step
-        self._flag = np.zeros(n, dtype=bool)  # [N] scratch
-        self._scratch = np.zeros((4, n))  # [4, N] cos, sin, temp, thetaacc's denominator
-        # [4, N] derivatives x_dot, xacc, theta_dot, thetaacc (then tau times them)
-        self._deriv = np.zeros((4, n))
-        self._forces = np.zeros(2)  # [2] force of action 0 and 1, rebuilt when params change
-        self._forces_of: CartPoleParams | None = None
 
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.05, 0.05)
@@ -219,68 +212,17 @@ class CartPoleBatch(BatchedEnv):
         self._done[rows] = False
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if self.params.kinematics_integrator == "euler":
-            terminated = self._step_euler(actions)
-        else:  # semi-implicit: the generic path, with temporaries
-            *s, terminated = step_state(ARRAY, self.params, *self._state, actions)  # type: ignore[call-arg]
-            for k, component in enumerate(s):
-                self._state[k] = component
+        # The one step_state on [N] arrays: an in-place copy of it ran ~25 µs faster per 1024
+        # rows but was a second CartPole physics; see BENCHMARKS.md (vector section).
+        *s, terminated = step_state(ARRAY, self.params, *self._state, actions)  # type: ignore[call-arg]
+        for k, component in enumerate(s):
+            self._state[k] = component
         if self.sutton_barto_reward:
             self._reward[:] = np.where(terminated | self._done, -1.0, 0.0)
         else:
             np.logical_not(self._done, out=self._reward)  # 1.0 until done, then 0.0
         self._done |= terminated
         return self._reward, terminated
-
-    def _step_euler(self, actions: np.ndarray) -> np.ndarray:
-        """:func:`step_state` (explicit Euler) in place, one ufunc per operation in its order.
-
-        About 30 ufunc calls and no temporaries but one; float products commute exactly, so
-        ``a * x`` written as ``x *= a`` is the same number. Returns terminated ``[N]``.
-        """
-        p = self.params
-        if self._forces_of is not p:  # params are frozen; a setter replaces them
-            self._forces[:] = (-p.force_mag, p.force_mag)
-            self._forces_of = p
-        x, _, theta, theta_dot = self._state  # [N] views of the state rows
-        cos, sin, temp, den = self._scratch
-        xacc, thetaacc = self._deriv[1], self._deriv[3]
-        np.cos(theta, out=cos)
-        np.sin(theta, out=sin)
-        # temp = (force + polemass_length * theta_dot**2 * sin) / total_mass
-        np.multiply(theta_dot, theta_dot, out=temp)
-        temp *= p.polemass_length
-        temp *= sin
-        temp += self._forces[actions]  # force_mag where action is 1, -force_mag where 0
-        temp /= p.total_mass
-        # thetaacc = (gravity * sin - cos * temp) / den, where
-        # den = length * (4/3 - masspole * cos**2 / total_mass)
-        np.multiply(cos, cos, out=den)
-        den *= p.masspole
-        den /= p.total_mass
-        np.subtract(4.0 / 3.0, den, out=den)
-        den *= p.length
-        np.multiply(sin, p.gravity, out=thetaacc)
-        np.multiply(cos, temp, out=xacc)  # xacc is scratch until it is computed below
-        thetaacc -= xacc
-        thetaacc /= den
-        # xacc = temp - polemass_length * thetaacc * cos / total_mass
-        np.multiply(thetaacc, p.polemass_length, out=xacc)
-        xacc *= cos
-        xacc /= p.total_mass
-        np.subtract(temp, xacc, out=xacc)
-        # Euler: state += tau * [x_dot, xacc, theta_dot, thetaacc], as one [4, N] update
-        self._deriv[0::2] = self._state[1::2]
-        self._deriv *= p.tau
-        self._state += self._deriv
-        # |x| > t is Gymnasium's x < -t or x > t (both False for NaN too)
-        terminated, flag, magnitude = self._terminated, self._flag, temp
-        np.abs(x, out=magnitude)
-        np.greater(magnitude, p.x_threshold, out=terminated)
-        np.abs(theta, out=magnitude)
-        np.greater(magnitude, p.theta_threshold_radians, out=flag)
-        terminated |= flag
-        return terminated
 
     def _observe(self, rows: np.ndarray | None) -> None:
         if rows is None:
