@@ -16,6 +16,18 @@ from palaestra.spaces import Box, Discrete
 RENDER_MODES = ["human", "rgb_array"]
 
 
+def state_array(values: Any, dtype: Any = np.float64) -> np.ndarray:
+    """The single env's state as a fresh, read-only array (``env.unwrapped.state``).
+
+    The state lives in Python floats (the fast path), so this array is a copy: writing into it
+    would silently change nothing. Read-only makes ``state[0] = x`` fail loudly instead;
+    assign a whole new state (``env.unwrapped.state = [...]``) to change it.
+    """
+    arr = np.array(values, dtype=dtype)
+    arr.flags.writeable = False
+    return arr
+
+
 def parse_number(name: str, value: Any) -> float:
     """A finite float from a reset option, or ``ValueError`` naming the option and value."""
     try:

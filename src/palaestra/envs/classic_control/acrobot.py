@@ -22,6 +22,7 @@ from palaestra.envs.classic_control._common import (
     check_discrete_action,
     expose_params,
     parse_reset_bounds,
+    state_array,
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
@@ -142,7 +143,7 @@ class AcrobotEnv(ClassicControlEnv):
         """``[theta1, theta2, dtheta1, dtheta2]``: float32 after reset, float64 after a step."""
         if self._s is None:
             return None
-        return np.array(self._s, dtype=np.float32 if self._fresh else np.float64)
+        return state_array(self._s, np.float32 if self._fresh else np.float64)
 
     @state.setter
     def state(self, value: Any) -> None:

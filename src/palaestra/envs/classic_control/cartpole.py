@@ -21,6 +21,7 @@ from palaestra.envs.classic_control._common import (
     check_discrete_action,
     expose_params,
     parse_reset_bounds,
+    state_array,
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
@@ -112,7 +113,7 @@ class CartPoleEnv(ClassicControlEnv):
     @property
     def state(self) -> np.ndarray | None:
         """``[x, x_dot, theta, theta_dot]`` as float64 (None before the first reset)."""
-        return None if self._s is None else np.array(self._s)
+        return None if self._s is None else state_array(self._s)
 
     @state.setter
     def state(self, value: Any) -> None:

@@ -32,6 +32,7 @@ from palaestra.envs.classic_control._common import (
     check_box_action,
     expose_params,
     parse_reset_bounds,
+    state_array,
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
@@ -153,7 +154,7 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
         """``[position, velocity]``: float64 after reset, float32 after a step (as Gymnasium)."""
         if self._s is None:
             return None
-        return np.array(self._s, dtype=np.float64 if self._fresh else np.float32)
+        return state_array(self._s, np.float64 if self._fresh else np.float32)
 
     @state.setter
     def state(self, value: Any) -> None:

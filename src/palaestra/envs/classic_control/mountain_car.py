@@ -19,6 +19,7 @@ from palaestra.envs.classic_control._common import (
     check_discrete_action,
     expose_params,
     parse_reset_bounds,
+    state_array,
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
@@ -88,7 +89,7 @@ class MountainCarEnv(ClassicControlEnv):
     @property
     def state(self) -> np.ndarray | None:
         """``[position, velocity]`` as float64 (None before the first reset)."""
-        return None if self._s is None else np.array(self._s)
+        return None if self._s is None else state_array(self._s)
 
     @state.setter
     def state(self, value: Any) -> None:

@@ -22,6 +22,7 @@ from palaestra.envs.classic_control._common import (
     check_box_action,
     expose_params,
     parse_number,
+    state_array,
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
@@ -104,7 +105,7 @@ class PendulumEnv(ClassicControlEnv):
     @property
     def state(self) -> np.ndarray | None:
         """``[theta, theta_dot]`` as float64 (None before the first reset)."""
-        return None if self._s is None else np.array(self._s)
+        return None if self._s is None else state_array(self._s)
 
     @state.setter
     def state(self, value: Any) -> None:
