@@ -158,21 +158,27 @@ def _openblas() -> Any:
     return None
 
 
+@cache
+def _threadpool_limits() -> Any:
+    """threadpoolctl's ``threadpool_limits``, or None (looked up once: a failed import is not
+    cached by Python and costs ~50 µs per try, once per update)."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        return None
+    return threadpool_limits
+
+
 @contextmanager
 def one_blas_thread() -> Iterator[None]:
     """Run numpy matmuls on one thread, then restore the previous setting.
 
     OpenBLAS splits even 256x64 matmuls across threads; the synchronisation costs more than
-    the math, and on a busy machine it makes an update 10-30x slower (measured). Uses
-    threadpoolctl when installed, else numpy's bundled OpenBLAS; a no-op otherwise.
+    the math, and on a busy machine it makes an update 10-30x slower (measured). Uses numpy's
+    bundled OpenBLAS directly (two C calls), else threadpoolctl when installed, else nothing.
     """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        funcs = _openblas()
-        if funcs is None:
-            yield
-            return
+    funcs = _openblas()
+    if funcs is not None:
         get, set_ = funcs
         previous = get()
         set_(1)
@@ -181,5 +187,9 @@ def one_blas_thread() -> Iterator[None]:
         finally:
             set_(previous)
         return
-    with threadpool_limits(1, user_api="blas"):
+    limits = _threadpool_limits()
+    if limits is None:
+        yield
+        return
+    with limits(1, user_api="blas"):
         yield
