@@ -164,7 +164,8 @@ def report(case: Case, rates: dict[str, list[float]]) -> str:
 def parse_args() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--cases", nargs="+", default=[c.name for c in CASES])
+    names = [c.name for c in CASES]
+    parser.add_argument("--cases", nargs="+", default=names, choices=names)
     parser.add_argument("--quick", action="store_true", help="1 repeat, a tenth of the steps")
     return parser.parse_args()
 
