@@ -32,6 +32,7 @@ def __getattr__(name: str) -> object:
         return importlib.import_module(f"palaestra.{name}")
     raise AttributeError(f"module 'palaestra' has no attribute {name!r}")
 
+
 __all__ = [
     "ActionWrapper",
     "Env",
