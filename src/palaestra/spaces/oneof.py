@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space
+from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space, require_spaces
 
 
 class OneOf(Space[tuple[int, Any]]):
@@ -32,12 +32,7 @@ class OneOf(Space[tuple[int, Any]]):
         self.spaces = tuple(spaces)
         if len(self.spaces) == 0:
             raise ValueError("Empty `OneOf` spaces are not supported.")
-        for space in self.spaces:
-            if not isinstance(space, Space):
-                raise TypeError(
-                    f"{space} does not inherit from `palaestra.spaces.Space`. "
-                    f"Actual Type: {type(space)}"
-                )
+        require_spaces(self.spaces)
         super().__init__(None, None, seed)
 
     @property

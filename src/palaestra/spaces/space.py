@@ -103,6 +103,18 @@ class Space(Generic[T_co]):
         return sample_n
 
 
+def require_spaces(spaces: Any) -> tuple[Space[Any], ...]:
+    """``spaces`` as a tuple, each checked to be a :class:`Space` (Gymnasium's message)."""
+    spaces = tuple(spaces)
+    for space in spaces:
+        if not isinstance(space, Space):
+            raise TypeError(
+                f"{space} does not inherit from `palaestra.spaces.Space`. "
+                f"Actual Type: {type(space)}"
+            )
+    return spaces
+
+
 @functools.lru_cache(maxsize=256)
 def can_cast(from_dtype: np.dtype, to_dtype: np.dtype) -> bool:
     """``np.can_cast`` for dtypes, memoised: ``contains`` runs on every step."""

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space
+from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space, require_spaces
 
 
 class Tuple(Space[tuple[Any, ...]], typing.Sequence[Any]):
@@ -28,13 +28,7 @@ class Tuple(Space[tuple[Any, ...]], typing.Sequence[Any]):
         self, spaces: Iterable[Space[Any]], seed: int | np.random.Generator | None = None
     ) -> None:
         """Build the product of ``spaces``; an int ``seed`` derives one seed per subspace."""
-        self.spaces = tuple(spaces)
-        for space in self.spaces:
-            if not isinstance(space, Space):
-                raise TypeError(
-                    f"{space} does not inherit from `palaestra.spaces.Space`. "
-                    f"Actual Type: {type(space)}"
-                )
+        self.spaces = require_spaces(spaces)
         super().__init__(None, None, seed)
 
     @property
