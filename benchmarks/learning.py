@@ -33,19 +33,8 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
-DQN_KWARGS: dict[str, Any] = dict(
-    learning_rate=1e-3,
-    buffer_size=50_000,
-    learning_starts=1000,
-    batch_size=128,
-    tau=1.0,
-    gamma=0.99,
-    train_freq=4,
-    gradient_steps=1,
-    target_update_interval=250,
-    exploration_fraction=0.2,
-    exploration_final_eps=0.05,
-)
+from tutorial_settings import DQN_KWARGS  # benchmarks/ is on sys.path when run as a script
+
 PPO_N_ENVS = 8
 EVAL_EPISODES = 100
 

@@ -36,20 +36,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import torch
+from tutorial_settings import DQN_KWARGS  # benchmarks/ is on sys.path when run as a script
 
-DQN_KWARGS: dict[str, Any] = dict(
-    learning_rate=1e-3,
-    buffer_size=50_000,
-    learning_starts=1000,
-    batch_size=128,
-    tau=1.0,
-    gamma=0.99,
-    train_freq=4,
-    gradient_steps=1,
-    target_update_interval=250,
-    exploration_fraction=0.2,
-    exploration_final_eps=0.05,
-)
 PPO_MC_KWARGS: dict[str, Any] = dict(learning_rate=1e-3, n_steps=2048, batch_size=64, n_epochs=10)
 PPO_CP_KWARGS: dict[str, Any] = dict(n_steps=128, batch_size=256, n_epochs=4)
 
