@@ -146,12 +146,16 @@ class DQN(BaseAlgorithm):
         )
         self.q_net, self.q_net_target = q_net, q_net_target  # .to() moved them in place
         self._q_params = list(q_net.parameters())
-        self._q_numpy = q_net.numpy_acting()  # cheap batch-1 acting on CPU MLPs
         self.optimizer = self._make_optimizer(self._q_params, optimizer_class, optimizer_kwargs)
         # Plain CPU MLPs with Adam train in numpy (same math, a fraction of torch's overhead).
         self._numpy_trainer = (
-            NumpyDQNTrainer.build(q_net, q_net_target, self.optimizer) if self._q_numpy else None
+            NumpyDQNTrainer.build(q_net, q_net_target, self.optimizer)
+            if q_net.numpy_acting()
+            else None
         )
+        # After the trainer, which moves the parameters into one flat buffer: the acting
+        # views must point into that buffer.
+        self._q_numpy = q_net.numpy_acting()  # cheap batch-1 acting on CPU MLPs
         self._make_replay_buffer()
 
     def _make_replay_buffer(self) -> None:

@@ -17,10 +17,9 @@ import torch
 from torch import nn
 
 from palaestra.algos.numpy_nn import (
+    FlatAdam,
     adam_ok,
-    adam_step,
     backward,
-    clip_grads,
     forward,
     linear_chain,
     one_blas_thread,
@@ -42,8 +41,21 @@ class NumpyDQNTrainer:
         chain: list[tuple[nn.Linear, str]],
         target_chain: list[tuple[nn.Linear, str]],
     ):
-        self.optimizer, self.chain, self.target_chain = optimizer, chain, target_chain
-        self.params = [p for lin, _ in chain for p in (lin.weight, lin.bias)]
+        self.chain, self.target_chain = chain, target_chain
+        self.adam = FlatAdam(optimizer, [p for lin, _ in chain for p in (lin.weight, lin.bias)])
+        self._views_key: tuple[int, ...] = ()
+        self._views_cache: tuple[list[Any], list[Any]] = ([], [])
+
+    def _views(self) -> tuple[list[Any], list[Any]]:
+        """Numpy views of both nets, taken again only when a parameter has moved."""
+        key = tuple(
+            p.data_ptr()
+            for lin, _ in self.chain + self.target_chain
+            for p in (lin.weight, lin.bias)
+        )
+        if key != self._views_key:
+            self._views_key, self._views_cache = key, (views(self.chain), views(self.target_chain))
+        return self._views_cache
 
     @classmethod
     def build(cls, q_net: nn.Module, q_target: nn.Module, optimizer: Any) -> NumpyDQNTrainer | None:
@@ -66,7 +78,7 @@ class NumpyDQNTrainer:
         action_start: int,
     ) -> float:
         """``gradient_steps`` updates; returns the mean loss."""
-        online, target = views(self.chain), views(self.target_chain)
+        online, target = self._views()
         idx = np.arange(batch_size)
         losses = []
         with one_blas_thread():
@@ -81,7 +93,7 @@ class NumpyDQNTrainer:
                 losses.append(float(np.where(absd < 1.0, 0.5 * diff * diff, absd - 0.5).mean()))
                 grad_out = np.zeros_like(acts[-1])
                 grad_out[idx, a] = np.clip(diff, -1.0, 1.0) / batch_size  # d(mean Huber)/dQ
-                grads, _ = backward(online, acts, grad_out)
-                clip_grads(grads, max_grad_norm)
-                adam_step(self.optimizer, self.params, grads)
+                backward(online, acts, grad_out, self.adam.grad_views())
+                self.adam.clip_grad_norm(max_grad_norm)
+                self.adam.step()
         return float(np.mean(losses))

@@ -1,5 +1,5 @@
-"""Numpy forward/backward for chains of Linear + ReLU/Tanh layers, global-norm clipping, and
-Adam on views of a ``torch.optim.Adam``'s state: the pieces of the numpy trainers.
+"""Numpy forward/backward for chains of Linear + ReLU/Tanh layers, and Adam with global-norm
+clipping on one flat buffer: the pieces of the numpy trainers.
 
 Everything works on *views* of torch tensors (parameters, ``exp_avg``, ``exp_avg_sq``,
 ``step``), so the torch model and optimizer stay the single source of truth for ``save``,
@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import ctypes
 import glob
+import itertools
+import math
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -22,11 +24,10 @@ import torch
 from torch import nn
 
 __all__ = [
+    "FlatAdam",
     "Layer",
     "adam_ok",
-    "adam_step",
     "backward",
-    "clip_grads",
     "forward",
     "linear_chain",
     "views",
@@ -80,11 +81,11 @@ def forward(layers: list[Layer], x: np.ndarray) -> list[np.ndarray]:
 
 
 def backward(
-    layers: list[Layer], acts: list[np.ndarray], grad_out: np.ndarray
-) -> tuple[list[np.ndarray], np.ndarray]:
-    """Gradients ``[dW0, db0, dW1, ...]`` and the gradient at the input, given d(loss)/d(out).
-    ``grad_out`` is taken *after* the last layer's activation (the head has none)."""
-    grads: list[np.ndarray] = []
+    layers: list[Layer], acts: list[np.ndarray], grad_out: np.ndarray, out: list[np.ndarray]
+) -> None:
+    """Write the gradients ``[dW0, db0, dW1, ...]`` into ``out`` (float32 arrays, e.g. views
+    of ``FlatAdam.grads``), given d(loss)/d(out) taken *after* the last layer's activation
+    (the head has none)."""
     g = grad_out
     for i in range(len(layers) - 1, -1, -1):
         w, _, act = layers[i]
@@ -92,18 +93,10 @@ def backward(
             g = g * (acts[i + 1] > 0)
         elif act == "tanh":
             g = g * (1.0 - acts[i + 1] * acts[i + 1])
-        grads[:0] = [g.T @ acts[i], g.sum(axis=0)]
-        g = g @ w
-    return grads, g
-
-
-def clip_grads(grads: list[np.ndarray], max_norm: float) -> None:
-    """In place, like ``clip_grad_norm_`` (coefficient clamped at 1)."""
-    total = np.sqrt(sum(float(np.dot(g.ravel(), g.ravel())) for g in grads))
-    coef = max_norm / (total + 1e-6)
-    if coef < 1.0:
-        for g in grads:
-            g *= coef
+        np.matmul(g.T, acts[i], out=out[2 * i])
+        np.sum(g, axis=0, out=out[2 * i + 1])
+        if i:
+            g = g @ w
 
 
 def adam_ok(optimizer: torch.optim.Optimizer) -> bool:
@@ -121,28 +114,115 @@ def adam_ok(optimizer: torch.optim.Optimizer) -> bool:
     )
 
 
-def adam_step(
-    optimizer: torch.optim.Optimizer, params: list[torch.Tensor], grads: list[np.ndarray]
-) -> None:
-    """One ``torch.optim.Adam`` step done in numpy on views of ``params`` and their state."""
-    group = optimizer.param_groups[0]
-    lr, (beta1, beta2), eps = float(group["lr"]), group["betas"], float(group["eps"])
-    for p, grad in zip(params, grads, strict=True):
-        st = optimizer.state[p]
-        if not st:  # the zero state torch creates on a first step
-            st["step"] = torch.tensor(0.0)
-            st["exp_avg"] = torch.zeros_like(p, memory_format=torch.preserve_format)
-            st["exp_avg_sq"] = torch.zeros_like(p, memory_format=torch.preserve_format)
-        st["step"] += 1
-        t = float(st["step"])
-        m, v = st["exp_avg"].numpy(), st["exp_avg_sq"].numpy()
-        m *= beta1
-        m += (1.0 - beta1) * grad
-        v *= beta2
-        v += (1.0 - beta2) * grad * grad
-        denom = np.sqrt(v) / np.sqrt(1.0 - beta2**t) + eps
-        param = p.detach().numpy()
-        param -= (lr / (1.0 - beta1**t)) * m / denom
+class FlatAdam:
+    """``torch.optim.Adam``'s update, done in numpy on one flat float32 buffer.
+
+    The parameters and the optimizer's ``exp_avg``/``exp_avg_sq``/``step`` tensors are rebound
+    as views of flat torch buffers, so one step is about a dozen numpy operations over all
+    weights instead of a dozen per tensor (per-tensor overhead was most of a small net's
+    update), and torch (``save``, ``load``, the torch code paths) keeps seeing the same tensors.
+    Only torch tensors are kept between calls (numpy views are taken per step), so a
+    ``deepcopy`` of the model and its trainer stays wired together. The math is torch's
+    non-fused float32 formula. The backward pass writes into ``grad_views()``.
+    """
+
+    def __init__(self, optimizer: torch.optim.Optimizer, params: list[torch.Tensor]):
+        self.optimizer, self.params = optimizer, params
+        bounds = np.cumsum([0] + [p.numel() for p in params])
+        self.slices = [slice(int(a), int(b)) for a, b in itertools.pairwise(bounds)]
+        self.grad = np.zeros(int(bounds[-1]), dtype=np.float32)
+        self._tmp, self._tmp2 = np.empty_like(self.grad), np.empty_like(self.grad)
+        self._bind_params()
+        self._bind_state()
+
+    def _bind_params(self) -> None:
+        """Make the parameters views of one flat buffer, keeping their values. This moves
+        them: numpy views taken earlier (acting) must be taken again."""
+        flat = torch.empty(self.grad.size)
+        with torch.no_grad():
+            for p, sl in zip(self.params, self.slices):
+                flat[sl].copy_(p.reshape(-1))
+                p.data = flat[sl].view_as(p)
+        self._flat = flat
+
+    def _bind_state(self) -> None:
+        """Make the optimizer state views of flat buffers, keeping its values
+        (``optimizer.load_state_dict`` replaces the state tensors: this runs again then)."""
+        size = self.grad.size
+        m, v, steps = torch.zeros(size), torch.zeros(size), torch.zeros(len(self.params))
+        state = self.optimizer.state
+        for i, (p, sl) in enumerate(zip(self.params, self.slices)):
+            st = state[p]
+            if st:
+                m[sl].copy_(st["exp_avg"].reshape(-1))
+                v[sl].copy_(st["exp_avg_sq"].reshape(-1))
+                steps[i] = float(st["step"])
+            st["step"] = steps[i]
+            st["exp_avg"] = m[sl].view_as(p)
+            st["exp_avg_sq"] = v[sl].view_as(p)
+        self._m, self._v, self._steps = m, v, steps
+        self._bound: list[tuple[dict[str, Any], torch.Tensor]] = [
+            (state[p], state[p]["exp_avg"]) for p in self.params
+        ]
+
+    def _params_bound(self) -> bool:
+        base = self._flat.data_ptr()
+        return all(p.data_ptr() == base + 4 * sl.start for p, sl in zip(self.params, self.slices))
+
+    def _state_bound(self) -> bool:
+        state = self.optimizer.state
+        return all(
+            state.get(p) is st and st["exp_avg"] is m
+            for p, (st, m) in zip(self.params, self._bound)
+        )
+
+    def grad_views(self) -> list[np.ndarray]:
+        """Per-parameter views of the flat gradient buffer, in ``params`` order."""
+        return [self.grad[sl].reshape(p.shape) for p, sl in zip(self.params, self.slices)]
+
+    def step(self) -> None:
+        """Apply ``self.grad`` (already clipped) to the parameters."""
+        if not self._params_bound():  # something moved the parameters (e.g. ``.to()``)
+            self._bind_params()
+        if not self._state_bound():
+            self._bind_state()
+        group = self.optimizer.param_groups[0]
+        lr, (beta1, beta2), eps = float(group["lr"]), group["betas"], float(group["eps"])
+        steps = self._steps.numpy()
+        steps += 1
+        first = float(steps[0])
+        if (steps == first).all():
+            self._update(slice(None), first, lr, beta1, beta2, eps)
+        else:  # per-tensor step counts (state loaded from elsewhere): one update per tensor
+            for sl, t in zip(self.slices, steps.tolist()):
+                self._update(sl, t, lr, beta1, beta2, eps)
+
+    def _update(
+        self, sl: slice, t: float, lr: float, beta1: float, beta2: float, eps: float
+    ) -> None:
+        g, p = self.grad[sl], self._flat.numpy()[sl]
+        m, v = self._m.numpy()[sl], self._v.numpy()[sl]
+        tmp, tmp2 = self._tmp[sl], self._tmp2[sl]
+        np.subtract(g, m, out=tmp)  # m.lerp_(g, 1 - beta1)
+        tmp *= 1.0 - beta1
+        m += tmp
+        v *= beta2  # v.mul_(beta2).addcmul_(g, g, value=1 - beta2)
+        np.multiply(g, g, out=tmp)
+        tmp *= 1.0 - beta2
+        v += tmp
+        np.sqrt(v, out=tmp)
+        tmp /= math.sqrt(1.0 - beta2**t)
+        tmp += eps
+        np.divide(m, tmp, out=tmp2)
+        tmp2 *= lr / (1.0 - beta1**t)
+        p -= tmp2
+
+    def clip_grad_norm(self, max_norm: float) -> None:
+        """Scale ``self.grad`` in place like ``clip_grad_norm_`` (coefficient clamped at 1)."""
+        total = math.sqrt(float(np.dot(self.grad, self.grad)))
+        coef = max_norm / (total + 1e-6)
+        if coef < 1.0:
+            self.grad *= coef
 
 
 @cache

@@ -17,10 +17,9 @@ import torch
 
 from palaestra.algos.numpy_acting import log_softmax
 from palaestra.algos.numpy_nn import (
+    FlatAdam,
     adam_ok,
-    adam_step,
     backward,
-    clip_grads,
     forward,
     linear_chain,
     views,
@@ -38,9 +37,10 @@ class NumpyPPOTrainer:
         self.policy, self.optimizer = policy, optimizer
         self.pi_chain, self.vf_chain = pi_chain, vf_chain
         self.head = policy.action_head
-        self.params = [p for lin, _ in pi_chain + vf_chain for p in (lin.weight, lin.bias)]
+        params = [p for lin, _ in pi_chain + vf_chain for p in (lin.weight, lin.bias)]
         if self.head.kind == "gaussian":
-            self.params.append(self.head.log_std)
+            params.append(self.head.log_std)
+        self.adam = FlatAdam(optimizer, params)
 
     @classmethod
     def build(cls, policy: Any, optimizer: Any) -> NumpyPPOTrainer | None:
@@ -55,7 +55,7 @@ class NumpyPPOTrainer:
         if not pi_chain or not vf_chain or not adam_ok(optimizer):
             return None
         trainer = cls(policy, optimizer, pi_chain, vf_chain)
-        if len(trainer.params) != len(list(policy.parameters())):
+        if len(trainer.adam.params) != len(list(policy.parameters())):
             return None
         return trainer
 
@@ -135,9 +135,12 @@ class NumpyPPOTrainer:
         d_v = (2.0 * vf_coef / n) * (v_pred - returns)
         if clip_range_vf is not None:
             d_v = d_v * (np.abs(values - old_values) <= clip_range_vf)
-        pi_grads, _ = backward(pi_layers, pi_acts, d_out.astype(np.float32))
-        vf_grads, _ = backward(vf_layers, vf_acts, d_v[:, None].astype(np.float32))
-        grads = [g.astype(np.float32, copy=False) for g in pi_grads + vf_grads + extra]
-        clip_grads(grads, max_grad_norm)
-        adam_step(self.optimizer, self.params, grads)
+        grads = self.adam.grad_views()
+        n_pi = 2 * len(pi_layers)
+        backward(pi_layers, pi_acts, d_out.astype(np.float32), grads[:n_pi])
+        backward(vf_layers, vf_acts, d_v[:, None].astype(np.float32), grads[n_pi:])
+        if extra:
+            grads[-1][...] = extra[0]
+        self.adam.clip_grad_norm(max_grad_norm)
+        self.adam.step()
         return metrics, False

@@ -137,11 +137,13 @@ class PPO(BaseAlgorithm):
         self.policy = ActorCritic(self.observation_space, self.action_space, **kwargs).to(
             self.device
         )
-        self._numpy = self.policy.numpy_acting()  # cheap acting on CPU MLPs; None otherwise
         self._params = list(self.policy.parameters())
         self.optimizer = self._make_optimizer(self._params, optimizer_class, optimizer_kwargs)
         # Plain CPU MLPs with Adam train in numpy (same loss, a fraction of torch's overhead).
         self._numpy_trainer = NumpyPPOTrainer.build(self.policy, self.optimizer)
+        # After the trainer, which moves the parameters into one flat buffer: the acting
+        # views must point into that buffer.
+        self._numpy = self.policy.numpy_acting()  # cheap acting on CPU MLPs; None otherwise
         self._make_rollout_buffer()
 
     def _make_rollout_buffer(self) -> None:
