@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import warnings
 from collections.abc import Callable
 from typing import Any
@@ -155,6 +156,7 @@ def test_module_prefix_imports_the_module_first() -> None:
 
 def test_missing_optional_package_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(lookup, "_package_installed", lambda module_name: False)
+    monkeypatch.setitem(sys.modules, "ale_py", None)  # the ALE ids are registered: the env says
     with pytest.raises(error.DependencyNotInstalled, match=r'pip install "palaestra\[atari\]"'):
         make("ALE/Breakout-v5")
     monkeypatch.setitem(lookup.NAMESPACE_PACKAGES, "Fake", ("fake_pkg", "fake-pkg", "fake"))

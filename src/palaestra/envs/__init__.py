@@ -1,5 +1,6 @@
 """Built-in environments, registered under Gymnasium's ids."""
 
+from palaestra.envs.atari.games import atari_specs
 from palaestra.envs.registration import make, pprint_registry, register, registry, spec
 
 __all__ = ["make", "pprint_registry", "register", "registry", "spec"]
@@ -48,4 +49,10 @@ _CLASSIC_CONTROL: dict[str, dict] = {
 }
 for _id, _kwargs in _CLASSIC_CONTROL.items():
     if _id not in registry:  # importing this module twice (pytest's importlib mode) is harmless
+        register(id=_id, **_kwargs)
+
+# Atari: every id ale-py registers for v5, plus the NoFrameskip-v4 ids of SB3/RL-Zoo pipelines,
+# from a static game list so that this import does not load ale-py.
+for _id, _kwargs in atari_specs().items():
+    if _id not in registry:
         register(id=_id, **_kwargs)
