@@ -4,7 +4,7 @@ The semantics are ale-py's ``AtariEnv`` (the one behind Gymnasium's ``ALE/<Game>
 the same constructor arguments and defaults, the same seeding (a seed is split by a
 ``SeedSequence`` into one seed for ``np_random`` and one for the emulator, and the ROM is
 reloaded), the same order of emulator calls, so that equal seeds and actions give equal frames,
-rewards and infos. Only ``ALEInterface`` is used: ale-py's Python env is not imported.
+rewards and infos. Only ``ALEInterface`` is used, never ale-py's own Python env class.
 
 Observations are fresh arrays on every step: a shared buffer would silently change
 observations that a caller (a replay buffer, a frame stack) still holds.
@@ -62,9 +62,7 @@ def check_frameskip(frameskip: Any) -> int | tuple[int, int]:
 
 def _check_choice(what: str, value: int | None, available: Sequence[int], game: str) -> None:
     if value is not None and value not in available:
-        raise error.Error(
-            f"Invalid {what} {value!r} for {game}: available {what}s are {list(available)}"
-        )
+        raise error.Error(f"Invalid {what} {value!r} for {game}: expected one of {list(available)}")
 
 
 class AtariEnv(Env[Any, Any]):

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from palaestra import error
+
 # ale-py 0.12's ROM ids (``ale_py.roms.get_all_rom_ids()``), sorted.
 ROM_IDS: tuple[str, ...] = tuple(
     sorted(
@@ -63,7 +65,7 @@ def rom_id_to_name(rom: str) -> str:
 
 
 def check_game(game: str) -> str:
-    """``game`` if it is a known ROM id, else ``ValueError`` naming the closest ids."""
+    """``game`` if it is a known ROM id, else ``palaestra.error.Error`` naming the closest."""
     if game in ROM_IDS:
         return game
     import difflib  # only on this error path: keeps `import palaestra` lean
@@ -73,7 +75,7 @@ def check_game(game: str) -> str:
         str(game).lower(), ROM_IDS, n=3
     )
     hint = f" Did you mean: {', '.join(map(repr, close))}?" if close else ""
-    raise ValueError(
+    raise error.Error(
         f"Unknown Atari game {game!r}: expected a snake_case ROM id of ale-py such as "
         f"'breakout' or 'space_invaders'.{hint}"
     )
