@@ -60,6 +60,12 @@ __all__ = [
 ]
 
 
+def _is_gymnasium_id(id: Any) -> bool:
+    """``"gymnasium:Taxi-v4"`` (or a spec with such an id): made by ``palaestra.compat``."""
+    name = id.id if isinstance(id, EnvSpec) else id
+    return isinstance(name, str) and name.startswith("gymnasium:")
+
+
 def _render_modes_of(env_creator: Any) -> Iterable[str] | None:
     """The creator's declared render modes, if its class-level metadata says."""
     metadata = getattr(env_creator, "metadata", None)
@@ -166,6 +172,7 @@ def make(
     """Create the environment registered as ``id`` (or described by an ``EnvSpec``), wrapped.
 
     ``id`` may start with ``"module:"`` to import that module (which registers the id) first.
+    ``"gymnasium:<id>"`` makes Gymnasium's ``<id>`` instead (see :mod:`palaestra.compat`).
     ``max_episode_steps`` overrides the spec's limit (``-1``: no ``TimeLimit``);
     ``disable_env_checker`` overrides the spec's; ``kwargs`` go to the environment constructor.
 
@@ -177,6 +184,12 @@ def make(
     """
     from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
 
+    # -- "gymnasium:<id>": Gymnasium's registry, through palaestra.compat ----------------------
+    if _is_gymnasium_id(id):
+        from palaestra.compat.registry import make_gymnasium
+
+        return make_gymnasium(id, max_episode_steps, disable_env_checker, **kwargs)
+    # -- end "gymnasium:" ----------------------------------------------------------------------
     if isinstance(id, EnvSpec):
         env_spec = id
     elif isinstance(id, str):
@@ -262,6 +275,14 @@ def make_vec(
     spec's vector entry point if it has one, else sync); ``vector_kwargs`` go to the vector
     env, ``wrappers`` wrap each copy (sync/async only), ``kwargs`` go to each env.
     """
+    # -- "gymnasium:<id>": Gymnasium's registry, through palaestra.compat ----------------------
+    if _is_gymnasium_id(id):
+        from palaestra.compat.registry import make_vec_gymnasium
+
+        return make_vec_gymnasium(
+            id, num_envs, vectorization_mode, vector_kwargs, wrappers, **kwargs
+        )
+    # -- end "gymnasium:" ----------------------------------------------------------------------
     if isinstance(id, EnvSpec):
         env_spec = id
     elif isinstance(id, str):
