@@ -109,3 +109,10 @@ def test_invalid_continuous_action(action: Any) -> None:
 def test_keys_to_action_is_undefined_for_continuous_actions() -> None:
     with pytest.raises(AttributeError, match="continuous=True"):
         AtariEnv("pong", continuous=True).get_keys_to_action()
+
+
+def test_a_rom_the_installed_ale_py_lacks(monkeypatch: pytest.MonkeyPatch) -> None:
+    roms = pytest.importorskip("ale_py.roms")
+    monkeypatch.setattr(roms, "get_rom_path", lambda name: None)  # what an older ale-py returns
+    with pytest.raises(error.Error, match=r"does not ship the ROM of 'pong'; upgrade it"):
+        AtariEnv("pong")

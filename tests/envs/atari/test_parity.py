@@ -135,3 +135,19 @@ def test_clone_restore_round_trip_and_states_equal_ale_pys() -> None:
     again = [ours.step(a)[0] for a in actions[60:]]
     assert all(np.array_equal(a, b) for a, b in zip(first, again))
     assert not np.array_equal(first[0], first[-1])  # the game moved: the check means something
+
+
+def test_deepcopy_keeps_the_trajectory() -> None:
+    """A copy continues exactly where the original is: emulator, sticky-action RNG, frameskip."""
+    import copy
+
+    env = palaestra.make("ALE/Breakout-v5", frameskip=(2, 5))
+    env.reset(seed=1)
+    for a in random_actions(4, 40, seed=5):
+        env.step(a)
+    clone = copy.deepcopy(env)
+    assert clone.unwrapped.np_random_seed == 1 and clone.spec == env.spec
+    actions = random_actions(4, 100, seed=6)
+    assert_same(
+        [("step", *clone.step(a)) for a in actions], [("step", *env.step(a)) for a in actions]
+    )

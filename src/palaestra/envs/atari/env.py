@@ -13,7 +13,6 @@ observations that a caller (a replay buffer, a frame stack) still holds.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -21,48 +20,19 @@ import numpy as np
 from palaestra import error, logger
 from palaestra.core import Env
 from palaestra.envs.atari.actions import direction_table, keys_for
+from palaestra.envs.atari.checks import (
+    RENDER_MODES,
+    check_choice,
+    check_frameskip,
+    check_options,
+    import_ale_py,
+)
 from palaestra.envs.atari.games import check_game
 from palaestra.envs.classic_control._common import check_discrete_action, invalid_action
 from palaestra.spaces import Box, Dict, Discrete
 from palaestra.utils.seeding import np_random as make_rng
 
-OBS_TYPES = ("rgb", "grayscale", "ram")
-RENDER_MODES = ["human", "rgb_array"]
 EMULATOR_FPS = 60  # the 2600's NTSC frame rate: human mode plays at 60 / frameskip steps/s
-
-
-def import_ale_py() -> Any:
-    """The ``ale_py`` module, or ``DependencyNotInstalled`` naming the extra to install."""
-    try:
-        import ale_py
-    except ImportError as e:
-        raise error.dependency_not_installed("ale-py", "atari", "the Atari environments") from e
-    return ale_py
-
-
-def check_frameskip(frameskip: Any) -> int | tuple[int, int]:
-    """An ``int >= 1`` or a ``(low, high)`` pair with ``1 <= low < high``, else ``error.Error``.
-
-    A pair draws ``np_random.integers(low, high)`` frames per step (``high`` excluded).
-    """
-    if isinstance(frameskip, (int, np.integer)) and not isinstance(frameskip, bool):
-        if frameskip >= 1:
-            return int(frameskip)
-    elif isinstance(frameskip, (tuple, list)) and len(frameskip) == 2:
-        low, high = frameskip
-        ints = all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in frameskip)
-        if ints and 1 <= low < high:
-            return int(low), int(high)
-    raise error.Error(
-        f"Invalid frameskip {frameskip!r}: expected a positive int (frames repeated per step) "
-        "or a (low, high) tuple of ints with 1 <= low < high (a random count in [low, high) "
-        "per step)"
-    )
-
-
-def _check_choice(what: str, value: int | None, available: Sequence[int], game: str) -> None:
-    if value is not None and value not in available:
-        raise error.Error(f"Invalid {what} {value!r} for {game}: expected one of {list(available)}")
 
 
 class AtariEnv(Env[Any, Any]):
@@ -93,25 +63,25 @@ class AtariEnv(Env[Any, Any]):
         render_mode: str | None = None,
         sound_obs: bool = False,
     ) -> None:
-        if obs_type not in OBS_TYPES:
-            raise error.Error(
-                f"Invalid observation type: {obs_type!r}. Expecting: rgb, grayscale, ram."
-            )
+        check_options(obs_type, render_mode, repeat_action_probability)
         self._frameskip = check_frameskip(frameskip)
-        if render_mode is not None and render_mode not in RENDER_MODES:
-            raise error.UnsupportedMode(
-                f"render_mode={render_mode!r} is not one of {RENDER_MODES} (or None)"
-            )
-        if isinstance(repeat_action_probability, bool) or not (
-            isinstance(repeat_action_probability, (int, float, np.floating, np.integer))
-            and 0.0 <= repeat_action_probability <= 1.0
-        ):
-            raise error.Error(
-                f"Invalid repeat_action_probability {repeat_action_probability!r}: expected a "
-                "probability in [0, 1] (0.25 in v5, 0 for no sticky actions)"
-            )
         self.game = check_game(game)
         ale_py = import_ale_py()
+        # Kept for copies: an ALEInterface cannot be copied, so a copy is rebuilt from these.
+        self._init_kwargs = dict(
+            game=game,
+            mode=mode,
+            difficulty=difficulty,
+            obs_type=obs_type,
+            frameskip=frameskip,
+            repeat_action_probability=repeat_action_probability,
+            full_action_space=full_action_space,
+            continuous=continuous,
+            continuous_action_threshold=continuous_action_threshold,
+            max_num_frames_per_episode=max_num_frames_per_episode,
+            render_mode=render_mode,
+            sound_obs=sound_obs,
+        )
         self.obs_type = obs_type
         self.render_mode = render_mode
         self.sound_obs = sound_obs
@@ -175,11 +145,15 @@ class AtariEnv(Env[Any, Any]):
         """Load the ROM (this applies the seed) and set the mode and difficulty."""
         from ale_py import roms
 
-        self.ale.loadROM(roms.get_rom_path(self.game))
-        _check_choice("mode", self._mode, self.ale.getAvailableModes(), self.game)
-        _check_choice(
-            "difficulty", self._difficulty, self.ale.getAvailableDifficulties(), self.game
-        )
+        rom_path = roms.get_rom_path(self.game)
+        if rom_path is None:  # a game newer than the installed ale-py
+            raise error.Error(
+                f"The installed ale-py does not ship the ROM of {self.game!r}; "
+                'upgrade it with `pip install -U "palaestra[atari]"`'
+            )
+        self.ale.loadROM(rom_path)
+        check_choice("mode", self._mode, self.ale.getAvailableModes(), self.game)
+        check_choice("difficulty", self._difficulty, self.ale.getAvailableDifficulties(), self.game)
         if self._mode is not None:
             self.ale.setMode(self._mode)
         if self._difficulty is not None:
@@ -308,3 +282,23 @@ class AtariEnv(Env[Any, Any]):
     def restore_state(self, state: Any) -> None:
         """Return the emulator to a state from :meth:`clone_state`."""
         self.ale.restoreState(state)
+
+    # --- copies (copy.deepcopy, pickle): same game, same emulator state, same RNG -------------
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {
+            "kwargs": self._init_kwargs,
+            "ale_state": self.ale.cloneState(include_rng=True).serialize(),
+            "np_random": self.np_random.bit_generator.state,
+            "np_random_seed": self._np_random_seed,
+            "spec": self.spec,
+        }
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        import ale_py
+
+        self.__init__(**state["kwargs"])  # type: ignore[misc]
+        self.ale.restoreState(ale_py.ALEState(state["ale_state"]))
+        self.np_random.bit_generator.state = state["np_random"]
+        self._np_random_seed = state["np_random_seed"]
+        self.spec = state["spec"]
