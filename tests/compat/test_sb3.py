@@ -252,3 +252,9 @@ def test_summarised_bounds_ask_for_an_env(saved: Any, tmp_path: Path) -> None:
     with pytest.raises(ModelFileError, match=r"printed in summarised form\); pass env=\.\.\."):
         from_sb3(bad)
     assert isinstance(from_sb3(bad, env="CartPole-v1"), DQN)
+
+
+def test_algo_load_of_an_sb3_file_points_to_from_sb3(saved: Any) -> None:
+    _, path = saved("dqn")
+    with pytest.raises(ModelFileError, match=r"palaestra.compat.from_sb3\(path\) reads the weig"):
+        DQN.load(path)

@@ -114,9 +114,9 @@ def _read(
     if MANIFEST not in names:
         if {"data", "policy.pth"} <= names:
             raise ModelFileError(
-                f"{name} is a Stable-Baselines3 model file; palaestra does not load those because "
-                "they are pickles that can run code on load. Retrain, or convert it in a trusted "
-                "SB3 session by exporting its parameters."
+                f"{name} is a Stable-Baselines3 model file, which Algo.load does not unpickle "
+                "(that can run code); palaestra.compat.from_sb3(path) reads the weights of an "
+                "SB3 DQN/PPO MlpPolicy file without unpickling anything."
             )
         raise ModelFileError(
             f"{name} is a zip archive but not a palaestra {kind} file (no {MANIFEST})"
