@@ -86,7 +86,7 @@ def test_palaestra_dqn_trains_on_gymnasium_taxi_discrete_observations() -> None:
     assert model.predict(obs, deterministic=True)[0] in env.action_space
 
 
-def test_palaestra_wrappers_and_vector_envs_accept_it() -> None:
+def test_palaestra_wrappers_accept_it() -> None:
     from palaestra.wrappers import RecordEpisodeStatistics, TimeLimit
 
     env = RecordEpisodeStatistics(TimeLimit(palaestra.make("gymnasium:CartPole-v1"), 5))
@@ -94,7 +94,12 @@ def test_palaestra_wrappers_and_vector_envs_accept_it() -> None:
     steps = [env.step(0) for _ in range(5)]
     assert [s[3] for s in steps] == [False] * 4 + [True]
     assert steps[-1][4]["episode"]["l"] == 5
-    vec = palaestra.make_vec("gymnasium:CartPole-v1", num_envs=3)
+
+
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_make_vec_of_gymnasium_ids(mode: str) -> None:
+    vec = palaestra.make_vec("gymnasium:CartPole-v1", num_envs=3, vectorization_mode=mode)
+    assert type(vec).__name__ == ("SyncVectorEnv" if mode == "sync" else "AsyncVectorEnv")
     obs, _ = vec.reset(seed=[1, 2, 3])
     assert obs.shape == (3, 4)
     np.testing.assert_array_equal(obs[1], gymnasium.make("CartPole-v1").reset(seed=2)[0])

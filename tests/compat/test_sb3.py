@@ -258,3 +258,19 @@ def test_algo_load_of_an_sb3_file_points_to_from_sb3(saved: Any) -> None:
     _, path = saved("dqn")
     with pytest.raises(ModelFileError, match=r"palaestra.compat.from_sb3\(path\) reads the weig"):
         DQN.load(path)
+
+
+def test_needs_neither_sb3_nor_gymnasium(saved: Any) -> None:
+    import subprocess
+    import sys
+
+    _, path = saved("ppo_box")
+    code = (
+        "import sys\n"
+        "for name in ('gymnasium', 'stable_baselines3', 'cloudpickle'): sys.modules[name] = None\n"
+        "from palaestra.compat import from_sb3\n"
+        f"model = from_sb3({str(path)!r})\n"
+        "print(type(model).__name__, model.action_space)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.stdout.strip() == "PPO Box(-2.0, 2.0, (1,), float32)", out.stderr
