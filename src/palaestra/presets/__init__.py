@@ -19,7 +19,19 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
-__all__ = ["PresetError", "available", "get_preset", "resolve"]
+__all__ = [
+    "SETTINGS_KEYS",
+    "PresetError",
+    "available",
+    "base_settings",
+    "get_preset",
+    "has_preset",
+    "merge",
+    "resolve",
+]
+
+# The keys of one preset besides its measurements; ``hyperparams`` holds constructor kwargs.
+SETTINGS_KEYS = ("policy", "n_envs", "n_timesteps", "hyperparams", "env_kwargs", "normalize")
 
 ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU"}
 
@@ -66,6 +78,39 @@ def get_preset(algo: str, env_id: str, name: str = "default") -> dict[str, Any]:
     return copy.deepcopy(envs[env_id][name])
 
 
+def has_preset(algo: str, env_id: str, name: str = "default") -> bool:
+    """Whether :func:`get_preset` would find ``(algo, env_id, name)``."""
+    return name in _table().get(algo.lower(), {}).get(env_id, {})
+
+
+def base_settings(n_timesteps: int = 100_000) -> dict[str, Any]:
+    """Settings with no preset: the algorithm's own defaults, one env, an MLP policy."""
+    return {
+        "policy": "MlpPolicy",
+        "n_envs": 1,
+        "n_timesteps": n_timesteps,
+        "hyperparams": {},
+        "env_kwargs": {},
+        "normalize": False,
+    }
+
+
+def merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
+    """``base`` updated by ``override``, dicts merged key by key (so overriding
+    ``policy_kwargs.net_arch`` keeps ``policy_kwargs.activation_fn``).
+
+    >>> merge({"a": 1, "k": {"x": 1, "y": 2}}, {"k": {"y": 3}})
+    {'a': 1, 'k': {'x': 1, 'y': 3}}
+    """
+    out = copy.deepcopy(base)
+    for key, value in override.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
 def resolve(hyperparams: dict[str, Any]) -> dict[str, Any]:
     """Constructor kwargs with ``"lin_<x>"`` schedules and activation names turned into objects."""
     from palaestra.algos.schedules import LinearSchedule
@@ -73,12 +118,21 @@ def resolve(hyperparams: dict[str, Any]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in hyperparams.items():
         if isinstance(value, str) and value.startswith("lin_"):
-            out[key] = LinearSchedule(float(value[4:]), 0.0)
+            out[key] = LinearSchedule(_lin_start(key, value), 0.0)
         elif key == "policy_kwargs" and isinstance(value, dict):
             out[key] = _resolve_policy_kwargs(value)
         else:
             out[key] = value
     return out
+
+
+def _lin_start(key: str, value: str) -> float:
+    try:
+        return float(value[4:])
+    except ValueError:
+        raise PresetError(
+            f"{key}={value!r} is not a linear schedule; write 'lin_<start>', e.g. 'lin_0.001'"
+        ) from None
 
 
 def _resolve_policy_kwargs(policy_kwargs: dict[str, Any]) -> dict[str, Any]:

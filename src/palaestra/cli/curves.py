@@ -1,0 +1,155 @@
+"""Episode returns of a run and the learning-curve plots of ``train`` and ``compare``."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from palaestra.cli.common import EPISODES_FILE, CLIError
+from palaestra.error import dependency_not_installed
+
+__all__ = ["Episodes", "plot_compare", "plot_learning_curve", "read_episodes", "rolling_mean"]
+
+
+class Episodes(NamedTuple):
+    """Finished episodes of one run, in order; ``terminated`` is None when unknown."""
+
+    steps: np.ndarray  # [E] env steps when the episode ended
+    returns: np.ndarray  # [E] float
+    lengths: np.ndarray  # [E] int
+    terminated: np.ndarray | None  # [E] bool
+
+
+def _read_csv(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="", encoding="utf-8") as file:
+        lines = [line for line in file if not line.startswith("#")]
+    return list(csv.DictReader(lines))
+
+
+def _floats(rows: list[dict[str, str]], key: str) -> np.ndarray:
+    return np.array([float(r[key]) if r.get(key) not in (None, "") else np.nan for r in rows])
+
+
+def read_episodes(run: Path) -> Episodes:
+    """From ``episodes.csv`` (written by ``train``), else SB3-style ``*monitor.csv`` files,
+    else ``progress.csv``'s ``rollout/ep_rew_mean`` (already a rolling mean)."""
+    try:
+        if (run / EPISODES_FILE).is_file():
+            rows = _read_csv(run / EPISODES_FILE)
+            return Episodes(
+                _floats(rows, "steps").astype(np.int64),
+                _floats(rows, "return"),
+                _floats(rows, "length").astype(np.int64),
+                _floats(rows, "terminated").astype(bool),
+            )
+        monitors = sorted(run.glob("*monitor.csv"))
+        if monitors:
+            rows = _read_csv(monitors[0])  # one env's file: its lengths add up to its steps
+            lengths = _floats(rows, "l").astype(np.int64)
+            return Episodes(np.cumsum(lengths), _floats(rows, "r"), lengths, None)
+        if (run / "progress.csv").is_file():
+            rows = [r for r in _read_csv(run / "progress.csv") if r.get("rollout/ep_rew_mean")]
+            returns = _floats(rows, "rollout/ep_rew_mean")
+            steps = _floats(rows, "time/total_timesteps").astype(np.int64)
+            lengths = np.nan_to_num(_floats(rows, "rollout/ep_len_mean")).astype(np.int64)
+            return Episodes(steps, returns, lengths, None)
+    except (OSError, KeyError, ValueError) as exc:
+        raise CLIError(f"cannot read the episodes of run {str(run)!r}: {exc}", "") from None
+    raise CLIError(
+        f"run {str(run)!r} has no episodes.csv, monitor.csv or progress.csv",
+        "pass folders written by palaestra train",
+    )
+
+
+def rolling_mean(values: np.ndarray, window: int) -> np.ndarray:
+    """Mean of the last ``window`` values at each index (fewer at the start).
+
+    >>> rolling_mean(np.array([1.0, 2.0, 3.0, 4.0]), 2).tolist()
+    [1.0, 1.5, 2.5, 3.5]
+    """
+    values = np.asarray(values, dtype=np.float64)
+    sums = np.cumsum(np.concatenate([[0.0], values]))
+    idx = np.arange(1, len(values) + 1)
+    start = np.maximum(idx - window, 0)
+    return (sums[idx] - sums[start]) / (idx - start)
+
+
+def default_window(n_episodes: int) -> int:
+    """Smoothing window: about a twentieth of the episodes, between 1 and 100."""
+    return int(min(100, max(1, n_episodes // 20)))
+
+
+def _pyplot() -> Any:
+    try:
+        import matplotlib
+    except ImportError:
+        raise dependency_not_installed("matplotlib", "render", "learning-curve plots") from None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_learning_curve(episodes: Episodes, path: Path, title: str) -> None:
+    """Episode returns against env steps, with their rolling mean."""
+    plt = _pyplot()
+    window = default_window(len(episodes.returns))
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot(episodes.steps, episodes.returns, ".", ms=2, alpha=0.3, label="episode return")
+    if len(episodes.returns):
+        smooth = rolling_mean(episodes.returns, window)
+        ax.plot(episodes.steps, smooth, lw=2, label=f"mean of last {window}")
+    ax.set(xlabel="env steps", ylabel="return", title=title)
+    ax.legend(loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+class Band(NamedTuple):
+    """One variant's curve on a step grid: mean and the 95% interval over seeds."""
+
+    label: str
+    steps: np.ndarray  # [G]
+    mean: np.ndarray  # [G]
+    low: np.ndarray  # [G] nan with one seed
+    high: np.ndarray  # [G]
+
+
+def variant_band(label: str, runs: list[Episodes], points: int = 100) -> Band | None:
+    """Each seed's rolling mean interpolated on a common step grid, then mean ± t-interval."""
+    from palaestra.cli.stats import confidence_interval
+
+    runs = [r for r in runs if len(r.returns)]
+    if not runs:
+        return None
+    start = max(int(r.steps[0]) for r in runs)
+    end = min(int(r.steps[-1]) for r in runs)
+    grid = np.linspace(start, max(end, start), points)
+    curves = np.stack(
+        [
+            np.interp(grid, r.steps, rolling_mean(r.returns, default_window(len(r.returns))))
+            for r in runs
+        ]
+    )  # [seeds, G]
+    stats = np.array([confidence_interval(list(col)) for col in curves.T])  # [G, 3]
+    return Band(label, grid, stats[:, 0], stats[:, 1], stats[:, 2])
+
+
+def plot_compare(bands: list[Band], path: Path, title: str) -> None:
+    """Every variant's mean curve with its 95% confidence band, on one plot."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for band in bands:
+        (line,) = ax.plot(band.steps, band.mean, lw=2, label=band.label)
+        if not all(math.isnan(v) for v in band.low):
+            ax.fill_between(band.steps, band.low, band.high, color=line.get_color(), alpha=0.2)
+    ax.set(xlabel="env steps", ylabel="return (rolling mean)", title=title)
+    ax.legend(loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

@@ -1,0 +1,100 @@
+"""``palaestra envs``: the registered ids with their spaces, reward thresholds and time limits.
+
+Classic-control envs are built (unwrapped, no rendering: microseconds) to read their spaces.
+Atari envs are not: loading a ROM takes ale-py and time, so their spaces are described from
+the registration kwargs, and the rows are marked.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+from typing import Any
+
+__all__ = ["add_parser", "env_rows", "run"]
+
+_ATARI_ENTRY = "palaestra.envs.atari."
+_ATARI_OBS = {
+    "rgb": "Box(0, 255, (210, 160, 3), uint8)",
+    "grayscale": "Box(0, 255, (210, 160), uint8)",
+    "ram": "Box(0, 255, (128,), uint8)",
+}
+
+
+def _spaces(spec: Any) -> tuple[str, str, bool]:
+    """``(observation space, action space, is_atari)`` as text."""
+    entry = spec.entry_point
+    if isinstance(entry, str) and entry.startswith(_ATARI_ENTRY):
+        obs = _ATARI_OBS.get(spec.kwargs.get("obs_type", "rgb"), "?")
+        full = spec.kwargs.get("full_action_space", False)
+        return obs, "Discrete(18)" if full else "Discrete(<=18)", True
+    from palaestra.envs.registration import load_env_creator
+
+    try:
+        creator = load_env_creator(entry) if isinstance(entry, str) else entry
+        env = creator(**spec.kwargs)
+    except Exception:  # a third-party entry point may fail in any way: show the row anyway
+        return "?", "?", False
+    try:
+        return str(env.observation_space), str(env.action_space), False
+    finally:
+        env.close()
+
+
+def env_rows(text: str | None = None) -> list[tuple[str, str, str, str, str, bool]]:
+    """``(id, observation, action, reward threshold, max steps, is_atari)`` for each
+    registered id whose id contains ``text`` (case-insensitive)."""
+    import palaestra
+
+    rows = []
+    for env_id, spec in palaestra.registry.items():
+        if text and text.lower() not in env_id.lower():
+            continue
+        obs, act, atari = _spaces(spec)
+        threshold = "-" if spec.reward_threshold is None else f"{spec.reward_threshold:g}"
+        limit = "-" if spec.max_episode_steps is None else str(spec.max_episode_steps)
+        rows.append((env_id, obs, act, threshold, limit, atari))
+    return sorted(rows, key=lambda r: (r[5], r[0].lower()))  # Atari after the others
+
+
+def add_parser(sub: Any) -> None:
+    """Register ``envs`` on the subcommand parsers."""
+    p = sub.add_parser(
+        "envs",
+        help="list the registered env ids",
+        description="List the registered env ids with their observation and action spaces, "
+        "reward thresholds and time limits. Atari ids (marked *) need ale-py to run.",
+    )
+    p.add_argument(
+        "--filter",
+        metavar="TEXT",
+        help="only ids containing TEXT (case-insensitive), e.g. --filter cart",
+    )
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """The ``envs`` command."""
+    rows = env_rows(args.filter)
+    if not rows:
+        print(f"no registered env id contains {args.filter!r}")
+        return 0
+    # The observation space goes last: a Box's bounds can be long.
+    header = ("id", "action space", "threshold", "max steps", "observation space")
+    table = [(f"{r[0]} *" if r[5] else r[0], r[2], r[3], r[4], r[1]) for r in rows]
+    widths = [max(len(h), *(len(t[i]) for t in table)) for i, h in enumerate(header)]
+    line = "  ".join(f"{{:<{w}}}" for w in widths)
+    print(line.format(*header).rstrip())
+    print("  ".join("-" * w for w in widths))
+    for t in table:
+        print(line.format(*t).rstrip())
+    n_atari = sum(r[5] for r in rows)
+    if n_atari:
+        have = importlib.util.find_spec("ale_py") is not None
+        state = "installed" if have else 'not installed: pip install "palaestra[atari]"'
+        print(
+            f"\n* {n_atari} Atari ids: need ale-py ({state}); spaces shown without loading the "
+            "ROM (the minimal action set has up to 18 actions, depending on the game)"
+        )
+    print(f"{len(rows)} env ids")
+    return 0

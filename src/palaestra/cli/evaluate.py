@@ -1,0 +1,238 @@
+"""``palaestra eval``: play a saved model and report returns, success and episode lengths.
+
+Also the pieces ``record`` and ``train`` reuse: loading a model file of either algorithm,
+finding the env it was trained on, and the episode loop.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from palaestra.cli.common import (
+    NORMALIZE_FILE,
+    CLIError,
+    find_run_config,
+    is_goal_env,
+    model_file,
+)
+
+__all__ = ["Played", "add_parser", "ascii_histogram", "load_model", "play", "run"]
+
+
+class Played(NamedTuple):
+    """What ``play`` saw: one entry per episode, and the frames when asked for."""
+
+    returns: list[float]
+    lengths: list[int]
+    terminated: list[bool]
+    frames: list[np.ndarray]
+
+
+def load_model(path: Path, device: str = "auto") -> Any:
+    """A DQN or PPO model; the algorithm comes from the file's own metadata."""
+    from palaestra.algos import DQN, PPO
+    from palaestra.algos.model_io import read_archive
+
+    meta, _ = read_archive(path, "model")
+    classes: dict[str, Any] = {"DQN": DQN, "PPO": PPO}
+    algo = meta.get("algo")
+    if algo not in classes:
+        raise CLIError(f"{str(path)!r} holds a {algo!r} model", "palaestra trains DQN and PPO")
+    return classes[algo].load(path, device=device)
+
+
+def model_env_id(path: Path, env: str | None) -> tuple[str, dict[str, Any]]:
+    """``(env id, env kwargs)``: ``--env`` if given, else the run's ``config.json``."""
+    config = find_run_config(path)
+    kwargs = dict(config.get("env_kwargs") or {}) if config else {}
+    if env is not None:
+        if config and config.get("env_id") != env:
+            kwargs = {}  # another env: the run's env kwargs need not apply
+        return env, kwargs
+    if config is None or not isinstance(config.get("env_id"), str):
+        raise CLIError(
+            f"cannot tell which env {str(path)!r} was trained on (no config.json beside it)",
+            "pass --env ID",
+        )
+    return config["env_id"], kwargs
+
+
+def make_env(env_id: str, kwargs: dict[str, Any], render: bool = False) -> Any:
+    """``palaestra.make`` with the run's kwargs (``render_mode="rgb_array"`` to record)."""
+    import palaestra
+
+    if render:
+        kwargs = {**kwargs, "render_mode": "rgb_array"}
+    return palaestra.make(env_id, **kwargs)
+
+
+def check_spaces(model: Any, env: Any, env_id: str) -> None:
+    """``CLIError`` when the model was trained on other spaces than ``env`` has."""
+    for what, ours, theirs in (
+        ("observations", model.observation_space, env.observation_space),
+        ("actions", model.action_space, env.action_space),
+    ):
+        if ours != theirs:
+            raise CLIError(
+                f"the model expects {what} {ours} but {env_id} has {theirs}",
+                "pass --env with the env the model was trained on",
+            )
+
+
+def obs_normalizer(path: Path, env_id: str) -> Any:
+    """The run's saved observation normalisation (``normalize`` presets), or None."""
+    stats = path.parent / NORMALIZE_FILE
+    if not stats.is_file():
+        return None
+    from palaestra.vec_env import VecNormalize, make_vec_env
+
+    normalizer = VecNormalize.load(str(stats), make_vec_env(env_id, n_envs=1))
+    normalizer.training = False
+    return normalizer.normalize_obs
+
+
+def play(
+    model: Any,
+    env: Any,
+    episodes: int,
+    deterministic: bool = True,
+    seed: int | None = 0,
+    record: bool = False,
+    normalize: Any = None,
+) -> Played:
+    """Run ``episodes`` episodes; the first reset gets ``seed``, later ones continue its
+    generator (as ``evaluate_policy`` after ``env.reset(seed=seed)``)."""
+    out = Played([], [], [], [])
+    obs, _ = env.reset(seed=seed)
+    for episode in range(episodes):
+        if episode:
+            obs, _ = env.reset()
+        if record:
+            out.frames.append(env.render())
+        total, length, terminated, truncated = 0.0, 0, False, False
+        while not (terminated or truncated):
+            action, _ = model.predict(
+                obs if normalize is None else normalize(obs), deterministic=deterministic
+            )
+            obs, reward, terminated, truncated, _ = env.step(action)
+            total += float(reward)
+            length += 1
+            if record:
+                out.frames.append(env.render())
+        out.returns.append(total)
+        out.lengths.append(length)
+        out.terminated.append(bool(terminated))
+    return out
+
+
+def ascii_histogram(values: list[int], bins: int = 10, width: int = 40) -> list[str]:
+    """Rows ``"lo-hi | ####  count"`` over at most ``bins`` bins of whole numbers.
+
+    >>> print("\\n".join(ascii_histogram([10, 10, 11, 14], bins=3, width=4)))
+      10-11 | ####  3
+      12-13 |       0
+      14-15 | #     1
+    """
+    data = np.asarray(values, dtype=np.int64)
+    lo, hi = int(data.min()), int(data.max())
+    step = max(1, -(-(hi - lo + 1) // bins))  # ceil: every value lands in one of <= bins bins
+    counts = np.bincount((data - lo) // step)
+    labels = [
+        str(lo + i * step) if step == 1 else f"{lo + i * step}-{lo + (i + 1) * step - 1}"
+        for i in range(len(counts))
+    ]
+    label_width = max(len(label) for label in labels)
+    peak = int(counts.max())
+    return [
+        f"  {label:>{label_width}} | {'#' * round(width * count / peak):<{width}}  {count}"
+        for label, count in zip(labels, counts)
+    ]
+
+
+def summary_lines(played: Played, env_id: str) -> list[str]:
+    """Mean ± std return and, for goal envs, the success rate."""
+    returns = np.asarray(played.returns)
+    lines = [f"mean return: {returns.mean():.2f} ± {returns.std():.2f}"]
+    if is_goal_env(env_id):
+        wins = sum(played.terminated)
+        rate = 100.0 * wins / len(returns)
+        lines.append(f"success rate: {rate:.1f}% ({wins}/{len(returns)} episodes reached the goal)")
+    return lines
+
+
+def add_parser(sub: Any) -> None:
+    """Register ``eval`` on the subcommand parsers."""
+    p = sub.add_parser(
+        "eval",
+        help="evaluate a saved model",
+        description="Play a saved model and print its mean ± std return, its success rate "
+        "(goal envs such as MountainCar: an episode that terminates before the time limit "
+        "succeeded) and a histogram of episode lengths.",
+    )
+    p.add_argument("model", metavar="MODEL", help="a model.zip, or a run folder holding one")
+    p.add_argument(
+        "--episodes", type=int, default=10, metavar="N", help="episodes to play (default: 10)"
+    )
+    p.add_argument(
+        "--env",
+        metavar="ID",
+        help="env id to play on (default: the env in the run's config.json)",
+    )
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument(
+        "--deterministic",
+        dest="deterministic",
+        action="store_true",
+        default=True,
+        help="greedy actions (the default)",
+    )
+    mode.add_argument(
+        "--stochastic",
+        dest="deterministic",
+        action="store_false",
+        help="sample actions from the policy (DQN: epsilon-greedy at its final epsilon)",
+    )
+    p.add_argument(
+        "--seed", type=int, default=0, metavar="S", help="seed of the first reset (default: 0)"
+    )
+    p.add_argument(
+        "--device", default="auto", metavar="DEV", help="torch device: auto (default), cpu, cuda"
+    )
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """The ``eval`` command."""
+    if args.episodes < 1:
+        raise CLIError(f"--episodes must be at least 1, got {args.episodes}", "e.g. --episodes 10")
+    path = model_file(args.model)
+    env_id, env_kwargs = model_env_id(path, args.env)
+    model = load_model(path, args.device)
+    env = make_env(env_id, env_kwargs)
+    check_spaces(model, env, env_id)
+    played = play(
+        model,
+        env,
+        args.episodes,
+        args.deterministic,
+        args.seed,
+        False,
+        obs_normalizer(path, env_id),
+    )
+    env.close()
+    kind = "deterministic" if args.deterministic else "stochastic"
+    print(
+        f"{type(model).__name__} {path} on {env_id}: {args.episodes} episodes, {kind}, "
+        f"seed {args.seed}"
+    )
+    for line in summary_lines(played, env_id):
+        print(line)
+    lengths = played.lengths
+    print(f"episode lengths (min {min(lengths)}, mean {np.mean(lengths):.1f}, max {max(lengths)}):")
+    for row in ascii_histogram(lengths):
+        print(row)
+    return 0

@@ -1,0 +1,169 @@
+"""Callbacks ``palaestra train`` adds to ``learn``: the episode log behind the learning curve,
+the live progress line, and the graceful stop on Ctrl-C."""
+
+from __future__ import annotations
+
+import csv
+import signal
+import sys
+import time
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+import numpy as np
+
+from palaestra.algos.callbacks import BaseCallback
+from palaestra.algos.logger import CSVOutputFormat
+
+__all__ = ["AppendingCSV", "EpisodeLog", "GracefulStop", "LiveProgress", "format_duration"]
+
+EPISODE_COLUMNS = ("steps", "return", "length", "terminated")
+
+
+class EpisodeLog(BaseCallback):
+    """Append one row per finished episode to ``episodes.csv``: the env step count when it
+    ended, its return and length, and whether it terminated (rather than hit a time limit)."""
+
+    def __init__(self, path: Path) -> None:
+        super().__init__()
+        new = not path.exists() or path.stat().st_size == 0
+        self.file = open(path, "a", newline="", encoding="utf-8")
+        self.writer = csv.writer(self.file)
+        if new:
+            self.writer.writerow(EPISODE_COLUMNS)
+
+    def _on_step(self) -> bool:
+        dones = self.locals.get("dones")
+        if dones is not None and np.any(dones):
+            for info, done in zip(self.locals["infos"], dones):
+                episode = info.get("episode") if done else None
+                if episode is not None:
+                    terminated = not info.get("TimeLimit.truncated", False)
+                    row = (self.num_timesteps, float(episode["r"]), int(episode["l"]), terminated)
+                    self.writer.writerow([*row[:3], int(row[3])])
+        return True
+
+    def _on_training_end(self) -> None:
+        self.file.flush()
+
+    def close(self) -> None:
+        """Flush and close the file (also after an interrupted ``learn``)."""
+        self.file.close()
+
+
+def format_duration(seconds: float) -> str:
+    """``3725.2`` -> ``"1:02:05"``."""
+    if not np.isfinite(seconds):
+        return "?"
+    whole = round(seconds)
+    return f"{whole // 3600}:{whole % 3600 // 60:02d}:{whole % 60:02d}"
+
+
+class LiveProgress(BaseCallback):
+    """A tqdm bar (``mode="bar"``) or a plain line every ``interval`` seconds (``"line"``) on
+    stderr: steps, fps, mean return of the recent episodes, time left."""
+
+    def __init__(self, total: int, mode: str = "bar", interval: float = 2.0) -> None:
+        super().__init__()
+        self.total, self.mode, self.interval = total, mode, interval
+        self.bar: Any = None
+        self._start_time = self._last_print = 0.0
+        self._start_steps = 0
+
+    def _mean_return(self) -> float:
+        buffer = self.model.ep_info_buffer
+        return float(np.mean([e["r"] for e in buffer])) if buffer else float("nan")
+
+    def _on_training_start(self) -> None:
+        self._start_time = self._last_print = time.perf_counter()
+        self._start_steps = self.model.num_timesteps
+        if self.mode == "bar":
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(
+                total=self.total,
+                initial=self._start_steps,
+                unit="step",
+                unit_scale=True,
+                dynamic_ncols=True,
+                file=sys.stderr,
+                mininterval=0.5,
+            )
+
+    def _on_step(self) -> bool:
+        now = time.perf_counter()
+        if self.bar is not None:
+            self.bar.update(self.model.num_timesteps - self.bar.n)
+            if now - self._last_print >= 1.0:
+                self._last_print = now
+                self.bar.set_postfix_str(f"mean return {self._mean_return():.2f}", refresh=False)
+        elif self.mode == "line" and now - self._last_print >= self.interval:
+            self._last_print = now
+            print(self.status_line(now), file=sys.stderr, flush=True)
+        return True
+
+    def status_line(self, now: float) -> str:
+        """``"  4,096/10,000 steps | 2,310 fps | mean return -200.00 | ETA 0:00:03"``."""
+        steps = self.model.num_timesteps
+        fps = (steps - self._start_steps) / max(now - self._start_time, 1e-9)
+        left = (self.total - steps) / fps if fps > 0 else float("inf")
+        return (
+            f"{steps:>9,}/{self.total:,} steps | {fps:,.0f} fps | "
+            f"mean return {self._mean_return():.2f} | ETA {format_duration(max(left, 0.0))}"
+        )
+
+    def _on_training_end(self) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Finish the bar (idempotent)."""
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+class GracefulStop(BaseCallback):
+    """The first Ctrl-C asks ``learn`` to stop at the next env step (so the model is saved
+    between two consistent steps); a second one interrupts at once."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.requested = False
+        self._previous: Any = None
+
+    def install(self) -> None:
+        """Take over SIGINT (main thread only; elsewhere Ctrl-C stays a KeyboardInterrupt)."""
+        try:
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+        except ValueError:  # not the main thread
+            self._previous = None
+
+    def uninstall(self) -> None:
+        """Give SIGINT back to whoever had it."""
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
+
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        print("\nstopping at the next step (Ctrl-C again to stop now)", file=sys.stderr)
+
+    def _on_step(self) -> bool:
+        return not self.requested
+
+
+class AppendingCSV(CSVOutputFormat):
+    """``progress.csv`` that a resumed run extends instead of overwriting."""
+
+    def __init__(self, filename: str) -> None:
+        path = Path(filename)
+        if not path.exists() or path.stat().st_size == 0:
+            super().__init__(filename)
+            return
+        self.file = open(filename, "r+", encoding="utf-8")
+        header = self.file.readline().strip()
+        self.keys = header.split(",") if header else []
+        self.file.seek(0, 2)

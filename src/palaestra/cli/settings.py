@@ -1,0 +1,188 @@
+"""The settings of a training run: preset, then ``--config`` file, then ``--set key=value``.
+
+Settings are plain data in the preset format (``policy``, ``n_envs``, ``n_timesteps``,
+``hyperparams``, ``env_kwargs``, ``normalize``) plus ``seed``; ``config.json`` records them
+exactly as resolved, so a run's ``config.json`` is itself a valid ``--config`` file.
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+from pathlib import Path
+from typing import Any
+
+from palaestra import presets
+from palaestra.cli.common import CLIError, parse_value
+
+__all__ = ["ALGOS", "algo_class", "hyperparameter_names", "load_config_file", "resolve_settings"]
+
+ALGOS = ("dqn", "ppo")
+# Constructor arguments the CLI sets itself (or that make no sense from a command line).
+_NOT_HYPERPARAMS = {"self", "policy", "env", "_init_setup_model", "verbose", "seed", "device"}
+_NOT_HYPERPARAMS |= {"tensorboard_log"}
+# Keys a --config file may carry that describe the run rather than configure it.
+_RUN_KEYS = {"algo", "env_id", "preset", "device", "palaestra_version", "measured"}
+_TOP_KEYS = (*presets.SETTINGS_KEYS, "seed")
+
+
+def check_algo(algo: str) -> str:
+    """``"PPO"`` -> ``"ppo"``; ``CLIError`` for anything but dqn/ppo."""
+    key = algo.lower()
+    if key not in ALGOS:
+        raise CLIError(f"unknown algorithm {algo!r}", f"choose one of: {', '.join(ALGOS)}")
+    return key
+
+
+def algo_class(algo: str) -> Any:
+    """``DQN`` or ``PPO`` (imports torch)."""
+    from palaestra import algos
+
+    return {"dqn": algos.DQN, "ppo": algos.PPO}[check_algo(algo)]
+
+
+def hyperparameter_names(algo: str) -> list[str]:
+    """Constructor keywords that ``hyperparams`` (and ``--set``) may name."""
+    params = inspect.signature(algo_class(algo).__init__).parameters
+    return sorted(name for name in params if name not in _NOT_HYPERPARAMS)
+
+
+def load_config_file(path: str) -> dict[str, Any]:
+    """A ``.json``, ``.yaml`` or ``.yml`` file holding one mapping."""
+    file = Path(path)
+    suffix = file.suffix.lower()
+    if suffix not in (".json", ".yaml", ".yml"):
+        raise CLIError(f"config file {path!r} has an unknown suffix", "use .json, .yaml or .yml")
+    try:
+        text = file.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CLIError(f"no config file at {path!r}", "check the path") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CLIError(f"cannot read config file {path!r}: {exc}", "check the file") from None
+    if suffix == ".json":
+        try:
+            data = json.loads(text)
+        except ValueError as exc:
+            raise CLIError(f"malformed JSON in {path!r}: {exc}", "fix the file") from None
+    else:
+        try:
+            import yaml
+        except ImportError:
+            raise CLIError(
+                f"reading the YAML config {path!r} needs PyYAML",
+                "pip install pyyaml, or write the config as JSON",
+                code=1,
+            ) from None
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            where = getattr(exc, "problem_mark", None)
+            at = f" at line {where.line + 1}, column {where.column + 1}" if where else ""
+            problem = getattr(exc, "problem", None) or type(exc).__name__
+            raise CLIError(f"malformed YAML in {path!r}{at}: {problem}", "fix the file") from None
+    if not isinstance(data, dict):
+        raise CLIError(
+            f"config file {path!r} holds a {type(data).__name__}, not a mapping",
+            "write keys such as hyperparams, n_envs, n_timesteps at the top level",
+        )
+    return data
+
+
+def _valid_keys(algo: str) -> list[str]:
+    return sorted({*_TOP_KEYS, *hyperparameter_names(algo)} - {"hyperparams"})
+
+
+def _split(algo: str, data: dict[str, Any], source: str) -> dict[str, Any]:
+    """A flat or preset-shaped mapping -> settings (hyperparameters under ``hyperparams``)."""
+    names = set(hyperparameter_names(algo))
+    out: dict[str, Any] = {}
+    hyper: dict[str, Any] = {}
+    nested = data.get("hyperparams", {})
+    if not isinstance(nested, dict):
+        raise CLIError(f"{source}: hyperparams must be a mapping, got {nested!r}", "fix it")
+    for key, value in [*data.items(), *nested.items()]:
+        if key == "hyperparams" or key in _RUN_KEYS:
+            continue
+        if key in _TOP_KEYS:
+            out[key] = value
+        elif key in names:
+            hyper[key] = value
+        else:
+            raise CLIError(
+                f"{source}: unknown {algo} setting {key!r}",
+                f"valid keys: {', '.join(_valid_keys(algo))}",
+            )
+    if hyper:
+        out["hyperparams"] = hyper
+    return out
+
+
+def _check_run_keys(algo: str, env_id: str, data: dict[str, Any], source: str) -> None:
+    for key, expected in (("algo", algo), ("env_id", env_id)):
+        if key in data and str(data[key]).lower() != expected.lower():
+            raise CLIError(
+                f"{source} is for {key} {data[key]!r}, not {expected!r}",
+                f"remove its {key!r} key or train {data[key]}",
+            )
+
+
+def parse_set(algo: str, assignments: list[str]) -> dict[str, Any]:
+    """``["learning_starts=100", "policy_kwargs.net_arch=[64,64]"]`` -> nested settings."""
+    data: dict[str, Any] = {}
+    for item in assignments:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise CLIError(f"--set {item!r} is not key=value", "e.g. --set learning_rate=0.001")
+        parts = key.split(".")
+        if parts[0] == "hyperparams":
+            parts = parts[1:]
+        if not parts or not all(parts):
+            raise CLIError(f"--set {item!r}: malformed key {key!r}", "e.g. policy_kwargs.net_arch")
+        if parts[0] not in {*_TOP_KEYS, *hyperparameter_names(algo)} - {"hyperparams"}:
+            raise CLIError(
+                f"unknown --set key {parts[0]!r} for {algo}",
+                f"valid keys: {', '.join(_valid_keys(algo))}",
+            )
+        node = data
+        for part in parts[:-1]:
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                raise CLIError(f"--set {item!r} conflicts with an earlier --set", "set it once")
+            node = child
+        node[parts[-1]] = parse_value(text)
+    return _split(algo, data, "--set")
+
+
+def resolve_settings(
+    algo: str,
+    env_id: str,
+    preset: str | None,
+    config: str | None,
+    assignments: list[str],
+) -> tuple[dict[str, Any], str | None, list[str]]:
+    """``(settings, preset name used or None, notes for the user)``."""
+    notes: list[str] = []
+    if preset is not None:
+        try:
+            settings = presets.get_preset(algo, env_id, preset)
+        except presets.PresetError as exc:
+            raise CLIError(str(exc), "pick another --preset, or drop it") from None
+        used: str | None = preset
+    elif presets.has_preset(algo, env_id):
+        settings, used = presets.get_preset(algo, env_id), "default"
+    else:
+        settings, used = presets.base_settings(), None
+        notes.append(
+            f"no preset for {algo} on {env_id}: using the {algo.upper()} defaults "
+            f"and {settings['n_timesteps']:,} steps"
+        )
+    settings.pop("measured", None)
+    settings = {**presets.base_settings(), **settings}
+    if config is not None:
+        data = load_config_file(config)
+        _check_run_keys(algo, env_id, data, f"config file {config!r}")
+        settings = presets.merge(settings, _split(algo, data, f"config file {config!r}"))
+    if assignments:
+        settings = presets.merge(settings, parse_set(algo, assignments))
+    return settings, used, notes

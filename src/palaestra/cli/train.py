@@ -1,0 +1,469 @@
+"""``palaestra train``: train DQN or PPO from a preset, a config file and ``--set`` overrides,
+into a run folder that ``eval``, ``record``, ``compare`` and ``--resume`` read.
+
+Run folder: ``config.json`` (resolved settings), ``status.json`` (steps done, total, wall
+time), ``progress.csv`` (SB3's log), ``episodes.csv`` (every episode: steps, return, length,
+terminated), ``model.zip``, ``replay_buffer.zip`` (DQN), ``checkpoints/``,
+``learning_curve.png``, ``tb/`` (when tensorboard is installed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from palaestra.cli import settings as settings_mod
+from palaestra.cli.common import (
+    CONFIG_FILE,
+    EPISODES_FILE,
+    MODEL_FILE,
+    NORMALIZE_FILE,
+    REPLAY_FILE,
+    STATUS_FILE,
+    CLIError,
+    eprint,
+    is_goal_env,
+    read_json,
+    write_json,
+)
+
+__all__ = ["EXTRA_CALLBACKS", "add_parser", "run"]
+
+# Test hook: callbacks added to every ``learn`` call (e.g. one that raises KeyboardInterrupt).
+EXTRA_CALLBACKS: list[Any] = []
+
+
+def add_parser(sub: Any) -> None:
+    """Register ``train`` on the subcommand parsers."""
+    p = sub.add_parser(
+        "train",
+        help="train DQN or PPO on an env",
+        description="Train an agent. Settings come from the preset (the 'default' preset when "
+        "one exists for ALGO and ENV, else the algorithm's defaults), overridden by --config, "
+        "then by --set, then by --n-envs/--timesteps/--seed. Ctrl-C saves a checkpoint that "
+        "--resume continues.",
+    )
+    p.add_argument("algo", nargs="?", metavar="ALGO", help="dqn or ppo (any case)")
+    p.add_argument("env", nargs="?", metavar="ENV", help="env id, e.g. CartPole-v1")
+    p.add_argument("--preset", metavar="NAME", help="preset name (default: 'default' if any)")
+    p.add_argument(
+        "--config",
+        metavar="FILE",
+        help="settings file, .json or .yaml (PyYAML): preset keys (hyperparams, n_envs, "
+        "n_timesteps, policy, env_kwargs, normalize, seed) or hyperparameters at top level",
+    )
+    p.add_argument("--n-envs", type=int, metavar="N", help="number of parallel envs")
+    p.add_argument("--timesteps", type=int, metavar="N", help="total env steps to train for")
+    p.add_argument("--seed", type=int, metavar="S", help="random seed (default: none)")
+    p.add_argument(
+        "--out", metavar="DIR", help="run folder (default: runs/<algo>-<env>-<timestamp>)"
+    )
+    p.add_argument(
+        "--set",
+        dest="assignments",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override one setting; repeatable; VALUE is JSON or a Python literal; dotted "
+        "keys reach inside dicts, e.g. policy_kwargs.net_arch=[128,128]",
+    )
+    p.add_argument(
+        "--resume",
+        metavar="DIR",
+        help="continue the run in DIR (after Ctrl-C, or to a larger --timesteps) with its "
+        "saved settings, model and replay buffer",
+    )
+    p.add_argument(
+        "--device", default="auto", metavar="DEV", help="torch device: auto (default), cpu, cuda"
+    )
+    p.add_argument(
+        "--checkpoint-every",
+        type=int,
+        metavar="N",
+        help="save checkpoints/model_<steps>_steps.zip every N steps (default: a tenth of "
+        "the budget; 0: never)",
+    )
+    p.add_argument(
+        "--eval-episodes",
+        type=int,
+        default=10,
+        metavar="N",
+        help="deterministic evaluation episodes at the end (default: 10; 0: skip)",
+    )
+    p.add_argument(
+        "--progress",
+        choices=("auto", "bar", "line", "none"),
+        default="auto",
+        help="live progress: a tqdm bar, a plain line every 2 s, or nothing "
+        "(default auto: the bar when tqdm is installed)",
+    )
+    p.add_argument(
+        "--verbose", action="store_true", help="also print the SB3-style log table to stdout"
+    )
+    p.set_defaults(func=run)
+
+
+# -- settings ----------------------------------------------------------------------------------
+def _positive_int(value: Any, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise CLIError(f"{what} must be a positive integer, got {value!r}", f"fix {what}")
+    return value
+
+
+def _check_settings(settings: dict[str, Any]) -> None:
+    _positive_int(settings["n_envs"], "n_envs")
+    _positive_int(settings["n_timesteps"], "n_timesteps")
+    seed = settings.get("seed")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
+        raise CLIError(f"seed must be an integer, got {seed!r}", "fix seed")
+    if not isinstance(settings["policy"], str):
+        raise CLIError(f"policy must be a name, got {settings['policy']!r}", "e.g. MlpPolicy")
+    if not isinstance(settings.get("env_kwargs") or {}, dict):
+        raise CLIError(f"env_kwargs must be a mapping, got {settings['env_kwargs']!r}", "fix it")
+    if not isinstance(settings.get("normalize", False), (bool, dict)):
+        raise CLIError(
+            f"normalize must be true/false or VecNormalize kwargs, got {settings['normalize']!r}",
+            "fix it",
+        )
+
+
+def _new_run_config(args: argparse.Namespace) -> tuple[dict[str, Any], list[str]]:
+    if args.algo is None or args.env is None:
+        raise CLIError("train needs ALGO and ENV", "e.g. palaestra train ppo CartPole-v1")
+    algo = settings_mod.check_algo(args.algo)
+    import palaestra
+
+    palaestra.spec(args.env)  # an unknown id fails here, with Gymnasium's "did you mean"
+    settings, preset, notes = settings_mod.resolve_settings(
+        algo, args.env, args.preset, args.config, args.assignments
+    )
+    for flag, key in (("n_envs", "n_envs"), ("timesteps", "n_timesteps"), ("seed", "seed")):
+        if getattr(args, flag) is not None:
+            settings[key] = getattr(args, flag)
+    settings.setdefault("seed", None)
+    _check_settings(settings)
+    config = {
+        "algo": algo,
+        "env_id": args.env,
+        "preset": preset,
+        **settings,
+        "device": args.device,
+        "palaestra_version": palaestra.__version__,
+    }
+    return config, notes
+
+
+def _resumed_config(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
+    given = [
+        flag
+        for flag, value in (
+            ("--preset", args.preset),
+            ("--config", args.config),
+            ("--set", args.assignments),
+            ("--n-envs", args.n_envs),
+            ("--seed", args.seed),
+            ("--out", args.out),
+        )
+        if value
+    ]
+    if given:
+        raise CLIError(
+            f"--resume continues a run with its saved settings; "
+            f"{', '.join(given)} cannot change them",
+            "drop them, or start a new run",
+        )
+    config = read_json(run_dir / CONFIG_FILE, "run config")
+    for key, value in (("algo", args.algo), ("env_id", args.env)):
+        if value is not None and str(value).lower() != str(config.get(key)).lower():
+            raise CLIError(
+                f"{run_dir} is a run of {config.get(key)}, not {value}",
+                f"palaestra train --resume {run_dir}",
+            )
+    if args.timesteps is not None:
+        config["n_timesteps"] = args.timesteps
+    _check_settings(config)
+    return config
+
+
+def _default_out(algo: str, env_id: str) -> Path:
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    base = Path("runs") / f"{algo}-{env_id.replace('/', '_')}-{stamp}"
+    out, n = base, 1
+    while out.exists():
+        n += 1
+        out = base.with_name(f"{base.name}-{n}")
+    return out
+
+
+# -- building ----------------------------------------------------------------------------------
+def _make_env(config: dict[str, Any], run_dir: Path, resume: bool, seed: int | None) -> Any:
+    from palaestra.vec_env import VecNormalize, make_vec_env
+
+    venv = make_vec_env(
+        config["env_id"],
+        n_envs=config["n_envs"],
+        seed=seed,
+        env_kwargs=dict(config.get("env_kwargs") or {}),
+    )
+    normalize = config.get("normalize") or False
+    if normalize is False:
+        return venv
+    if resume and (run_dir / NORMALIZE_FILE).is_file():
+        return VecNormalize.load(str(run_dir / NORMALIZE_FILE), venv)
+    kwargs = dict(normalize) if isinstance(normalize, dict) else {}
+    kwargs.setdefault("gamma", config["hyperparams"].get("gamma", 0.99))
+    return VecNormalize(venv, **kwargs)
+
+
+def _make_model(config: dict[str, Any], venv: Any, run_dir: Path, resume: bool) -> Any:
+    from palaestra import presets
+    from palaestra.algos.model_io import ModelFileError
+
+    cls = settings_mod.algo_class(config["algo"])
+    if resume:
+        try:
+            model = cls.load(run_dir / MODEL_FILE, env=venv, device=config["device"])
+            if config["algo"] == "dqn" and (run_dir / REPLAY_FILE).is_file():
+                model.load_replay_buffer(run_dir / REPLAY_FILE)
+        except FileNotFoundError:
+            raise CLIError(f"{run_dir} has no {MODEL_FILE} to resume from", "check DIR") from None
+        except (ModelFileError, ValueError) as exc:
+            raise CLIError(f"cannot resume {run_dir}: {exc}", "start a new run") from None
+        return model
+    try:
+        hyper = presets.resolve(config["hyperparams"])
+        return cls(
+            config["policy"],
+            venv,
+            seed=config["seed"],
+            device=config["device"],
+            verbose=0,
+            **hyper,
+        )
+    except presets.PresetError as exc:
+        raise CLIError(str(exc), "fix the setting") from None
+    except (TypeError, ValueError, NotImplementedError, RuntimeError) as exc:
+        raise CLIError(
+            f"invalid {config['algo']} settings: {exc}", "check --set/--config values"
+        ) from None
+
+
+def _make_logger(run_dir: Path, verbose: bool) -> Any:
+    from palaestra.algos.logger import HumanOutputFormat, Logger, TensorBoardOutputFormat
+    from palaestra.cli.progress import AppendingCSV
+
+    formats: list[Any] = [AppendingCSV(str(run_dir / "progress.csv"))]
+    if importlib.util.find_spec("tensorboard") is not None:
+        formats.append(TensorBoardOutputFormat(str(run_dir / "tb")))
+    if verbose:
+        formats.append(HumanOutputFormat(sys.stdout))
+    return Logger(str(run_dir), formats)
+
+
+def _progress_mode(requested: str) -> str:
+    if requested != "auto":
+        if requested == "bar" and importlib.util.find_spec("tqdm") is None:
+            raise CLIError("--progress bar needs tqdm", 'pip install "palaestra[progress]"')
+        return requested
+    return "bar" if importlib.util.find_spec("tqdm") is not None else "line"
+
+
+# -- the command -------------------------------------------------------------------------------
+def run(args: argparse.Namespace) -> int:
+    """The ``train`` command."""
+    resume = args.resume is not None
+    notes: list[str] = []
+    if resume:
+        run_dir = Path(args.resume)
+        config = _resumed_config(args, run_dir)
+        status = read_json(run_dir / STATUS_FILE, "run status")
+    else:
+        config, notes = _new_run_config(args)
+        run_dir = Path(args.out) if args.out else _default_out(config["algo"], config["env_id"])
+        if (run_dir / CONFIG_FILE).exists():
+            raise CLIError(
+                f"{run_dir} already holds a run", f"choose another --out, or --resume {run_dir}"
+            )
+        status = {"num_timesteps": 0, "wall_time_s": 0.0}
+    if args.checkpoint_every is not None and args.checkpoint_every < 0:
+        raise CLIError(
+            f"--checkpoint-every must be >= 0, got {args.checkpoint_every}", "e.g. 10000"
+        )
+    if args.eval_episodes < 0:
+        raise CLIError(f"--eval-episodes must be >= 0, got {args.eval_episodes}", "e.g. 10")
+    progress_mode = _progress_mode(args.progress)
+    for note in notes:
+        eprint(f"note: {note}")
+
+    import torch
+
+    torch.set_num_threads(1)  # the small nets here are fastest on one thread
+    seed = config["seed"]
+    venv = _make_env(config, run_dir, resume, seed)
+    model = _make_model(config, venv, run_dir, resume)
+    total = config["n_timesteps"]
+    if resume:
+        if model.num_timesteps >= total:
+            raise CLIError(
+                f"{run_dir} already trained {model.num_timesteps:,} of its {total:,} steps",
+                f"pass --timesteps larger than {model.num_timesteps} to train further",
+            )
+        if seed is not None:
+            venv.seed(seed + model.num_timesteps)  # new episodes, not a replay of the first ones
+    run_dir.mkdir(parents=True, exist_ok=True)
+    write_json(run_dir / CONFIG_FILE, config)
+    return _train(args, config, status, model, run_dir, total, resume, progress_mode)
+
+
+def _train(
+    args: argparse.Namespace,
+    config: dict[str, Any],
+    status: dict[str, Any],
+    model: Any,
+    run_dir: Path,
+    total: int,
+    resume: bool,
+    progress_mode: str,
+) -> int:
+    from palaestra.algos.callbacks import CallbackList, CheckpointCallback
+    from palaestra.cli.progress import EpisodeLog, GracefulStop, LiveProgress
+
+    model.set_logger(_make_logger(run_dir, args.verbose))
+    episodes = EpisodeLog(run_dir / EPISODES_FILE)
+    stop = GracefulStop()
+    callbacks: list[Any] = [episodes, stop]
+    progress = None
+    if progress_mode != "none":
+        progress = LiveProgress(total, progress_mode)
+        callbacks.append(progress)
+    every = args.checkpoint_every if args.checkpoint_every is not None else total // 10
+    if every > 0:
+        callbacks.append(
+            CheckpointCallback(
+                max(every // model.n_envs, 1), str(run_dir / "checkpoints"), name_prefix="model"
+            )
+        )
+    callbacks.extend(EXTRA_CALLBACKS)
+    start_steps = model.num_timesteps
+    eprint(
+        f"training {config['algo']} on {config['env_id']} "
+        f"({model.n_envs} env{'s' * (model.n_envs > 1)}, preset {config.get('preset')}) "
+        f"{'from step ' + format(start_steps, ',') + ' ' if resume else ''}to {total:,} steps "
+        f"-> {run_dir}"
+    )
+    interrupted = False
+    stop.install()
+    start = time.perf_counter()
+    try:
+        model.learn(
+            total - start_steps,
+            callback=CallbackList(callbacks),
+            reset_num_timesteps=not resume,
+        )
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        seconds = time.perf_counter() - start
+        stop.uninstall()
+        episodes.close()
+        if progress is not None:
+            progress.close()
+        model.logger.close()
+    interrupted = interrupted or stop.requested
+    wall = float(status.get("wall_time_s", 0.0)) + seconds
+    _save(model, run_dir, config, total, wall, "interrupted" if interrupted else "finished")
+    if interrupted:
+        eprint(
+            f"palaestra: interrupted at {model.num_timesteps:,}/{total:,} steps; checkpoint "
+            f"saved in {run_dir} (resume with: palaestra train --resume {run_dir})"
+        )
+        return 130
+    _finish(args, config, model, run_dir, model.num_timesteps - start_steps, seconds)
+    return 0
+
+
+def _save(
+    model: Any, run_dir: Path, config: dict[str, Any], total: int, wall: float, state: str
+) -> None:
+    from palaestra.vec_env import VecNormalize
+
+    model.save(run_dir / MODEL_FILE)
+    if config["algo"] == "dqn":
+        model.save_replay_buffer(run_dir / REPLAY_FILE)
+    if isinstance(model.get_env(), VecNormalize):
+        model.get_env().save(str(run_dir / NORMALIZE_FILE))
+    write_json(
+        run_dir / STATUS_FILE,
+        {
+            "status": state,
+            "num_timesteps": int(model.num_timesteps),
+            "total_timesteps": int(total),
+            "wall_time_s": round(wall, 3),
+        },
+    )
+
+
+def _finish(
+    args: argparse.Namespace,
+    config: dict[str, Any],
+    model: Any,
+    run_dir: Path,
+    steps: int,
+    seconds: float,
+) -> None:
+    from palaestra.cli.curves import read_episodes
+    from palaestra.cli.evaluate import make_env, obs_normalizer, play, summary_lines
+    from palaestra.cli.progress import format_duration
+
+    env_id = config["env_id"]
+    written = [CONFIG_FILE, "progress.csv", EPISODES_FILE, MODEL_FILE]
+    print(
+        f"trained {config['algo']} on {env_id}: {model.num_timesteps:,} steps, "
+        f"wall time {format_duration(seconds)} ({seconds:.1f} s), {steps / seconds:,.0f} fps"
+    )
+    history = read_episodes(run_dir)
+    last = history.returns[-100:]
+    if len(last):
+        line = f"mean return over the last {len(last)} training episodes: {np.mean(last):.2f}"
+        if is_goal_env(env_id) and history.terminated is not None:
+            line += f", success {100 * np.mean(history.terminated[-100:]):.1f}%"
+        print(line)
+    else:
+        print("no training episode finished yet")
+    if args.eval_episodes > 0:
+        env = make_env(env_id, dict(config.get("env_kwargs") or {}))
+        played = play(
+            model,
+            env,
+            args.eval_episodes,
+            True,
+            0,
+            normalize=obs_normalizer(run_dir / MODEL_FILE, env_id),
+        )
+        env.close()
+        print(f"evaluation ({args.eval_episodes} episodes, deterministic, seed 0):")
+        for text in summary_lines(played, env_id):
+            print(f"  {text}")
+    from palaestra.cli.curves import plot_learning_curve
+    from palaestra.error import DependencyNotInstalled
+
+    try:
+        plot_learning_curve(
+            history, run_dir / "learning_curve.png", f"{config['algo'].upper()} on {env_id}"
+        )
+        written.append("learning_curve.png")
+    except DependencyNotInstalled:
+        eprint("note: matplotlib is not installed, so no learning_curve.png")
+    if config["algo"] == "dqn":
+        written.append(REPLAY_FILE)
+    if (run_dir / "checkpoints").is_dir():
+        written.append("checkpoints/")
+    if (run_dir / "tb").is_dir():
+        written.append("tb/")
+    print(f"wrote {run_dir}/: {', '.join(written)}")
