@@ -16,9 +16,12 @@ surprising, palaestra differs on purpose:
 - DQN draws one epsilon coin per env (SB3: one for all envs);
 - a function callback returning ``None`` keeps training (SB3 stops);
 - ``progress_bar=True`` needs tqdm only; channel-last images need no ``VecTransposeImage``;
-- small MLP policies act in numpy and train with one torch thread and fused Adam.
+- small MLP policies act in numpy and train with one torch thread and fused Adam;
+- DQN's ``optimize_memory_usage=True`` keeps each frame of stacked observations once (SB3
+  keeps it four times) and returns exact terminal observations, so it combines with
+  ``handle_timeout_termination`` (SB3 refuses the pair).
 
-Not supported yet: ``use_sde``, DQN's ``n_steps``/``optimize_memory_usage``, custom buffer
+Not supported yet: ``use_sde``, DQN's ``n_steps``, custom buffer
 classes, recurrent policies, VecNormalize-aware replay (observations are stored as the env
 returns them).
 """

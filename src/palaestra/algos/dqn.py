@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -12,6 +12,7 @@ from palaestra import spaces
 from palaestra.algos import model_io
 from palaestra.algos.base import BaseAlgorithm
 from palaestra.algos.dqn_math import dqn_loss, polyak_update
+from palaestra.algos.frame_replay_buffer import FrameReplayBuffer, frame_layout
 from palaestra.algos.numpy_dqn import NumpyDQNTrainer
 from palaestra.algos.policies import QNetwork, extractor_class
 from palaestra.algos.replay_buffer import ReplayBuffer
@@ -45,7 +46,10 @@ class DQN(BaseAlgorithm):
     (polyak with ``tau``); Huber loss; gradients clipped to ``max_grad_norm``; truncated
     episodes bootstrap. Changed: with several envs each env draws its own epsilon coin (SB3
     explores with all envs or none); resuming continues epsilon where it stopped.
-    ``num_threads`` sets torch's CPU threads (default 1 for MlpPolicy).
+    ``optimize_memory_usage=True`` stores each frame of stacked image observations once
+    (``FrameReplayBuffer``; exact, terminal observations included, so unlike SB3 it works with
+    ``handle_timeout_termination``). ``num_threads`` sets torch's CPU threads (default 1 for
+    MlpPolicy).
     """
 
     supported_action_spaces = (spaces.Discrete,)
@@ -81,10 +85,9 @@ class DQN(BaseAlgorithm):
         num_threads: int | None = None,
         _init_setup_model: bool = True,
     ) -> None:
-        if replay_buffer_class is not None or optimize_memory_usage or n_steps != 1:
-            raise NotImplementedError(
-                "replay_buffer_class, optimize_memory_usage and n_steps > 1 are not supported yet"
-            )
+        if replay_buffer_class is not None or n_steps != 1:
+            raise NotImplementedError("replay_buffer_class and n_steps > 1 are not supported yet")
+        self.optimize_memory_usage = bool(optimize_memory_usage)
         self.learning_rate, self.lr_schedule = learning_rate, as_schedule(learning_rate)
         self.buffer_size, self.learning_starts, self.batch_size = (
             buffer_size,
@@ -104,7 +107,7 @@ class DQN(BaseAlgorithm):
             exploration_initial_eps, exploration_final_eps, exploration_fraction
         )
         self.exploration_rate, self._n_calls = 0.0, 0
-        self.replay_buffer: ReplayBuffer | None = None
+        self.replay_buffer: ReplayBuffer | FrameReplayBuffer | None = None
         self._init_common(
             policy,
             env,
@@ -159,6 +162,17 @@ class DQN(BaseAlgorithm):
         self._make_replay_buffer()
 
     def _make_replay_buffer(self) -> None:
+        if self.optimize_memory_usage:
+            self.replay_buffer = FrameReplayBuffer(
+                self.buffer_size,
+                self.observation_space,
+                self.action_space,
+                self.n_envs,
+                self.device,
+                **{"layout": frame_layout(self.observation_space, self.env)}
+                | self.replay_buffer_kwargs,
+            )
+            return
         self.replay_buffer = ReplayBuffer(
             self.buffer_size,
             self.observation_space,
@@ -296,7 +310,7 @@ class DQN(BaseAlgorithm):
         start = int(self.action_space.start)
         if self._numpy_trainer is not None:
             mean_loss = self._numpy_trainer.train(
-                self.replay_buffer,
+                cast(ReplayBuffer, self.replay_buffer),  # both buffers have sample_arrays
                 gradient_steps,
                 batch_size,
                 self._rng,
@@ -350,6 +364,7 @@ class DQN(BaseAlgorithm):
             "seed": self.seed,
             "stats_window_size": self._stats_window_size,
             "replay_buffer_kwargs": self.replay_buffer_kwargs,
+            "optimize_memory_usage": self.optimize_memory_usage,
         }
 
     def _schedules(self) -> dict[str, Any]:

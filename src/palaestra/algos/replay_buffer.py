@@ -81,6 +81,12 @@ class ReplayBuffer:
         """Number of stored rows (each row holds one transition per env)."""
         return self.buffer_size if self.full else self.pos
 
+    def nbytes(self) -> int:
+        """Bytes of every array this buffer holds."""
+        stores = [self.observations, self.next_observations, self.actions]
+        arrays = [a for st in stores for a in (st.values() if isinstance(st, dict) else [st])]
+        return int(sum(a.nbytes for a in [*arrays, self.rewards, self.terminated]))
+
     def add(
         self,
         obs: Obs,
@@ -153,6 +159,11 @@ class ReplayBuffer:
 
     def load_state(self, meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
         """Restore from ``state()`` output; ``ValueError`` if it does not fit this buffer."""
+        if meta.get("kind") == "frames":
+            raise ValueError(
+                "the file holds a frame buffer (optimize_memory_usage=True); "
+                "this model uses optimize_memory_usage=False"
+            )
         if int(meta["n_envs"]) != self.n_envs:
             raise ValueError(
                 f"replay buffer was saved with n_envs={meta['n_envs']}, "
