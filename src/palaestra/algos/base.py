@@ -35,7 +35,16 @@ from palaestra.algos.schedules import Schedule
 from palaestra.algos.spaces_util import is_image_space, is_vectorized_observation
 from palaestra.core import Env, Wrapper
 
-__all__ = ["BaseAlgorithm"]
+__all__ = ["BaseAlgorithm", "resolve_device"]
+
+
+def resolve_device(device: torch.device | str, policy: str) -> torch.device:
+    """``"auto"``: cuda for CNN policies when available, else the CPU; anything else as given."""
+    if device == "auto":
+        # CNNs gain from a GPU; small MLPs are faster on the CPU (no transfers per step).
+        wants_gpu = policy in ("CnnPolicy", "MultiInputPolicy")
+        return torch.device("cuda" if wants_gpu and torch.cuda.is_available() else "cpu")
+    return torch.device(device)
 
 
 def _safe_mean(values: list[float]) -> float:
@@ -169,11 +178,7 @@ class BaseAlgorithm:
 
     # -- device, seeding ---------------------------------------------------------------------
     def _resolve_device(self, device: torch.device | str, policy: str) -> torch.device:
-        if device == "auto":
-            # CNNs gain from a GPU; small MLPs are faster on the CPU (no transfers per step).
-            wants_gpu = policy in ("CnnPolicy", "MultiInputPolicy")
-            return torch.device("cuda" if wants_gpu and torch.cuda.is_available() else "cpu")
-        return torch.device(device)
+        return resolve_device(device, policy)
 
     def set_random_seed(self, seed: int | None = None) -> None:
         """Seed torch, this model's generator, the action space and the env's next reset."""
