@@ -34,6 +34,8 @@ _LAZY: dict[str, str] = {
     "NormalizeObservation": "stateful_observation",
     "MaxAndSkipObservation": "stateful_observation",
     "FrameStackObservation": "frame_stack",
+    "AtariPreprocessing": "atari_preprocessing",
+    "AtariWrapper": "atari",  # SB3's; its parts are in palaestra.wrappers.atari
     # actions
     "TransformAction": "transform_action",
     "ClipAction": "transform_action",
