@@ -6,7 +6,7 @@ engines of :mod:`palaestra.vector`; ``make_vec_env`` picks the native batch for 
 
 from palaestra.vec_env.base import VecEnv, VecEnvWrapper
 from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
-from palaestra.vec_env.env_util import make_vec_env
+from palaestra.vec_env.env_util import make_atari_env, make_vec_env
 from palaestra.vec_env.image import VecFrameStack, VecTransposeImage
 from palaestra.vec_env.monitor import VecMonitor
 from palaestra.vec_env.normalize import VecNormalize
@@ -21,5 +21,6 @@ __all__ = [
     "VecMonitor",
     "VecNormalize",
     "VecTransposeImage",
+    "make_atari_env",
     "make_vec_env",
 ]

@@ -1,4 +1,5 @@
-"""``make_vec_env``: SB3's helper, with the native batch as the default for built-in envs."""
+"""``make_vec_env`` and ``make_atari_env``: SB3's helpers, with the native batch as the default
+for built-in envs."""
 
 from __future__ import annotations
 
@@ -107,3 +108,63 @@ def make_vec_env(
     vec_env = cls([make_env(i + start_index) for i in range(n_envs)], **vec_env_kwargs)
     vec_env.seed(seed)
     return vec_env
+
+
+def _atari_engine(
+    env_id: Any,
+    n_envs: int,
+    wrapper_kwargs: dict[str, Any],
+    env_kwargs: dict[str, Any],
+    vec_env_cls: type[VecEnv] | None,
+) -> VecEnv | None:
+    """The one place that decides whether ``make_atari_env`` may use a native batched Atari
+    engine instead of ``n_envs`` wrapped single envs; None means "build single envs".
+
+    No batched Atari engine exists yet, so this is always None. One may be used only where it
+    gives what SB3's recipe gives (Monitor, then AtariWrapper with ``wrapper_kwargs``, around
+    each env made with ``env_kwargs``), and never when the caller chose ``vec_env_cls``.
+    """
+    return None
+
+
+def make_atari_env(
+    env_id: str | Callable[..., Env[Any, Any]],
+    n_envs: int = 1,
+    seed: int | None = None,
+    start_index: int = 0,
+    monitor_dir: str | None = None,
+    wrapper_kwargs: dict[str, Any] | None = None,
+    env_kwargs: dict[str, Any] | None = None,
+    vec_env_cls: type[VecEnv] | None = None,
+    vec_env_kwargs: dict[str, Any] | None = None,
+    monitor_kwargs: dict[str, Any] | None = None,
+) -> VecEnv:
+    """``n_envs`` Atari envs, each ``Monitor`` then ``AtariWrapper`` (SB3's ``make_atari_env``).
+
+    ``wrapper_kwargs`` go to :class:`palaestra.wrappers.AtariWrapper`. As in SB3, the default
+    ``terminal_on_life_loss=True`` makes ``reset()`` after a lost life a no-op step rather than
+    a new game; pass ``wrapper_kwargs=dict(terminal_on_life_loss=False)`` to avoid it. Use an id
+    without frame skip of its own, e.g. ``"BreakoutNoFrameskip-v4"``.
+
+    >>> vec_env = make_atari_env("BreakoutNoFrameskip-v4", n_envs=2, seed=0)  # doctest: +SKIP
+    >>> vec_env.reset().shape  # doctest: +SKIP
+    (2, 84, 84, 1)
+    """
+    from palaestra.wrappers.atari import AtariWrapper
+
+    engine = _atari_engine(env_id, n_envs, wrapper_kwargs or {}, env_kwargs or {}, vec_env_cls)
+    if engine is not None:
+        return engine
+    return make_vec_env(
+        env_id,
+        n_envs=n_envs,
+        seed=seed,
+        start_index=start_index,
+        monitor_dir=monitor_dir,
+        wrapper_class=AtariWrapper,
+        env_kwargs=env_kwargs,
+        vec_env_cls=vec_env_cls,
+        vec_env_kwargs=vec_env_kwargs,
+        monitor_kwargs=monitor_kwargs,
+        wrapper_kwargs=wrapper_kwargs,
+    )
