@@ -19,6 +19,7 @@ from palaestra.algos.logger import CSVOutputFormat
 __all__ = ["AppendingCSV", "EpisodeLog", "GracefulStop", "LiveProgress", "format_duration"]
 
 EPISODE_COLUMNS = ("steps", "return", "length", "terminated")
+LINE_INTERVAL_S = 2.0  # seconds between two plain progress lines
 
 
 class EpisodeLog(BaseCallback):
@@ -61,19 +62,22 @@ def format_duration(seconds: float) -> str:
 
 
 class LiveProgress(BaseCallback):
-    """A tqdm bar (``mode="bar"``) or a plain line every ``interval`` seconds (``"line"``) on
-    stderr: steps, fps, mean return of the recent episodes, time left."""
+    """A tqdm bar (``mode="bar"``) or a plain line every ``interval`` seconds (``"line"``,
+    default ``LINE_INTERVAL_S``) on stderr: steps, fps, mean return of the recent episodes,
+    time left."""
 
-    def __init__(self, total: int, mode: str = "bar", interval: float = 2.0) -> None:
+    def __init__(self, total: int, mode: str = "bar", interval: float | None = None) -> None:
         super().__init__()
-        self.total, self.mode, self.interval = total, mode, interval
+        self.total, self.mode = total, mode
+        self.interval = LINE_INTERVAL_S if interval is None else interval
         self.bar: Any = None
         self._start_time = self._last_print = 0.0
         self._start_steps = 0
 
-    def _mean_return(self) -> float:
+    def _mean_return(self) -> str:
+        """Mean return of the last (up to 100) episodes, ``-`` before the first one ends."""
         buffer = self.model.ep_info_buffer
-        return float(np.mean([e["r"] for e in buffer])) if buffer else float("nan")
+        return f"{np.mean([e['r'] for e in buffer]):.2f}" if buffer else "-"
 
     def _on_training_start(self) -> None:
         self._start_time = self._last_print = time.perf_counter()
@@ -97,7 +101,7 @@ class LiveProgress(BaseCallback):
             self.bar.update(self.model.num_timesteps - self.bar.n)
             if now - self._last_print >= 1.0:
                 self._last_print = now
-                self.bar.set_postfix_str(f"mean return {self._mean_return():.2f}", refresh=False)
+                self.bar.set_postfix_str(f"mean return {self._mean_return()}", refresh=False)
         elif self.mode == "line" and now - self._last_print >= self.interval:
             self._last_print = now
             print(self.status_line(now), file=sys.stderr, flush=True)
@@ -110,7 +114,7 @@ class LiveProgress(BaseCallback):
         left = (self.total - steps) / fps if fps > 0 else float("inf")
         return (
             f"{steps:>9,}/{self.total:,} steps | {fps:,.0f} fps | "
-            f"mean return {self._mean_return():.2f} | ETA {format_duration(max(left, 0.0))}"
+            f"mean return {self._mean_return()} | ETA {format_duration(max(left, 0.0))}"
         )
 
     def _on_training_end(self) -> None:

@@ -1,0 +1,56 @@
+"""Run ``palaestra`` commands in-process and share two tiny trained runs between the tests."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from collections.abc import Callable
+from pathlib import Path
+from typing import NamedTuple
+
+import pytest
+
+from palaestra.cli import main
+
+
+class Result(NamedTuple):
+    code: int
+    out: str
+    err: str
+
+
+def run_cli(*argv: str) -> Result:
+    """``palaestra *argv`` in this process: exit code, stdout, stderr."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in argv])
+    return Result(code, out.getvalue(), err.getvalue())
+
+
+@pytest.fixture
+def cli() -> Callable[..., Result]:
+    return run_cli
+
+
+@pytest.fixture(scope="session")
+def ppo_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Result]:
+    """The brief's tiny PPO run: the CartPole-v1 default preset (8 envs) for 512 steps."""
+    import torch
+
+    torch.set_num_threads(1)
+    out = tmp_path_factory.mktemp("runs") / "ppo"
+    result = run_cli("train", "ppo", "CartPole-v1", "--timesteps", 512, "--seed", 0,
+                     "--out", out, "--progress", "line")  # fmt: skip
+    assert result.code == 0, result.err
+    return out, result
+
+
+@pytest.fixture(scope="session")
+def dqn_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Result]:
+    """The brief's tiny DQN run: MountainCar-v0's preset for 300 steps, learning from step 100."""
+    out = tmp_path_factory.mktemp("runs") / "dqn"
+    result = run_cli("train", "dqn", "MountainCar-v0", "--timesteps", 300, "--seed", 1,
+                     "--set", "learning_starts=100", "--out", out,
+                     "--progress", "none")  # fmt: skip
+    assert result.code == 0, result.err
+    return out, result

@@ -1,0 +1,262 @@
+"""``palaestra train``: run-folder contents, settings layering, Ctrl-C checkpoints and resume."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import re
+import signal
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from palaestra import presets
+from palaestra.algos import DQN, PPO, LinearSchedule
+from palaestra.algos.callbacks import BaseCallback
+from palaestra.cli import train
+from palaestra.cli.settings import resolve_settings
+
+from .conftest import Result, run_cli
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as file:
+        return list(csv.DictReader(file))
+
+
+def test_ppo_run_folder_and_summary(ppo_run: tuple[Path, Result]) -> None:
+    out, result = ppo_run
+    for name in ("config.json", "status.json", "progress.csv", "episodes.csv", "model.zip"):
+        assert (out / name).is_file(), name
+    assert (out / "learning_curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert sorted(p.name for p in (out / "checkpoints").iterdir())[0].startswith("model_")
+    config = json.loads((out / "config.json").read_text())
+    preset = presets.get_preset("ppo", "CartPole-v1")
+    assert config["preset"] == "default" and config["n_envs"] == preset["n_envs"] == 8
+    assert config["hyperparams"] == preset["hyperparams"]  # recorded unresolved: "lin_0.001"
+    assert config["n_timesteps"] == 512 and config["seed"] == 0
+    status = json.loads((out / "status.json").read_text())
+    assert status["status"] == "finished" and status["num_timesteps"] == 512
+    progress = _rows(out / "progress.csv")
+    assert [int(r["time/total_timesteps"]) for r in progress] == [256, 512]
+    episodes = _rows(out / "episodes.csv")
+    steps = [int(r["steps"]) for r in episodes]
+    assert episodes and steps == sorted(steps) and steps[-1] <= 512
+    assert all(r["terminated"] in ("0", "1") for r in episodes)
+    model = PPO.load(out / "model.zip")
+    assert model.num_timesteps == 512 and model.n_envs == 8
+    assert model.lr_schedule == LinearSchedule(0.001, 0.0)  # "lin_0.001" became a schedule
+    # The summary: steps, wall time, fps, final mean return, a deterministic evaluation.
+    summary = result.out
+    assert re.search(r"trained ppo on CartPole-v1: 512 steps, wall time \d+:\d\d:\d\d", summary)
+    assert re.search(r"[\d,]+ fps", summary)
+    last = re.search(r"mean return over the last (\d+) training episodes: (-?[\d.]+)", summary)
+    assert last is not None
+    n = int(last[1])
+    returns = [float(r["return"]) for r in episodes[-n:]]
+    assert float(last[2]) == pytest.approx(np.mean(returns), abs=0.006)
+    assert re.search(r"evaluation \(10 episodes, deterministic, seed 0\):", summary)
+    assert "success rate" not in summary  # CartPole terminates on failure: not a goal env
+
+
+def test_dqn_run_with_set_override(dqn_run: tuple[Path, Result]) -> None:
+    out, result = dqn_run
+    config = json.loads((out / "config.json").read_text())
+    preset = presets.get_preset("dqn", "MountainCar-v0")["hyperparams"]
+    assert config["hyperparams"] == {**preset, "learning_starts": 100}
+    assert (out / "replay_buffer.zip").is_file() and (out / "learning_curve.png").is_file()
+    model = DQN.load(out / "model.zip")
+    assert model.learning_starts == 100 and model.num_timesteps >= 300
+    assert model.policy_kwargs["net_arch"] == [256, 256]
+    rate = re.search(r"success rate: ([\d.]+)% \((\d+)/10 episodes", result.out)
+    assert rate is not None and 0 <= float(rate[1]) <= 100
+    assert "trained dqn on MountainCar-v0" in result.out
+
+
+def test_settings_layering(tmp_path: Path) -> None:
+    """preset < --config file < --set; dicts merge key by key."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("n_envs: 2\nhyperparams:\n  gamma: 0.9\n  policy_kwargs: {net_arch: [8]}\n"
+                   "batch_size: 16\n")  # fmt: skip
+    settings, used, notes = resolve_settings(
+        "ppo", "CartPole-v1", None, str(cfg), ["gamma=0.5", "policy_kwargs.activation_fn=relu"]
+    )
+    base = presets.get_preset("ppo", "CartPole-v1")
+    assert used == "default" and notes == []
+    assert settings["n_envs"] == 2 and settings["n_timesteps"] == base["n_timesteps"]
+    hyper = settings["hyperparams"]
+    assert hyper["gamma"] == 0.5 and hyper["batch_size"] == 16
+    assert hyper["n_steps"] == base["hyperparams"]["n_steps"]
+    assert hyper["policy_kwargs"] == {"net_arch": [8], "activation_fn": "relu"}
+    resolved = presets.resolve(hyper)
+    assert resolved["policy_kwargs"]["activation_fn"] is torch.nn.ReLU
+    assert resolved["learning_rate"] == LinearSchedule(0.001, 0.0)
+    # JSON config in the preset's own shape; a config.json of a run is accepted as well.
+    cfg_json = tmp_path / "c.json"
+    cfg_json.write_text(json.dumps({"algo": "ppo", "env_id": "CartPole-v1", "n_steps": 64}))
+    settings, *_ = resolve_settings("ppo", "CartPole-v1", None, str(cfg_json), [])
+    assert settings["hyperparams"]["n_steps"] == 64
+
+
+def test_no_preset_uses_algorithm_defaults(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from palaestra.cli import progress
+
+    monkeypatch.setattr(progress, "LINE_INTERVAL_S", 0.0)  # a progress line at every step
+    result = run_cli("train", "DQN", "Acrobot-v1", "--timesteps", 64, "--out", tmp_path / "r",
+                     "--progress", "line", "--eval-episodes", 0,
+                     "--set", "policy_kwargs.net_arch=[16]", "--set", "learning_starts=32",
+                     "--set", "policy_kwargs.activation_fn=tanh")  # fmt: skip
+    assert result.code == 0, result.err
+    assert "note: no preset for dqn on Acrobot-v1: using the DQN defaults" in result.err
+    config = json.loads((tmp_path / "r" / "config.json").read_text())
+    assert config["preset"] is None and config["n_envs"] == 1
+    model = DQN.load(tmp_path / "r" / "model.zip")
+    assert model.batch_size == 32 and model.gamma == 0.99  # SB3's defaults
+    assert model.policy_kwargs == {"net_arch": [16], "activation_fn": torch.nn.Tanh}
+    lines = [line for line in result.err.splitlines() if " fps | " in line]
+    assert len(lines) == 64
+    assert re.fullmatch(
+        r" +64/64 steps \| [\d,]+ fps \| mean return (-?[\d.]+|-) \| ETA 0:00:00", lines[-1]
+    ), lines[-1]
+
+
+class _InterruptAt(BaseCallback):
+    """Simulates Ctrl-C: a KeyboardInterrupt from inside ``learn``."""
+
+    def __init__(self, steps: int) -> None:
+        super().__init__()
+        self.steps = steps
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self.steps:
+            raise KeyboardInterrupt
+        return True
+
+
+def _status(out: Path) -> dict[str, object]:
+    return json.loads((out / "status.json").read_text())
+
+
+def test_ctrl_c_saves_checkpoint_and_resume_reaches_the_total(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = tmp_path / "run"
+    monkeypatch.setattr(train, "EXTRA_CALLBACKS", [_InterruptAt(200)])
+    result = run_cli("train", "dqn", "CartPole-v1", "--timesteps", 600, "--seed", 3,
+                     "--set", "learning_starts=50", "--set", "train_freq=4",
+                     "--set", "gradient_steps=1", "--out", out, "--progress", "none")  # fmt: skip
+    assert result.code == 130
+    lines = result.err.strip().splitlines()
+    assert lines[-1] == (
+        f"palaestra: interrupted at 200/600 steps; checkpoint saved in {out} "
+        f"(resume with: palaestra train --resume {out})"
+    )
+    status = _status(out)
+    assert (status["status"], status["num_timesteps"], status["total_timesteps"]) == (
+        "interrupted",
+        200,
+        600,
+    )
+    checkpoint = DQN.load(out / "model.zip")
+    checkpoint.load_replay_buffer(out / "replay_buffer.zip")
+    assert checkpoint.num_timesteps == 200
+    assert checkpoint.replay_buffer is not None and checkpoint.replay_buffer.size() == 199
+    episodes_before = _rows(out / "episodes.csv")
+    progress_before = (out / "progress.csv").read_text().splitlines()
+
+    monkeypatch.setattr(train, "EXTRA_CALLBACKS", [])
+    result = run_cli("train", "--resume", out, "--progress", "none", "--eval-episodes", 0)
+    assert result.code == 0, result.err
+    assert "from step 200 to 600 steps" in result.err
+    assert _status(out)["status"] == "finished" and _status(out)["num_timesteps"] == 600
+    resumed = DQN.load(out / "model.zip")
+    assert resumed.num_timesteps == 600
+    # The schedules ran to their end over the two segments together.
+    assert resumed._progress_remaining == 0.0
+    assert resumed.exploration_rate == pytest.approx(resumed.exploration_final_eps)
+    episodes = _rows(out / "episodes.csv")
+    assert episodes[: len(episodes_before)] == episodes_before  # appended, not rewritten
+    assert int(episodes[-1]["steps"]) > 200
+    progress = (out / "progress.csv").read_text().splitlines()
+    assert progress[1 : len(progress_before)] == progress_before[1:]
+    assert len(progress) > len(progress_before)
+
+
+def test_ppo_interrupt_then_resume_to_the_same_total(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = tmp_path / "run"
+    monkeypatch.setattr(train, "EXTRA_CALLBACKS", [_InterruptAt(300)])
+    args = ["--set", "n_steps=16", "--set", "batch_size=32", "--set", "n_epochs=1"]
+    result = run_cli("train", "ppo", "CartPole-v1", "--n-envs", 4, "--timesteps", 512,
+                     *args, "--out", out, "--progress", "none", "--eval-episodes", 0)  # fmt: skip
+    assert result.code == 130 and _status(out)["num_timesteps"] == 300
+    monkeypatch.setattr(train, "EXTRA_CALLBACKS", [])
+    result = run_cli("train", "--resume", out, "--progress", "none", "--eval-episodes", 0)
+    assert result.code == 0, result.err
+    model = PPO.load(out / "model.zip")
+    assert 512 <= model.num_timesteps < 512 + 64  # one rollout is 16 steps x 4 envs
+    assert json.loads((out / "config.json").read_text())["n_timesteps"] == 512
+    # A finished run resumes only to a larger budget.
+    again = run_cli("train", "--resume", out, "--progress", "none")
+    assert again.code == 2
+    assert again.err.strip() == (
+        f"palaestra: error: {out} already trained {model.num_timesteps} of its 512 steps "
+        f"(pass --timesteps larger than {model.num_timesteps} to train further)"
+    )
+
+
+class _SigintAt(BaseCallback):
+    """Sends this process a real SIGINT, as a terminal's Ctrl-C does."""
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps == 96:
+            os.kill(os.getpid(), signal.SIGINT)
+        return True
+
+
+def test_real_sigint_stops_at_the_next_step(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(train, "EXTRA_CALLBACKS", [_SigintAt()])
+    previous = signal.getsignal(signal.SIGINT)
+    result = run_cli("train", "dqn", "CartPole-v1", "--timesteps", 1000, "--out", tmp_path / "r",
+                     "--set", "learning_starts=50", "--progress", "none")  # fmt: skip
+    assert result.code == 130
+    assert "stopping at the next step" in result.err
+    assert _status(tmp_path / "r")["num_timesteps"] == 97  # the step after the signal
+    assert signal.getsignal(signal.SIGINT) is previous  # the handler was given back
+
+
+def test_graceful_stop_second_ctrl_c_interrupts() -> None:
+    from palaestra.cli.progress import GracefulStop
+
+    stop = GracefulStop()
+    stop._handle(signal.SIGINT, None)
+    assert stop.requested and stop._on_step() is False
+    with pytest.raises(KeyboardInterrupt):
+        stop._handle(signal.SIGINT, None)
+
+
+def test_resume_refuses_new_settings(tmp_path: Path, ppo_run: tuple[Path, Result]) -> None:
+    out, _ = ppo_run
+    result = run_cli("train", "--resume", out, "--set", "gamma=0.5")
+    assert result.code == 2
+    assert result.err.strip() == (
+        "palaestra: error: --resume continues a run with its saved settings; --set cannot "
+        "change them (drop them, or start a new run)"
+    )
+    result = run_cli("train", "dqn", "CartPole-v1", "--resume", out)
+    assert result.code == 2 and "is a run of ppo, not dqn" in result.err
+
+
+def test_out_folder_holding_a_run_is_not_overwritten(ppo_run: tuple[Path, Result]) -> None:
+    out, _ = ppo_run
+    result = run_cli("train", "ppo", "CartPole-v1", "--out", out)
+    assert result.code == 2
+    assert result.err.strip() == (
+        f"palaestra: error: {out} already holds a run (choose another --out, or --resume {out})"
+    )
