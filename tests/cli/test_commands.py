@@ -141,6 +141,10 @@ def _bad(tmp_path: Path) -> dict[str, tuple[list[object], int, str | re.Pattern[
                       "normalize_advantage=True (see "
                       "https://github.com/DLR-RM/stable-baselines3/issues/440) "
                       "(check --set/--config values)"),
+        "algo cannot act": (["train", "dqn", "Pendulum-v1", "--progress", "none"], 2,
+                            e + "cannot train dqn on Pendulum-v1: DQN does not support "
+                            "Box(-2.0, 2.0, (1,), float32) action spaces; supported: Discrete "
+                            "(use ppo)"),
         "bad schedule": (["train", "ppo", "CartPole-v1", "--set", "learning_rate=lin_fast"], 2,
                          e + "learning_rate='lin_fast' is not a linear schedule; write "
                          "'lin_<start>', e.g. 'lin_0.001' (fix the setting)"),

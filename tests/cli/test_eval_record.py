@@ -145,3 +145,26 @@ def test_eval_detects_the_algorithm(dqn_run: tuple[Path, Result]) -> None:
     from palaestra.cli.evaluate import load_model
 
     assert isinstance(load_model(dqn_run[0] / "model.zip"), DQN)
+
+
+def test_normalized_run_evaluates_on_normalized_observations(tmp_path: Path) -> None:
+    from palaestra.vec_env import VecNormalize, make_vec_env
+
+    out = tmp_path / "run"
+    result = run_cli("train", "ppo", "Pendulum-v1", "--timesteps", 256, "--set", "n_steps=64",
+                     "--set", "batch_size=32", "--set", "normalize={'norm_reward': False}",
+                     "--out", out, "--progress", "none", "--eval-episodes", 0)  # fmt: skip
+    assert result.code == 0, result.err
+    assert "vecnormalize.npz" in result.out and (out / "vecnormalize.npz").is_file()
+    evaluated = run_cli("eval", out, "--episodes", 1, "--seed", 5)
+    assert evaluated.code == 0, evaluated.err
+    stats = VecNormalize.load(str(out / "vecnormalize.npz"), make_vec_env("Pendulum-v1"))
+    stats.training = False
+    model, env = PPO.load(out / "model.zip"), gym.make("Pendulum-v1")
+    obs, _ = env.reset(seed=5)
+    total, done = 0.0, False
+    while not done:
+        action, _ = model.predict(stats.normalize_obs(obs), deterministic=True)
+        obs, reward, terminated, truncated, _ = env.step(action)
+        total, done = total + float(reward), terminated or truncated
+    assert _mean_std(evaluated.out)[0] == pytest.approx(total, abs=0.005)

@@ -192,8 +192,9 @@ def test_ppo_interrupt_then_resume_to_the_same_total(
     monkeypatch.setattr(train, "EXTRA_CALLBACKS", [_InterruptAt(300)])
     args = ["--set", "n_steps=16", "--set", "batch_size=32", "--set", "n_epochs=1"]
     result = run_cli("train", "ppo", "CartPole-v1", "--n-envs", 4, "--timesteps", 512,
-                     *args, "--out", out, "--progress", "none", "--eval-episodes", 0)  # fmt: skip
+                     *args, "--out", out, "--progress", "bar", "--eval-episodes", 0)  # fmt: skip
     assert result.code == 130 and _status(out)["num_timesteps"] == 300
+    assert re.search(r"\d+/512 \[", result.err)  # the tqdm bar
     monkeypatch.setattr(train, "EXTRA_CALLBACKS", [])
     result = run_cli("train", "--resume", out, "--progress", "none", "--eval-episodes", 0)
     assert result.code == 0, result.err

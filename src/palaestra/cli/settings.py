@@ -173,10 +173,7 @@ def resolve_settings(
         settings, used = presets.get_preset(algo, env_id), "default"
     else:
         settings, used = presets.base_settings(), None
-        notes.append(
-            f"no preset for {algo} on {env_id}: using the {algo.upper()} defaults "
-            f"and {settings['n_timesteps']:,} steps"
-        )
+        notes.append(f"no preset for {algo} on {env_id}: using the {algo.upper()} defaults")
     settings.pop("measured", None)
     settings = {**presets.base_settings(), **settings}
     if config is not None:

@@ -248,7 +248,16 @@ def _make_model(config: dict[str, Any], venv: Any, run_dir: Path, resume: bool) 
         )
     except presets.PresetError as exc:
         raise CLIError(str(exc), "fix the setting") from None
-    except (TypeError, ValueError, NotImplementedError, RuntimeError) as exc:
+    except TypeError as exc:
+        if "does not support" not in str(exc):
+            raise CLIError(
+                f"invalid {config['algo']} settings: {exc}", "check the values"
+            ) from None
+        other = "ppo" if config["algo"] == "dqn" else "another algorithm"
+        raise CLIError(
+            f"cannot train {config['algo']} on {config['env_id']}: {exc}", f"use {other}"
+        ) from None
+    except (ValueError, NotImplementedError, RuntimeError) as exc:
         raise CLIError(
             f"invalid {config['algo']} settings: {exc}", "check --set/--config values"
         ) from None
@@ -298,8 +307,6 @@ def run(args: argparse.Namespace) -> int:
     if args.eval_episodes < 0:
         raise CLIError(f"--eval-episodes must be >= 0, got {args.eval_episodes}", "e.g. 10")
     progress_mode = _progress_mode(args.progress)
-    for note in notes:
-        eprint(f"note: {note}")
 
     import torch
 
@@ -316,6 +323,8 @@ def run(args: argparse.Namespace) -> int:
             )
         if seed is not None:
             venv.seed(seed + model.num_timesteps)  # new episodes, not a replay of the first ones
+    for note in notes:  # after every check: bad input gets its error line only
+        eprint(f"note: {note}")
     run_dir.mkdir(parents=True, exist_ok=True)
     write_json(run_dir / CONFIG_FILE, config)
     return _train(args, config, status, model, run_dir, total, resume, progress_mode)
@@ -353,7 +362,8 @@ def _train(
     start_steps = model.num_timesteps
     eprint(
         f"training {config['algo']} on {config['env_id']} "
-        f"({model.n_envs} env{'s' * (model.n_envs > 1)}, preset {config.get('preset')}) "
+        f"({model.n_envs} env{'s' * (model.n_envs > 1)}, "
+        f"{'preset ' + config['preset'] if config.get('preset') else 'no preset'}) "
         f"{'from step ' + format(start_steps, ',') + ' ' if resume else ''}to {total:,} steps "
         f"-> {run_dir}"
     )
@@ -462,6 +472,8 @@ def _finish(
         eprint("note: matplotlib is not installed, so no learning_curve.png")
     if config["algo"] == "dqn":
         written.append(REPLAY_FILE)
+    if (run_dir / NORMALIZE_FILE).is_file():
+        written.append(NORMALIZE_FILE)
     if (run_dir / "checkpoints").is_dir():
         written.append("checkpoints/")
     if (run_dir / "tb").is_dir():
