@@ -87,8 +87,8 @@ def add_parser(sub: Any) -> None:
         "compare",
         help="compare runs: table with confidence intervals, and learning curves",
         description="Group runs that differ only by seed into variants; print each variant's "
-        "final mean return with a 95%% confidence interval over seeds (t-distribution) and "
-        "success rate, and plot every variant's learning curve (mean ± 95%% CI band).",
+        "final mean return with a 95% confidence interval over seeds (t-distribution) and "
+        "success rate, and plot every variant's learning curve (mean ± 95% CI band).",
     )
     p.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run folders written by train")
     p.add_argument(

@@ -49,8 +49,12 @@ def add_parser(sub: Any) -> None:
         "then by --set, then by --n-envs/--timesteps/--seed. Ctrl-C saves a checkpoint that "
         "--resume continues.",
     )
-    p.add_argument("algo", nargs="?", metavar="ALGO", help="dqn or ppo (any case)")
-    p.add_argument("env", nargs="?", metavar="ENV", help="env id, e.g. CartPole-v1")
+    p.add_argument(
+        "algo", nargs="?", metavar="ALGO", help="dqn or ppo (any case); not needed with --resume"
+    )
+    p.add_argument(
+        "env", nargs="?", metavar="ENV", help="env id, e.g. CartPole-v1 (see palaestra envs)"
+    )
     p.add_argument("--preset", metavar="NAME", help="preset name (default: 'default' if any)")
     p.add_argument(
         "--config",
