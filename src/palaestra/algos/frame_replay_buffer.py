@@ -60,15 +60,15 @@ def frame_layout(space: spaces.Space[Any], venv: Any = None) -> tuple[int | None
     return None, 0
 
 
-def _bits(a: np.ndarray) -> np.ndarray:
-    """Same-size unsigned view: equality then means equal bits (-0.0 != 0.0, NaN == NaN)."""
-    return a.view(f"u{a.dtype.itemsize}") if a.dtype.kind == "f" else a
-
-
-def _equal(a: np.ndarray, b: np.ndarray, lead: int) -> np.ndarray:
-    """Element-wise bit equality reduced over all but the first ``lead`` axes."""
-    eq = _bits(a) == _bits(b)
-    return eq.reshape(*eq.shape[:lead], -1).all(axis=-1)
+def _words(a: np.ndarray, lead: int) -> np.ndarray:
+    """C-contiguous ``a`` as ``[*a.shape[:lead], words]`` in the widest unsigned type dividing
+    its rows: equal words mean equal bits (-0.0 is not 0.0, NaN equals itself), and comparing
+    7056-byte frames as 882 words is what keeps ``add`` cheap."""
+    row = a.reshape(*a.shape[:lead], -1).view(np.uint8)
+    for word in (np.uint64, np.uint32, np.uint16):
+        if row.shape[-1] % np.dtype(word).itemsize == 0:
+            return row.view(word)
+    return row
 
 
 class FrameReplayBuffer:
@@ -116,6 +116,7 @@ class FrameReplayBuffer:
         self._free = np.arange(capacity - 1, 0, -1, dtype=np.int32)  # a stack: pops low slots
         self._n_free = capacity - 1
         self._last_next = np.zeros((n_envs, *shape), dtype=observation_space.dtype)
+        self._last_frames = np.zeros((n_envs, self.n_frames, *self.frame_shape), self._frames.dtype)
         self._last_refs = np.zeros((n_envs, self.n_frames), dtype=np.int32)
         self._has_last = np.zeros(n_envs, dtype=bool)
 
@@ -135,6 +136,7 @@ class FrameReplayBuffer:
             self.rewards,
             self.terminated,
             self._last_next,
+            self._last_frames,
             self._last_refs,
             self._has_last,
         ]
@@ -153,6 +155,11 @@ class FrameReplayBuffer:
         s = self.obs_shape
         split = obs.reshape(obs.shape[0], *s[:axis], self.n_frames, channels, *s[axis + 1 :])
         return np.moveaxis(split, 1 + axis, 1)
+
+    def _frame_major(self, obs: np.ndarray) -> np.ndarray:
+        """``[B, *obs_shape]`` -> C-contiguous ``[B, n_frames, *frame_shape]`` (a copy only
+        when frames are interleaved, as channel-last stacks are)."""
+        return np.ascontiguousarray(self._split(obs))
 
     def _gather(self, refs: np.ndarray) -> np.ndarray:
         """``[B, n_frames]`` references -> observations ``[B, *obs_shape]``."""
@@ -181,28 +188,29 @@ class FrameReplayBuffer:
                     f"{getattr(value, 'shape', type(value).__name__)}"
                 )
         # Compared bit for bit below, so both must be in the stored dtype first.
-        obs, next_obs = (
-            obs.astype(self._frames.dtype, copy=False),
-            next_obs.astype(self._frames.dtype, copy=False),
-        )
+        obs = np.ascontiguousarray(obs, dtype=self._frames.dtype)
+        next_obs = np.ascontiguousarray(next_obs, dtype=self._frames.dtype)
         new: list[np.ndarray] = []  # frames to store; refs -(i + 1) point at new[i] until then
-        of, nf = self._split(obs), self._split(next_obs)
-        obs_refs = np.empty((self.n_envs, self.n_frames), dtype=np.int64)
-        same = self._has_last & _equal(obs, self._last_next, 1)
-        obs_refs[same] = self._last_refs[same]
+        same = self._has_last & (_words(obs, 1) == _words(self._last_next, 1)).all(axis=1)
+        nf = self._frame_major(next_obs)  # [E, n_frames, *frame_shape]
+        nw = _words(nf, 2)  # [E, n_frames, words]
+        if same.all():  # mid-episode: obs is the last next_obs, already split
+            of, ow = self._last_frames, _words(self._last_frames, 2)
+        else:
+            of = self._frame_major(obs)
+            ow = _words(of, 2)
+        obs_refs = self._last_refs.astype(np.int64)
         for e in np.flatnonzero(~same):  # an episode start (or a first add): padding or new
-            newer: np.ndarray | None = None
-            newer_ref = 0
-            for k in range(self.n_frames - 1, -1, -1):
-                newer_ref = obs_refs[e, k] = self._ref(of[e, k], newer, newer_ref, new)
-                newer = of[e, k]
+            obs_refs[e] = self._fresh_refs(of[e], ow[e], new)
         next_refs = np.zeros((self.n_envs, self.n_frames), dtype=np.int64)
         shifted = np.zeros((self.n_envs, self.n_frames), dtype=bool)
-        if self.n_frames > 1:
-            shifted[:, :-1] = _equal(nf[:, :-1], of[:, 1:], 2)
+        if self.n_frames > 1:  # a frame stack's shift: next_obs[k] is obs[k + 1]
+            shifted[:, :-1] = (nw[:, :-1] == ow[:, 1:]).all(axis=2)
             next_refs[:, :-1] = obs_refs[:, 1:]
         for e, k in zip(*np.nonzero(~shifted)):
-            next_refs[e, k] = self._ref(nf[e, k], None, 0, new)
+            if nw[e, k].any():
+                new.append(nf[e, k])
+                next_refs[e, k] = -len(new)
         if new:
             slots = self._alloc(len(new))
             for slot, frame in zip(slots.tolist(), new):
@@ -217,6 +225,7 @@ class FrameReplayBuffer:
             self._release(np.concatenate([self.obs_refs[row].ravel(), self.next_refs[row].ravel()]))
         self.obs_refs[row], self.next_refs[row] = obs_refs, next_refs
         self._last_next[...] = next_obs
+        self._last_frames[...] = nf
         self._last_refs[...] = next_refs
         self._has_last[:] = True
         self.actions[row] = actions
@@ -230,16 +239,19 @@ class FrameReplayBuffer:
             self.full, self.pos = True, 0
 
     @staticmethod
-    def _ref(
-        frame: np.ndarray, newer: np.ndarray | None, newer_ref: int, new: list[np.ndarray]
-    ) -> int:
-        """The zero frame, the newer frame it repeats (padding), or a new frame."""
-        if not _bits(frame).any():
-            return 0
-        if newer is not None and bool(_equal(frame, newer, 0)):
-            return newer_ref
-        new.append(frame)
-        return -len(new)
+    def _fresh_refs(frames: np.ndarray, words: np.ndarray, new: list[np.ndarray]) -> np.ndarray:
+        """References for a stack not continuing the last one: the zero frame, the newer frame
+        it repeats (padding), or a new frame."""
+        refs = np.zeros(len(frames), dtype=np.int64)
+        for k in range(len(frames) - 1, -1, -1):
+            if not words[k].any():
+                continue
+            if k + 1 < len(frames) and (words[k] == words[k + 1]).all():
+                refs[k] = refs[k + 1]
+            else:
+                new.append(frames[k])
+                refs[k] = -len(new)
+        return refs
 
     def _alloc(self, k: int) -> np.ndarray:
         if k > self._n_free:
