@@ -18,6 +18,9 @@ Cases:
   ``cv2.resize(INTER_AREA)``; where OpenCV is not installed its ``cv2`` is a stand-in whose
   ``resize`` is Pillow's ``Image.resize(BOX)`` (the line says which was measured, and the
   resize alone is timed too). Target: palaestra faster (ratio > 1).
+- ``memory``: bytes of DQN's ``optimize_memory_usage`` replay buffer holding 100k real Breakout
+  transitions (84x84x4 stacks) vs 1.2x the bytes of 100k unique frames, and SB3's buffers
+  (``atari_memory.py``; ``--quick``: 2k transitions). Not a speed ratio.
 
 Each figure is the median of ``--repeats`` runs, the two libraries interleaved. Time is the
 process's CPU time (``time.process_time``): the shared machine is busy with other jobs, and
@@ -33,6 +36,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from atari_memory import bench_memory  # benchmarks/ is on sys.path when run as a script
 
 import palaestra
 
@@ -155,6 +159,7 @@ CASES: dict[str, Callable[[argparse.Namespace], None] | None] = {
     "single": bench_single,
     "preprocessed": bench_preprocessed,
     "vector": None,  # native vector Atari: not written yet
+    "memory": bench_memory,
 }
 
 
