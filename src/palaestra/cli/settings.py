@@ -15,7 +15,14 @@ from typing import Any
 from palaestra import presets
 from palaestra.cli.common import CLIError, parse_value
 
-__all__ = ["ALGOS", "algo_class", "hyperparameter_names", "load_config_file", "resolve_settings"]
+__all__ = [
+    "ALGOS",
+    "algo_class",
+    "check_settings",
+    "hyperparameter_names",
+    "load_config_file",
+    "resolve_settings",
+]
 
 ALGOS = ("dqn", "ppo")
 # Constructor arguments the CLI sets itself (or that make no sense from a command line).
@@ -183,3 +190,27 @@ def resolve_settings(
     if assignments:
         settings = presets.merge(settings, parse_set(algo, assignments))
     return settings, used, notes
+
+
+def _positive_int(value: Any, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise CLIError(f"{what} must be a positive integer, got {value!r}", f"fix {what}")
+    return value
+
+
+def check_settings(settings: dict[str, Any]) -> None:
+    """``CLIError`` unless the top-level settings have usable types and values."""
+    _positive_int(settings["n_envs"], "n_envs")
+    _positive_int(settings["n_timesteps"], "n_timesteps")
+    seed = settings.get("seed")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
+        raise CLIError(f"seed must be an integer, got {seed!r}", "fix seed")
+    if not isinstance(settings["policy"], str):
+        raise CLIError(f"policy must be a name, got {settings['policy']!r}", "e.g. MlpPolicy")
+    if not isinstance(settings.get("env_kwargs") or {}, dict):
+        raise CLIError(f"env_kwargs must be a mapping, got {settings['env_kwargs']!r}", "fix it")
+    if not isinstance(settings.get("normalize", False), (bool, dict)):
+        raise CLIError(
+            f"normalize must be true/false or VecNormalize kwargs, got {settings['normalize']!r}",
+            "fix it",
+        )

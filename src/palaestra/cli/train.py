@@ -16,8 +16,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from palaestra.cli import settings as settings_mod
 from palaestra.cli.common import (
     CONFIG_FILE,
@@ -28,7 +26,6 @@ from palaestra.cli.common import (
     STATUS_FILE,
     CLIError,
     eprint,
-    is_goal_env,
     read_json,
     write_json,
 )
@@ -114,29 +111,6 @@ def add_parser(sub: Any) -> None:
 
 
 # -- settings ----------------------------------------------------------------------------------
-def _positive_int(value: Any, what: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise CLIError(f"{what} must be a positive integer, got {value!r}", f"fix {what}")
-    return value
-
-
-def _check_settings(settings: dict[str, Any]) -> None:
-    _positive_int(settings["n_envs"], "n_envs")
-    _positive_int(settings["n_timesteps"], "n_timesteps")
-    seed = settings.get("seed")
-    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
-        raise CLIError(f"seed must be an integer, got {seed!r}", "fix seed")
-    if not isinstance(settings["policy"], str):
-        raise CLIError(f"policy must be a name, got {settings['policy']!r}", "e.g. MlpPolicy")
-    if not isinstance(settings.get("env_kwargs") or {}, dict):
-        raise CLIError(f"env_kwargs must be a mapping, got {settings['env_kwargs']!r}", "fix it")
-    if not isinstance(settings.get("normalize", False), (bool, dict)):
-        raise CLIError(
-            f"normalize must be true/false or VecNormalize kwargs, got {settings['normalize']!r}",
-            "fix it",
-        )
-
-
 def _new_run_config(args: argparse.Namespace) -> tuple[dict[str, Any], list[str]]:
     if args.algo is None or args.env is None:
         raise CLIError("train needs ALGO and ENV", "e.g. palaestra train ppo CartPole-v1")
@@ -151,7 +125,7 @@ def _new_run_config(args: argparse.Namespace) -> tuple[dict[str, Any], list[str]
         if getattr(args, flag) is not None:
             settings[key] = getattr(args, flag)
     settings.setdefault("seed", None)
-    _check_settings(settings)
+    settings_mod.check_settings(settings)
     config = {
         "algo": algo,
         "env_id": args.env,
@@ -191,7 +165,7 @@ def _resumed_config(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
             )
     if args.timesteps is not None:
         config["n_timesteps"] = args.timesteps
-    _check_settings(config)
+    settings_mod.check_settings(config)
     return config
 
 
@@ -346,6 +320,7 @@ def _train(
 ) -> int:
     from palaestra.algos.callbacks import CallbackList, CheckpointCallback
     from palaestra.cli.progress import EpisodeLog, GracefulStop, LiveProgress
+    from palaestra.cli.run_files import print_summary, save_run
 
     model.set_logger(_make_logger(run_dir, args.verbose))
     episodes = EpisodeLog(run_dir / EPISODES_FILE)
@@ -391,95 +366,14 @@ def _train(
         model.logger.close()
     interrupted = interrupted or stop.requested
     wall = float(status.get("wall_time_s", 0.0)) + seconds
-    _save(model, run_dir, config, total, wall, "interrupted" if interrupted else "finished")
+    save_run(model, run_dir, config, total, wall, "interrupted" if interrupted else "finished")
     if interrupted:
         eprint(
             f"palaestra: interrupted at {model.num_timesteps:,}/{total:,} steps; checkpoint "
             f"saved in {run_dir} (resume with: palaestra train --resume {run_dir})"
         )
         return 130
-    _finish(args, config, model, run_dir, model.num_timesteps - start_steps, seconds)
+    print_summary(
+        args.eval_episodes, config, model, run_dir, model.num_timesteps - start_steps, seconds
+    )
     return 0
-
-
-def _save(
-    model: Any, run_dir: Path, config: dict[str, Any], total: int, wall: float, state: str
-) -> None:
-    from palaestra.vec_env import VecNormalize
-
-    model.save(run_dir / MODEL_FILE)
-    if config["algo"] == "dqn":
-        model.save_replay_buffer(run_dir / REPLAY_FILE)
-    if isinstance(model.get_env(), VecNormalize):
-        model.get_env().save(str(run_dir / NORMALIZE_FILE))
-    write_json(
-        run_dir / STATUS_FILE,
-        {
-            "status": state,
-            "num_timesteps": int(model.num_timesteps),
-            "total_timesteps": int(total),
-            "wall_time_s": round(wall, 3),
-        },
-    )
-
-
-def _finish(
-    args: argparse.Namespace,
-    config: dict[str, Any],
-    model: Any,
-    run_dir: Path,
-    steps: int,
-    seconds: float,
-) -> None:
-    from palaestra.cli.curves import read_episodes
-    from palaestra.cli.evaluate import make_env, obs_normalizer, play, summary_lines
-    from palaestra.cli.progress import format_duration
-
-    env_id = config["env_id"]
-    written = [CONFIG_FILE, "progress.csv", EPISODES_FILE, MODEL_FILE]
-    print(
-        f"trained {config['algo']} on {env_id}: {model.num_timesteps:,} steps, "
-        f"wall time {format_duration(seconds)} ({seconds:.1f} s), {steps / seconds:,.0f} fps"
-    )
-    history = read_episodes(run_dir)
-    last = history.returns[-100:]
-    if len(last):
-        line = f"mean return over the last {len(last)} training episodes: {np.mean(last):.2f}"
-        if is_goal_env(env_id) and history.terminated is not None:
-            line += f", success {100 * np.mean(history.terminated[-100:]):.1f}%"
-        print(line)
-    else:
-        print("no training episode finished yet")
-    if args.eval_episodes > 0:
-        env = make_env(env_id, dict(config.get("env_kwargs") or {}))
-        played = play(
-            model,
-            env,
-            args.eval_episodes,
-            True,
-            0,
-            normalize=obs_normalizer(run_dir / MODEL_FILE, env_id),
-        )
-        env.close()
-        print(f"evaluation ({args.eval_episodes} episodes, deterministic, seed 0):")
-        for text in summary_lines(played, env_id):
-            print(f"  {text}")
-    from palaestra.cli.curves import plot_learning_curve
-    from palaestra.error import DependencyNotInstalled
-
-    try:
-        plot_learning_curve(
-            history, run_dir / "learning_curve.png", f"{config['algo'].upper()} on {env_id}"
-        )
-        written.append("learning_curve.png")
-    except DependencyNotInstalled:
-        eprint("note: matplotlib is not installed, so no learning_curve.png")
-    if config["algo"] == "dqn":
-        written.append(REPLAY_FILE)
-    if (run_dir / NORMALIZE_FILE).is_file():
-        written.append(NORMALIZE_FILE)
-    if (run_dir / "checkpoints").is_dir():
-        written.append("checkpoints/")
-    if (run_dir / "tb").is_dir():
-        written.append("tb/")
-    print(f"wrote {run_dir}/: {', '.join(written)}")

@@ -1,0 +1,110 @@
+"""What ``train`` leaves in a run folder when it stops: the resumable checkpoint, and the
+end-of-run summary with the learning curve."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from palaestra.cli.common import (
+    CONFIG_FILE,
+    EPISODES_FILE,
+    MODEL_FILE,
+    NORMALIZE_FILE,
+    REPLAY_FILE,
+    STATUS_FILE,
+    eprint,
+    is_goal_env,
+    write_json,
+)
+
+__all__ = ["print_summary", "save_run"]
+
+
+def save_run(
+    model: Any, run_dir: Path, config: dict[str, Any], total: int, wall: float, state: str
+) -> None:
+    """Model, replay buffer (DQN), normalisation statistics and ``status.json``: all that
+    ``--resume`` needs."""
+    from palaestra.vec_env import VecNormalize
+
+    model.save(run_dir / MODEL_FILE)
+    if config["algo"] == "dqn":
+        model.save_replay_buffer(run_dir / REPLAY_FILE)
+    if isinstance(model.get_env(), VecNormalize):
+        model.get_env().save(str(run_dir / NORMALIZE_FILE))
+    write_json(
+        run_dir / STATUS_FILE,
+        {
+            "status": state,
+            "num_timesteps": int(model.num_timesteps),
+            "total_timesteps": int(total),
+            "wall_time_s": round(wall, 3),
+        },
+    )
+
+
+def print_summary(
+    eval_episodes: int,
+    config: dict[str, Any],
+    model: Any,
+    run_dir: Path,
+    steps: int,
+    seconds: float,
+) -> None:
+    """Steps, wall time, fps, the recent training return, a deterministic evaluation, the
+    learning curve, and the list of files written."""
+    from palaestra.cli.curves import read_episodes
+    from palaestra.cli.evaluate import make_env, obs_normalizer, play, summary_lines
+    from palaestra.cli.progress import format_duration
+
+    env_id = config["env_id"]
+    written = [CONFIG_FILE, "progress.csv", EPISODES_FILE, MODEL_FILE]
+    print(
+        f"trained {config['algo']} on {env_id}: {model.num_timesteps:,} steps, "
+        f"wall time {format_duration(seconds)} ({seconds:.1f} s), {steps / seconds:,.0f} fps"
+    )
+    history = read_episodes(run_dir)
+    last = history.returns[-100:]
+    if len(last):
+        line = f"mean return over the last {len(last)} training episodes: {np.mean(last):.2f}"
+        if is_goal_env(env_id) and history.terminated is not None:
+            line += f", success {100 * np.mean(history.terminated[-100:]):.1f}%"
+        print(line)
+    else:
+        print("no training episode finished yet")
+    if eval_episodes > 0:
+        env = make_env(env_id, dict(config.get("env_kwargs") or {}))
+        played = play(
+            model,
+            env,
+            eval_episodes,
+            True,
+            0,
+            normalize=obs_normalizer(run_dir / MODEL_FILE, env_id),
+        )
+        env.close()
+        print(f"evaluation ({eval_episodes} episodes, deterministic, seed 0):")
+        for text in summary_lines(played, env_id):
+            print(f"  {text}")
+    from palaestra.cli.curves import plot_learning_curve
+    from palaestra.error import DependencyNotInstalled
+
+    try:
+        plot_learning_curve(
+            history, run_dir / "learning_curve.png", f"{config['algo'].upper()} on {env_id}"
+        )
+        written.append("learning_curve.png")
+    except DependencyNotInstalled:
+        eprint("note: matplotlib is not installed, so no learning_curve.png")
+    if config["algo"] == "dqn":
+        written.append(REPLAY_FILE)
+    if (run_dir / NORMALIZE_FILE).is_file():
+        written.append(NORMALIZE_FILE)
+    if (run_dir / "checkpoints").is_dir():
+        written.append("checkpoints/")
+    if (run_dir / "tb").is_dir():
+        written.append("tb/")
+    print(f"wrote {run_dir}/: {', '.join(written)}")
