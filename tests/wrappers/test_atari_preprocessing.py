@@ -326,3 +326,20 @@ def test_parity_with_gymnasium(monkeypatch: pytest.MonkeyPatch, case: str) -> No
 @pytest.mark.parametrize("env_id", ["ALE/Pong-v5", "ALE/SpaceInvaders-v5", "ALE/Qbert-v5"])
 def test_parity_with_gymnasium_long(monkeypatch: pytest.MonkeyPatch, env_id: str) -> None:
     _check_gymnasium_parity(monkeypatch, {"terminal_on_life_loss": True}, 3000, env_id)
+
+
+def test_env_skips_screen_reads_only_when_nothing_below_uses_them() -> None:
+    """AtariPreprocessing reads frames from the emulator; the env's own screen copy is skipped
+    unless a wrapper below the preprocessing could look at observations."""
+    pytest.importorskip("ale_py")
+    from palaestra.wrappers import TransformObservation
+
+    env = palaestra.make("ALE/Pong-v5", frameskip=1)
+    wrapped = AtariPreprocessing(env)
+    obs, _ = env.reset(seed=0)
+    assert not obs.any()
+    assert wrapped.reset(seed=0)[0].any()  # the preprocessed frame is real
+
+    user = TransformObservation(palaestra.make("ALE/Pong-v5", frameskip=1), lambda o: o, None)
+    AtariPreprocessing(user)
+    assert user.reset(seed=0)[0].any()

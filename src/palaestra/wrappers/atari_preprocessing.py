@@ -127,6 +127,10 @@ class AtariPreprocessing(Wrapper[np.ndarray, int, np.ndarray, int], RecordConstr
                 f"AtariPreprocessing only downscales: screen_size (width, height) = "
                 f"{self.screen_size} is larger than the {width}x{height} screen"
             )
+        # Every frame this wrapper uses is read from the emulator, so when nothing between it
+        # and the Atari env looks at observations, the env can skip reading screens for it.
+        if _observations_unused_below(env) and hasattr(base, "skip_screen_observations"):
+            base.skip_screen_observations()
         self.terminal_on_life_loss = terminal_on_life_loss
         self.grayscale_obs = grayscale_obs
         self.grayscale_newaxis = grayscale_newaxis
@@ -209,3 +213,15 @@ class AtariPreprocessing(Wrapper[np.ndarray, int, np.ndarray, int], RecordConstr
         if self.scale_obs:
             return obs.astype(np.float32) / np.float32(255.0)
         return obs
+
+
+def _observations_unused_below(env: Env[Any, Any]) -> bool:
+    """Whether every layer between ``env`` and its base env ignores observations."""
+    from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
+
+    layer: Any = env
+    while isinstance(layer, Wrapper):
+        if type(layer) not in (OrderEnforcing, PassiveEnvChecker, TimeLimit):
+            return False
+        layer = layer.env
+    return True

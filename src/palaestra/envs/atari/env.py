@@ -130,6 +130,7 @@ class AtariEnv(Env[Any, Any]):
         else:
             self.observation_space = image_space
         self._window: Any = None
+        self._blank: np.ndarray | None = None  # set by skip_screen_observations()
 
     # --- seeding and loading (ale-py's public methods, same names) -------------------------
 
@@ -201,8 +202,18 @@ class AtariEnv(Env[Any, Any]):
             self.render()
         return self._obs(), reward, terminated, truncated, self._info()
 
+    def skip_screen_observations(self, skip: bool = True) -> None:
+        """Return a fresh all-zero frame instead of reading the screen at every step and
+        reset (``skip=False`` undoes it).
+
+        For wrappers that read the screen from ``ale`` themselves and discard the env's
+        observation (``AtariPreprocessing`` does, at ``frameskip=1``): an RGB screen read
+        costs about a quarter of an emulated frame, and would be paid on every frame.
+        """
+        self._blank = np.zeros_like(self._observe()) if skip else None
+
     def _obs(self) -> Any:
-        image = self._observe()
+        image = self._observe() if self._blank is None else np.zeros_like(self._blank)
         if self.sound_obs:
             return {"image": image, "sound": self.ale.getAudio()}
         return image
@@ -292,6 +303,7 @@ class AtariEnv(Env[Any, Any]):
             "np_random": self.np_random.bit_generator.state,
             "np_random_seed": self._np_random_seed,
             "spec": self.spec,
+            "skip_screen": self._blank is not None,
         }
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -302,3 +314,4 @@ class AtariEnv(Env[Any, Any]):
         self.np_random.bit_generator.state = state["np_random"]
         self._np_random_seed = state["np_random_seed"]
         self.spec = state["spec"]
+        self.skip_screen_observations(state.get("skip_screen", False))
