@@ -26,7 +26,7 @@ class Transition(NamedTuple):
     terminated: np.ndarray  # [N] bool
     truncated: np.ndarray  # [N] bool
     infos: Infos  # per-row step infos (reset infos for rows reset in this call)
-    final_rows: np.ndarray | None  # SAME_STEP: indices of rows that ended and were reset
+    final_rows: np.ndarray | None  # SAME_STEP: rows that ended (reset, unless `continuing`)
     final_obs: list[Any] | None  # their last observations, in final_rows order
     final_infos: list[dict[str, Any]] | None  # their last step infos
 
@@ -128,6 +128,9 @@ class Autoresetter:
         """Collect the step and apply the mode's autoreset."""
         engine = self.engine
         rewards, terminated, truncated, infos = engine.step_recv(timeout)
+        # Rows whose `terminated` marks a lost life while the game goes on (ale-py's
+        # life_loss_info): reported as terminated, never reset. Only some engines have them.
+        continuing: np.ndarray | None = getattr(engine, "continuing", None)
         if self.mode is not AutoresetMode.SAME_STEP:
             pending = self._pending
             if pending is not None:
@@ -136,26 +139,31 @@ class Autoresetter:
                 terminated[pending] = False
                 truncated[pending] = False
             np.logical_or(terminated, truncated, out=self._ended)
+            if continuing is not None:
+                self._ended &= ~continuing
             return Transition(engine.obs, rewards, terminated, truncated, infos, None, None, None)
 
         done = np.logical_or(terminated, truncated, out=self._done)
         if not done.any():
             return Transition(engine.obs, rewards, terminated, truncated, infos, None, None, None)
-        rows = np.flatnonzero(done)
-        final_obs = take_rows(engine.observation_space, engine.obs, rows)
-        final_infos = [{} for _ in rows] if infos is None else [infos[i] for i in rows]
-        reset_infos = engine.reset(done, self._no_seeds, None)
-        if reset_infos is not None:
-            if infos is None:
-                infos = [{} for _ in range(engine.num_envs)]
-            else:
+        final_rows = np.flatnonzero(done)
+        final_obs = take_rows(engine.observation_space, engine.obs, final_rows)
+        final_infos = (
+            [{} for _ in final_rows] if infos is None else [infos[i] for i in final_rows.tolist()]
+        )
+        if continuing is not None:
+            done &= ~continuing  # their final obs is also their next one: nothing to reset
+        rows = np.flatnonzero(done).tolist()
+        if rows:
+            reset_infos = engine.reset(done, self._no_seeds, None)
+            if reset_infos is not None:
+                infos = [{} for _ in range(engine.num_envs)] if infos is None else list(infos)
+                for i in rows:
+                    infos[i] = reset_infos[i]
+            elif infos is not None:
                 infos = list(infos)
-            for i in rows.tolist():
-                infos[i] = reset_infos[i]
-        elif infos is not None:
-            infos = list(infos)
-            for i in rows.tolist():
-                infos[i] = {}
+                for i in rows:
+                    infos[i] = {}
         return Transition(
-            engine.obs, rewards, terminated, truncated, infos, rows, final_obs, final_infos
+            engine.obs, rewards, terminated, truncated, infos, final_rows, final_obs, final_infos
         )

@@ -24,7 +24,9 @@ from palaestra.spaces.batched_samples import concatenate, create_empty_array, it
 from palaestra.spaces.batching import batch_differing_spaces, batch_space
 from palaestra.spaces.utils import is_space_dtype_shape_equiv
 
-Infos = list[dict[str, Any]] | None  # one raw info dict per row; None: every dict is empty
+# One raw info dict per row (a list, or a StackedInfos holding them as arrays); None: every
+# dict is empty.
+Infos = Sequence[dict[str, Any]] | None
 Rows = Sequence[int] | None  # sub-env indices; None: all
 StepResult = tuple[np.ndarray, np.ndarray, np.ndarray, Infos]
 

@@ -6,11 +6,13 @@ nested dicts stack recursively; ``final_obs`` always goes in an object array.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from palaestra.vector.autoreset import Transition
+from palaestra.vector.stacked_infos import StackedInfos
 
 
 def add_info(infos: dict[str, Any], env_info: dict[str, Any], i: int, n: int) -> dict[str, Any]:
@@ -51,6 +53,8 @@ def stack_transition_infos(t: Transition, n: int) -> dict[str, Any]:
     finals: dict[int, int] = {}
     if t.final_rows is not None:
         finals = {row: j for j, row in enumerate(t.final_rows.tolist())}
+    if isinstance(t.infos, StackedInfos) and not finals:
+        return t.infos.stacked()  # an engine's arrays, already one per key
     if t.infos is None:
         # Fast path (native engines): only the rows that ended carry anything.
         for row, k in finals.items():
@@ -65,8 +69,10 @@ def stack_transition_infos(t: Transition, n: int) -> dict[str, Any]:
     return infos
 
 
-def stack_infos(raw: list[dict[str, Any]] | None, n: int) -> dict[str, Any]:
+def stack_infos(raw: Sequence[dict[str, Any]] | None, n: int) -> dict[str, Any]:
     """Stack per-env reset infos."""
+    if isinstance(raw, StackedInfos):
+        return raw.stacked()
     infos: dict[str, Any] = {}
     if raw is not None:
         for i, env_info in enumerate(raw):
