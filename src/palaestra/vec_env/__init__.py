@@ -4,6 +4,7 @@
 engines of :mod:`palaestra.vector`; ``make_vec_env`` picks the native batch for built-in ids.
 """
 
+from palaestra.vec_env.atari_vec_env import AtariVecEnv
 from palaestra.vec_env.base import VecEnv, VecEnvWrapper
 from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
 from palaestra.vec_env.env_util import make_atari_env, make_vec_env
@@ -12,6 +13,7 @@ from palaestra.vec_env.monitor import VecMonitor
 from palaestra.vec_env.normalize import VecNormalize
 
 __all__ = [
+    "AtariVecEnv",
     "BatchedVecEnv",
     "DummyVecEnv",
     "SubprocVecEnv",

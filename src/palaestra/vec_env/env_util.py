@@ -5,12 +5,16 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from dataclasses import asdict
 from typing import Any
 
+from palaestra import logger
 from palaestra.core import Env
+from palaestra.vec_env.atari_vec_env import AtariGameMonitor, AtariVecEnv, atari_wrapper_settings
 from palaestra.vec_env.base import VecEnv
-from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv
+from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
 from palaestra.vec_env.monitor import VecMonitor
+from palaestra.vector.ale_engine import vector_interface_available
 
 _NATIVE = "palaestra.vector.native:"
 
@@ -116,15 +120,37 @@ def _atari_engine(
     wrapper_kwargs: dict[str, Any],
     env_kwargs: dict[str, Any],
     vec_env_cls: type[VecEnv] | None,
+    seed: int | None = None,
+    recipe_only: tuple[str, ...] = (),
 ) -> VecEnv | None:
-    """The one place that decides whether ``make_atari_env`` may use a native batched Atari
-    engine instead of ``n_envs`` wrapped single envs; None means "build single envs".
+    """The one place that decides whether ``make_atari_env`` uses the native vector Atari
+    instead of ``n_envs`` wrapped single envs; None means "build single envs".
 
-    No batched Atari engine exists yet, so this is always None. One may be used only where it
-    gives what SB3's recipe gives (Monitor, then AtariWrapper with ``wrapper_kwargs``, around
-    each env made with ``env_kwargs``), and never when the caller chose ``vec_env_cls``.
+    Only when the caller asks for it with ``vec_env_cls=AtariVecEnv``: its preprocessing means
+    what SB3's recipe means but is not frame for frame the same (see
+    :func:`~palaestra.vec_env.atari_vec_env.atari_wrapper_settings`), so the default stays the
+    recipe itself. When a setting does not map (or ``recipe_only`` names arguments that only
+    single envs take, such as ``monitor_dir``), a warning says which and None is returned.
     """
-    return None
+    from palaestra.envs.lookup import resolve_id
+
+    if vec_env_cls is not AtariVecEnv:
+        return None
+    if recipe_only:
+        mapped: tuple[str, Any] | str = f"{list(recipe_only)} need single envs"
+    elif not vector_interface_available():
+        mapped = "the installed ale-py has no ALEVectorInterface"
+    else:
+        mapped = atari_wrapper_settings(env_id, wrapper_kwargs, env_kwargs)
+    if isinstance(mapped, str):
+        logger.warn(f"make_atari_env: {mapped}; running SB3's recipe in SubprocVecEnv workers")
+        return None
+    game, settings = mapped
+    venv = AtariVecEnv(game, n_envs, frames_last=True, **asdict(settings))
+    venv.spec = resolve_id(env_id)
+    monitor = AtariGameMonitor(venv)
+    monitor.seed(seed)  # SB3: env i gets seed + i
+    return monitor
 
 
 def make_atari_env(
@@ -146,15 +172,26 @@ def make_atari_env(
     a new game; pass ``wrapper_kwargs=dict(terminal_on_life_loss=False)`` to avoid it. Use an id
     without frame skip of its own, e.g. ``"BreakoutNoFrameskip-v4"``.
 
+    ``vec_env_cls=AtariVecEnv`` runs the games on ale-py's C++ threads instead, with the same
+    settings in meaning (not frame for frame; see ``atari_wrapper_settings``); settings that do
+    not map fall back to ``SubprocVecEnv`` workers with a warning.
+
     >>> vec_env = make_atari_env("BreakoutNoFrameskip-v4", n_envs=2, seed=0)  # doctest: +SKIP
     >>> vec_env.reset().shape  # doctest: +SKIP
     (2, 84, 84, 1)
     """
     from palaestra.wrappers.atari import AtariWrapper
 
-    engine = _atari_engine(env_id, n_envs, wrapper_kwargs or {}, env_kwargs or {}, vec_env_cls)
+    given = (monitor_dir, vec_env_kwargs, monitor_kwargs)
+    names = ("monitor_dir", "vec_env_kwargs", "monitor_kwargs")
+    recipe_only = tuple(name for name, value in zip(names, given) if value)
+    engine = _atari_engine(
+        env_id, n_envs, wrapper_kwargs or {}, env_kwargs or {}, vec_env_cls, seed, recipe_only
+    )
     if engine is not None:
         return engine
+    if vec_env_cls is AtariVecEnv:
+        vec_env_cls = SubprocVecEnv  # _atari_engine has said why
     return make_vec_env(
         env_id,
         n_envs=n_envs,
