@@ -18,6 +18,9 @@ Cases:
   ``cv2.resize(INTER_AREA)``; where OpenCV is not installed its ``cv2`` is a stand-in whose
   ``resize`` is Pillow's ``Image.resize(BOX)`` (the line says which was measured, and the
   resize alone is timed too). Target: palaestra faster (ratio > 1).
+- ``vector``: ``make_vec("ALE/Breakout-v5", num_envs=n)`` for n = 2 and 4 in both libraries
+  (both ale-py's ``ALEVectorInterface``); env-steps/s (``atari_vector.py``). Target: ratio
+  >= 0.90.
 - ``memory``: bytes of DQN's ``optimize_memory_usage`` replay buffer holding 100k real Breakout
   transitions (84x84x4 stacks) vs 1.2x the bytes of 100k unique frames, and SB3's buffers
   (``atari_memory.py``; ``--quick``: 2k transitions). Not a speed ratio.
@@ -37,6 +40,7 @@ from typing import Any
 
 import numpy as np
 from atari_memory import bench_memory  # benchmarks/ is on sys.path when run as a script
+from atari_vector import bench_vector
 
 import palaestra
 
@@ -158,7 +162,7 @@ def bench_preprocessed(args: argparse.Namespace) -> None:
 CASES: dict[str, Callable[[argparse.Namespace], None] | None] = {
     "single": bench_single,
     "preprocessed": bench_preprocessed,
-    "vector": None,  # native vector Atari: not written yet
+    "vector": bench_vector,
     "memory": bench_memory,
 }
 
