@@ -70,7 +70,7 @@ def test_dqn_run_with_set_override(dqn_run: tuple[Path, Result]) -> None:
     assert (out / "replay_buffer.zip").is_file() and (out / "learning_curve.png").is_file()
     model = DQN.load(out / "model.zip")
     assert model.learning_starts == 100 and model.num_timesteps >= 300
-    assert model.policy_kwargs["net_arch"] == [256, 256]
+    assert model.policy_kwargs["net_arch"] == preset["policy_kwargs"]["net_arch"]
     rate = re.search(r"success rate: ([\d.]+)% \((\d+)/10 episodes", result.out)
     assert rate is not None and 0 <= float(rate[1]) <= 100
     assert "trained dqn on MountainCar-v0" in result.out
@@ -101,16 +101,17 @@ def test_settings_layering(tmp_path: Path) -> None:
     assert settings["hyperparams"]["n_steps"] == 64
 
 
+@pytest.mark.filterwarnings("ignore:.*CartPole-v0 is out of date:DeprecationWarning")
 def test_no_preset_uses_algorithm_defaults(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from palaestra.cli import progress
 
     monkeypatch.setattr(progress, "LINE_INTERVAL_S", 0.0)  # a progress line at every step
-    result = run_cli("train", "DQN", "Acrobot-v1", "--timesteps", 64, "--out", tmp_path / "r",
+    result = run_cli("train", "DQN", "CartPole-v0", "--timesteps", 64, "--out", tmp_path / "r",
                      "--progress", "line", "--eval-episodes", 0,
                      "--set", "policy_kwargs.net_arch=[16]", "--set", "learning_starts=32",
                      "--set", "policy_kwargs.activation_fn=tanh")  # fmt: skip
     assert result.code == 0, result.err
-    assert "note: no preset for dqn on Acrobot-v1: using the DQN defaults" in result.err
+    assert "note: no preset for dqn on CartPole-v0: using the DQN defaults" in result.err
     config = json.loads((tmp_path / "r" / "config.json").read_text())
     assert config["preset"] is None and config["n_envs"] == 1
     model = DQN.load(tmp_path / "r" / "model.zip")
@@ -145,7 +146,7 @@ def test_ctrl_c_saves_checkpoint_and_resume_reaches_the_total(
 ) -> None:
     out = tmp_path / "run"
     monkeypatch.setattr(train, "EXTRA_CALLBACKS", [_InterruptAt(200)])
-    result = run_cli("train", "dqn", "CartPole-v1", "--timesteps", 600, "--seed", 3,
+    result = run_cli("train", "dqn", "CartPole-v1", "--timesteps", 600, "--seed", 3, "--n-envs", 1,
                      "--set", "learning_starts=50", "--set", "train_freq=4",
                      "--set", "gradient_steps=1", "--out", out, "--progress", "none")  # fmt: skip
     assert result.code == 130
@@ -225,7 +226,8 @@ def test_real_sigint_stops_at_the_next_step(
     monkeypatch.setattr(train, "EXTRA_CALLBACKS", [_SigintAt()])
     previous = signal.getsignal(signal.SIGINT)
     result = run_cli("train", "dqn", "CartPole-v1", "--timesteps", 1000, "--out", tmp_path / "r",
-                     "--set", "learning_starts=50", "--progress", "none")  # fmt: skip
+                     "--n-envs", 1, "--set", "learning_starts=50",
+                     "--progress", "none")  # fmt: skip
     assert result.code == 130
     assert "stopping at the next step" in result.err
     assert _status(tmp_path / "r")["num_timesteps"] == 97  # the step after the signal

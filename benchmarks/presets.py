@@ -1,0 +1,299 @@
+"""Train every shipped preset on several seeds, evaluate it, and (``--update``) record the
+results in ``src/palaestra/presets/presets.json``.
+
+Run from the repository root::
+
+    .venv/bin/python benchmarks/presets.py                          # every preset, seeds 0-4
+    .venv/bin/python benchmarks/presets.py --algo dqn --env MountainCar-v0
+    .venv/bin/python benchmarks/presets.py --update                 # write each preset's "measured"
+    .venv/bin/python benchmarks/presets.py --algo dqn --env CartPole-v1 --seeds 0 1 \\
+        --set n_timesteps=30000 --set hyperparams.learning_rate=0.001   # try a change
+
+Each run is built exactly as ``palaestra train ALGO ENV --preset NAME --seed S`` builds it:
+``make_vec_env(env_id, n_envs, seed=S, env_kwargs)`` (under ``VecNormalize`` when the preset
+says ``normalize``), ``ALGO(policy, env, seed=S, **resolve(hyperparams))``, then
+``learn(n_timesteps)`` with ``torch.set_num_threads(1)``. Only ``learn`` is timed (wall clock).
+The trained model then plays 100 deterministic episodes with ``evaluate_policy`` on a fresh
+``palaestra.make(env_id)`` reset once with seed ``10_000 + S`` (later resets continue its
+generator). Goal envs (MountainCar, Acrobot) also report the success rate: episodes that end
+before the time limit. One row per (preset, seed) as it finishes, then per preset the medians
+and how many seeds reach the env's target (the env spec's ``reward_threshold``; -200 for
+Pendulum-v1, which has none). Run one training at a time on a quiet machine: wall times are
+the point.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import statistics
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import palaestra
+from palaestra import presets
+from palaestra.cli.common import is_goal_env, parse_value
+
+PRESETS_JSON = Path(__file__).resolve().parents[1] / "src/palaestra/presets/presets.json"
+EVAL_EPISODES = 100
+EVAL_SEED = 10_000
+# Targets where the env spec has no reward_threshold ("solved" as the RL Zoo reports it).
+EXTRA_TARGETS = {"Pendulum-v1": -200.0}
+
+
+@dataclass
+class Run:
+    """One trained and evaluated (preset, seed)."""
+
+    algo: str
+    env_id: str
+    name: str
+    seed: int
+    mean_return: float
+    std_return: float
+    success: float | None  # goal envs only: fraction of episodes ending before the time limit
+    wall_s: float
+    steps: int
+
+
+def target(env_id: str) -> float:
+    """The mean return that counts as solving ``env_id``."""
+    threshold = palaestra.spec(env_id).reward_threshold
+    if threshold is not None:
+        return float(threshold)
+    if env_id in EXTRA_TARGETS:
+        return EXTRA_TARGETS[env_id]
+    raise KeyError(f"no target return known for {env_id!r}; add it to EXTRA_TARGETS")
+
+
+def make_training_env(env_id: str, preset: dict[str, Any], seed: int) -> Any:
+    """The CLI's training env: the native batch, under VecNormalize when asked."""
+    from palaestra.vec_env import VecNormalize, make_vec_env
+
+    venv = make_vec_env(
+        env_id, n_envs=preset["n_envs"], seed=seed, env_kwargs=preset.get("env_kwargs")
+    )
+    normalize = preset.get("normalize") or False
+    if normalize is False:
+        return venv
+    kwargs = dict(normalize) if isinstance(normalize, dict) else {}
+    kwargs.setdefault("gamma", preset["hyperparams"].get("gamma", 0.99))
+    return VecNormalize(venv, **kwargs)
+
+
+class NormalizedPolicy:
+    """``model.predict`` on observations normalised by the training VecNormalize's statistics."""
+
+    def __init__(self, model: Any, venv: Any) -> None:
+        self.model, self.venv = model, venv
+        venv.training = False
+
+    def predict(self, obs: Any, **kwargs: Any) -> Any:
+        return self.model.predict(self.venv.normalize_obs(obs), **kwargs)
+
+
+def run_one(algo: str, env_id: str, name: str, preset: dict[str, Any], seed: int) -> Run:
+    """Train ``preset`` with ``seed`` the way the CLI does, then evaluate it."""
+    import torch
+
+    from palaestra.algos import DQN, PPO, evaluate_policy
+
+    torch.set_num_threads(1)
+    venv = make_training_env(env_id, preset, seed)
+    cls = {"dqn": DQN, "ppo": PPO}[algo]
+    model = cls(
+        preset["policy"], venv, seed=seed, verbose=0, **presets.resolve(preset["hyperparams"])
+    )
+    start = time.perf_counter()
+    model.learn(preset["n_timesteps"])
+    wall = time.perf_counter() - start
+    policy = NormalizedPolicy(model, venv) if preset.get("normalize") else model
+    env = palaestra.make(env_id, **(preset.get("env_kwargs") or {}))
+    env.reset(seed=EVAL_SEED + seed)
+    returns, lengths = evaluate_policy(
+        policy, env, n_eval_episodes=EVAL_EPISODES, deterministic=True, return_episode_rewards=True
+    )
+    success = None
+    if is_goal_env(env_id):
+        limit = env.spec.max_episode_steps if env.spec is not None else None
+        success = float(np.mean([n < limit for n in lengths])) if limit else None
+    env.close()
+    return Run(
+        algo,
+        env_id,
+        name,
+        seed,
+        float(np.mean(returns)),
+        float(np.std(returns)),
+        success,
+        wall,
+        int(model.num_timesteps),
+    )
+
+
+# -- output ------------------------------------------------------------------------------------
+HEADER = f"{'algo':4s} {'env':15s} {'preset':8s} {'seed':>4s} {'return':>14s} {'success':>7s}"
+HEADER += f" {'wall s':>7s} {'steps':>8s}"
+
+
+def row(run: Run) -> str:
+    """One table line."""
+    success = "" if run.success is None else f"{run.success:.0%}"
+    score = f"{run.mean_return:7.1f} ±{run.std_return:5.1f}"
+    return (
+        f"{run.algo:4s} {run.env_id:15s} {run.name:8s} {run.seed:4d} {score:>14s} {success:>7s}"
+        f" {run.wall_s:7.1f} {run.steps:8d}"
+    )
+
+
+def summary(runs: list[Run]) -> dict[str, Any]:
+    """Per-seed results and medians of one preset (the ``measured`` record)."""
+    goal = target(runs[0].env_id)
+    out: dict[str, Any] = {
+        "seeds": [r.seed for r in runs],
+        "mean_return": [round(r.mean_return, 1) for r in runs],
+        "median_return": round(statistics.median(r.mean_return for r in runs), 1),
+        "target": goal,
+        "seeds_meeting_target": sum(r.mean_return >= goal for r in runs),
+        "wall_s": [round(r.wall_s, 1) for r in runs],
+        "wall_s_median": round(statistics.median(r.wall_s for r in runs), 1),
+    }
+    if runs[0].success is not None:
+        out["success_rate"] = [r.success for r in runs]
+    return out
+
+
+def summary_line(runs: list[Run]) -> str:
+    s = summary(runs)
+    head = f"{runs[0].algo} {runs[0].env_id} {runs[0].name}:"
+    return (
+        f"{head} median return {s['median_return']:.1f}, "
+        f"{s['seeds_meeting_target']}/{len(runs)} seeds >= {s['target']:g}, "
+        f"median train wall {s['wall_s_median']:.1f}s"
+    )
+
+
+# -- presets.json --------------------------------------------------------------------------------
+def compact_json(value: Any, indent: int = 0, width: int = 100) -> str:
+    """JSON with anything that fits on one line kept on one line (the file stays readable)."""
+    flat = json.dumps(value)
+    if len(flat) + indent <= width or not isinstance(value, (dict, list)) or not value:
+        return flat
+    pad = " " * (indent + 2)
+    if isinstance(value, dict):
+        items = [
+            f"{pad}{json.dumps(k)}: {compact_json(v, indent + 2, width)}" for k, v in value.items()
+        ]
+        return "{\n" + ",\n".join(items) + "\n" + " " * indent + "}"
+    items = [f"{pad}{compact_json(v, indent + 2, width)}" for v in value]
+    return "[\n" + ",\n".join(items) + "\n" + " " * indent + "]"
+
+
+def write_measured(measured: dict[tuple[str, str, str], dict[str, Any]]) -> None:
+    """Set the ``measured`` field of each given preset in presets.json."""
+    table = json.loads(PRESETS_JSON.read_text(encoding="utf-8"))
+    for (algo, env_id, name), record in measured.items():
+        table[algo][env_id][name]["measured"] = record
+    PRESETS_JSON.write_text(compact_json(table) + "\n", encoding="utf-8")
+
+
+def machine() -> str:
+    return f"{os.cpu_count()}-core CPU, 1 torch thread"
+
+
+# -- main ----------------------------------------------------------------------------------------
+def selected(algo: str | None, env_id: str | None, name: str | None) -> list[tuple[str, str, str]]:
+    out = []
+    for a, envs in presets.available().items():
+        for e, names in envs.items():
+            for n in names:
+                if (algo in (None, a)) and (env_id in (None, e)) and (name in (None, n)):
+                    out.append((a, e, n))
+    if not out:
+        raise SystemExit(f"no preset matches algo={algo!r} env={env_id!r} preset={name!r}")
+    return out
+
+
+def overridden(preset: dict[str, Any], assignments: list[str]) -> dict[str, Any]:
+    """``preset`` with ``--set key.sub=value`` overrides (JSON or Python-literal values)."""
+    for item in assignments:
+        key, sep, text = item.partition("=")
+        if not sep:
+            raise SystemExit(f"--set {item!r} is not key=value")
+        override: dict[str, Any] = {}
+        node = override
+        parts = key.split(".")
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+        node[parts[-1]] = parse_value(text)
+        preset = presets.merge(preset, override)
+    return preset
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--algo", choices=["dqn", "ppo"])
+    parser.add_argument("--env", metavar="ID")
+    parser.add_argument("--preset", metavar="NAME", help="preset name (default: all)")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
+    parser.add_argument(
+        "--set",
+        dest="assignments",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="try a change, e.g. n_envs=4 or hyperparams.learning_rate=0.002 (not with --update)",
+    )
+    parser.add_argument("--update", action="store_true", help="write 'measured' into presets.json")
+    args = parser.parse_args(argv)
+    if args.update and args.assignments:
+        parser.error("--update records the presets as shipped; drop --set")
+    return args
+
+
+def command(algo: str, env_id: str, name: str, seeds: list[int]) -> str:
+    preset = "" if name == "default" else f" --preset {name}"
+    seed_list = " ".join(map(str, seeds))
+    return (
+        f".venv/bin/python benchmarks/presets.py --algo {algo} --env {env_id}{preset}"
+        f" --seeds {seed_list}"
+    )
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
+    print(f"load average at start: {os.getloadavg()[0]:.2f} ({machine()})", flush=True)
+    print(HEADER, flush=True)
+    measured: dict[tuple[str, str, str], dict[str, Any]] = {}
+    lines = []
+    for algo, env_id, name in selected(args.algo, args.env, args.preset):
+        preset = overridden(presets.get_preset(algo, env_id, name), args.assignments)
+        runs = []
+        for seed in args.seeds:
+            runs.append(run_one(algo, env_id, name, preset, seed))
+            print(row(runs[-1]), flush=True)
+        lines.append(summary_line(runs))
+        measured[(algo, env_id, name)] = {
+            **summary(runs),
+            "date": datetime.date.today().isoformat(),
+            "machine": machine(),
+            "load_average_1m": round(os.getloadavg()[0], 2),
+            "command": command(algo, env_id, name, args.seeds),
+        }
+    print("\nsummary")
+    print("\n".join(lines))
+    print(f"load average at end: {os.getloadavg()[0]:.2f}")
+    if args.update:
+        write_measured(measured)
+        print(f"wrote {len(measured)} measured record(s) to {PRESETS_JSON}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
