@@ -14,7 +14,7 @@ Shows the whole life of a custom env with palaestra's Gymnasium API:
 
 Run::
 
-    .venv/bin/python examples/custom_env.py            # ~15 s: train 30k steps, evaluate
+    .venv/bin/python examples/custom_env.py            # seconds: train 30k steps, evaluate
     .venv/bin/python examples/custom_env.py --quick    # a few seconds, for the tests
 
 Outputs go to ``runs/custom_env/`` (``--out`` to change): ``episode.gif``.
