@@ -88,7 +88,7 @@ def bench_single(args: argparse.Namespace) -> None:
 def opencv_or_pillow() -> str:
     """Import ``cv2``; without OpenCV, put a stand-in in ``sys.modules`` whose ``resize`` is
     Pillow's area-style ``BOX`` filter, so that Gymnasium's AtariPreprocessing can run.
-    Returns what Gymnasium's resize is."""
+    Returns what Gymnasium's resize is. ``drop_cv2_stand_in`` takes the stand-in out again."""
     import sys
     import types
 
@@ -105,8 +105,18 @@ def opencv_or_pillow() -> str:
     shim = types.ModuleType("cv2")
     shim.INTER_AREA = 3  # type: ignore[attr-defined]
     shim.resize = resize  # type: ignore[attr-defined]
+    shim.palaestra_stand_in = True  # type: ignore[attr-defined]
     sys.modules["cv2"] = shim
     return "no OpenCV here: Pillow Image.resize(BOX) stand-in"
+
+
+def drop_cv2_stand_in() -> None:
+    """Remove the ``cv2`` stand-in: SB3 (the memory case) treats any ``cv2`` as OpenCV and
+    calls ``cv2.ocl``, which the stand-in does not have."""
+    import sys
+
+    if getattr(sys.modules.get("cv2"), "palaestra_stand_in", False):
+        del sys.modules["cv2"]
 
 
 def resize_micros(resize: Callable[[np.ndarray], Any], frame: np.ndarray, n: int = 2000) -> float:
@@ -157,6 +167,7 @@ def bench_preprocessed(args: argparse.Namespace) -> None:
     print(f"{'':<34}gymnasium resize: {resize_kind}")
     sizes = f"resize_area {ours_us:.0f} us, gymnasium's {ref_us:.0f} us"
     print(f"{'':<34}210x160 -> 84x84 gray: {sizes}")
+    drop_cv2_stand_in()
 
 
 CASES: dict[str, Callable[[argparse.Namespace], None] | None] = {
