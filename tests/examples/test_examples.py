@@ -68,3 +68,17 @@ def test_vectorized_training() -> None:
         assert re.search(rf"^{name} +{NUMBER} +{NUMBER} +{NUMBER}$", out, re.M), out
     # Seeded alike, the native batch and the loop give the same episodes, hence the same agent.
     assert "same trained weights from both vec envs: True" in out
+
+
+def test_tabular_mountain_car(tmp_path: Path) -> None:
+    from PIL import Image
+
+    out = run_example("tabular_mountain_car.py", "--out", tmp_path)
+    assert re.search(rf"^trained on 200,000 MountainCar steps in {NUMBER} s", out, re.M), out
+    match = re.search(rf"greedy policy over 100 episodes: success (\d+)%, mean length ({NUMBER})", out)
+    assert match, out
+    assert 0 <= int(match[1]) <= 100 and 1 <= float(match[2]) <= 200
+    with Image.open(tmp_path / "mountain_car.gif") as gif:
+        assert gif.size == (600, 400) and gif.n_frames >= 2
+    with Image.open(tmp_path / "learning_curve.png") as png:
+        assert png.format == "PNG"
