@@ -10,10 +10,10 @@ part of a spec, there as here).
 
 from __future__ import annotations
 
-from typing import Any, SupportsFloat
+import functools
+from typing import Any
 
-import numpy as np
-
+from palaestra.compat._forwarding import Forwarding
 from palaestra.compat._optional import gymnasium_missing
 from palaestra.compat.registry import GYMNASIUM_PREFIX
 from palaestra.compat.spaces import (
@@ -33,78 +33,27 @@ except ImportError as exc:  # pragma: no cover - exercised in a subprocess test
 __all__ = ["PalaestraEnvAdapter", "from_gymnasium"]
 
 
-class PalaestraEnvAdapter(Env[Any, Any]):
+class PalaestraEnvAdapter(Forwarding, Env[Any, Any]):  # type: ignore[override]
     """A palaestra ``Env`` that forwards to a ``gymnasium.Env``; build it with
     :func:`from_gymnasium`."""
 
     def __init__(self, env: Any) -> None:
-        self.gymnasium_env = env
+        self.gymnasium_env = self._inner = env
         self.observation_space = from_gymnasium_space(env.observation_space)
         self.action_space = from_gymnasium_space(env.action_space)
-        self._convert_obs = needs_value_conversion(self.observation_space)
-        self._convert_act = needs_value_conversion(self.action_space)
+        obs_space, act_space = self.observation_space, self.action_space
+        # Graph values are the only ones whose type differs; skip the walk for everything else.
+        self._act_in = (
+            functools.partial(to_gymnasium_value, act_space)
+            if needs_value_conversion(act_space)
+            else None
+        )
+        self._obs_out = (
+            functools.partial(from_gymnasium_value, obs_space)
+            if needs_value_conversion(obs_space)
+            else None
+        )
         self.spec = _palaestra_spec(env.spec)
-
-    def step(self, action: Any) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
-        """Step the Gymnasium env with ``action`` (a palaestra-space element)."""
-        if self._convert_act:
-            action = to_gymnasium_value(self.action_space, action)
-        obs, reward, terminated, truncated, info = self.gymnasium_env.step(action)
-        if self._convert_obs:
-            obs = from_gymnasium_value(self.observation_space, obs)
-        return obs, reward, terminated, truncated, info
-
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Any, dict[str, Any]]:
-        """Reset the Gymnasium env (which seeds its own generator)."""
-        obs, info = self.gymnasium_env.reset(seed=seed, options=options)
-        if self._convert_obs:
-            obs = from_gymnasium_value(self.observation_space, obs)
-        return obs, info
-
-    def render(self) -> Any:
-        """The Gymnasium env's frame for its ``render_mode``."""
-        return self.gymnasium_env.render()
-
-    def close(self) -> None:
-        """Close the Gymnasium env."""
-        self.gymnasium_env.close()
-
-    @property
-    def render_mode(self) -> str | None:  # type: ignore[override]
-        """The Gymnasium env's render mode."""
-        return self.gymnasium_env.render_mode
-
-    @property
-    def metadata(self) -> dict[str, Any]:  # type: ignore[override]
-        """The Gymnasium env's metadata."""
-        return self.gymnasium_env.metadata
-
-    # One generator, the Gymnasium env's (see to_gymnasium_env for the other direction).
-    @property
-    def np_random(self) -> np.random.Generator:
-        """The Gymnasium env's generator."""
-        return self.gymnasium_env.np_random
-
-    @np_random.setter
-    def np_random(self, value: np.random.Generator) -> None:
-        self.gymnasium_env.np_random = value
-
-    @property
-    def np_random_seed(self) -> int:
-        """The Gymnasium env's seed."""
-        return self.gymnasium_env.np_random_seed
-
-    @property
-    def _np_random(self) -> np.random.Generator | None:  # type: ignore[override]
-        return self.gymnasium_env.unwrapped._np_random
-
-    def __str__(self) -> str:
-        return f"<{type(self).__name__}{self.gymnasium_env}>"
-
-    def __repr__(self) -> str:
-        return str(self)
 
 
 def from_gymnasium(env: Any) -> Env[Any, Any]:

@@ -10,10 +10,9 @@ the palaestra stack below it stays reachable as ``adapter.palaestra_env``.
 from __future__ import annotations
 
 import functools
-from typing import Any, SupportsFloat
+from typing import Any
 
-import numpy as np
-
+from palaestra.compat._forwarding import Forwarding
 from palaestra.compat._optional import gymnasium_missing
 from palaestra.compat.spaces import (
     from_gymnasium_value,
@@ -32,80 +31,25 @@ except ImportError as exc:  # pragma: no cover - exercised in a subprocess test
 __all__ = ["GymnasiumEnvAdapter", "to_gymnasium"]
 
 
-class GymnasiumEnvAdapter(gymnasium.Env):
+class GymnasiumEnvAdapter(Forwarding, gymnasium.Env):  # type: ignore[override]
     """A ``gymnasium.Env`` that forwards to a palaestra env; build it with :func:`to_gymnasium`."""
 
     def __init__(self, env: Env[Any, Any]) -> None:
-        self.palaestra_env = env
+        self.palaestra_env = self._inner = env
         self.observation_space = to_gymnasium_space(env.observation_space)
         self.action_space = to_gymnasium_space(env.action_space)
         # Graph values are the only ones whose type differs; skip the walk for everything else.
-        self._convert_obs = needs_value_conversion(env.observation_space)
-        self._convert_act = needs_value_conversion(env.action_space)
+        self._act_in = (
+            functools.partial(from_gymnasium_value, env.action_space)
+            if needs_value_conversion(env.action_space)
+            else None
+        )
+        self._obs_out = (
+            functools.partial(to_gymnasium_value, env.observation_space)
+            if needs_value_conversion(env.observation_space)
+            else None
+        )
         self.spec = _gymnasium_spec(env.spec)
-
-    def step(self, action: Any) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
-        """Step the palaestra env with ``action`` (a Gymnasium-space element)."""
-        env = self.palaestra_env
-        if self._convert_act:
-            action = from_gymnasium_value(env.action_space, action)
-        obs, reward, terminated, truncated, info = env.step(action)
-        if self._convert_obs:
-            obs = to_gymnasium_value(env.observation_space, obs)
-        return obs, reward, terminated, truncated, info
-
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Any, dict[str, Any]]:
-        """Reset the palaestra env; ``seed`` seeds its generator exactly as Gymnasium would."""
-        obs, info = self.palaestra_env.reset(seed=seed, options=options)
-        if self._convert_obs:
-            obs = to_gymnasium_value(self.palaestra_env.observation_space, obs)
-        return obs, info
-
-    def render(self) -> Any:
-        """The palaestra env's frame for its ``render_mode``."""
-        return self.palaestra_env.render()
-
-    def close(self) -> None:
-        """Close the palaestra env."""
-        self.palaestra_env.close()
-
-    @property
-    def render_mode(self) -> str | None:  # type: ignore[override]
-        """The palaestra env's render mode."""
-        return self.palaestra_env.render_mode
-
-    @property
-    def metadata(self) -> dict[str, Any]:  # type: ignore[override]
-        """The palaestra env's metadata (``render_modes``, ``render_fps``)."""
-        return self.palaestra_env.metadata
-
-    # One generator, the palaestra env's: Gymnasium code that reads or replaces `np_random` (or
-    # `unwrapped._np_random`, as check_env does) sees the stream the env actually draws from.
-    @property
-    def np_random(self) -> np.random.Generator:
-        """The palaestra env's generator."""
-        return self.palaestra_env.np_random
-
-    @np_random.setter
-    def np_random(self, value: np.random.Generator) -> None:
-        self.palaestra_env.np_random = value
-
-    @property
-    def np_random_seed(self) -> int:
-        """The palaestra env's seed."""
-        return self.palaestra_env.np_random_seed
-
-    @property
-    def _np_random(self) -> np.random.Generator | None:  # type: ignore[override]
-        return self.palaestra_env.unwrapped._np_random
-
-    def __str__(self) -> str:
-        return f"<{type(self).__name__}{self.palaestra_env}>"
-
-    def __repr__(self) -> str:
-        return str(self)
 
 
 def to_gymnasium(env: Env[Any, Any]) -> Any:
