@@ -9,7 +9,7 @@ import torch
 
 import palaestra as gym
 from palaestra.algos import DQN, PPO
-from palaestra.algos.numpy_nn import FlatAdam
+from palaestra.algos.numpy_nn import FlatAdam, LayerViews
 
 
 def _twin_params(seed: int = 0) -> tuple[list[torch.Tensor], list[torch.Tensor]]:
@@ -110,3 +110,26 @@ def test_acting_sees_trained_parameters() -> None:
     assert not np.allclose(initial, logits)  # training moved the policy
     np.testing.assert_allclose(pi_fn(obs), logits, atol=1e-6)
     np.testing.assert_allclose(vf_fn(obs), values, atol=1e-6)
+
+
+def test_layer_views_follow_moved_and_updated_parameters() -> None:
+    lin = torch.nn.Linear(3, 2)
+    cache = LayerViews([(lin, "tanh")])
+    ((w, b, act),) = cache()[0]
+    assert act == "tanh" and np.shares_memory(w, lin.weight.detach().numpy())
+    with torch.no_grad():
+        lin.bias.add_(1.0)  # in place: the same views see it
+    assert cache()[0][0][1] is b
+    np.testing.assert_array_equal(b, lin.bias.detach().numpy())
+    lin.weight.data = lin.weight.data.clone()  # moved: new views
+    w2 = cache()[0][0][0]
+    assert w2 is not w and np.shares_memory(w2, lin.weight.detach().numpy())
+
+
+def test_grad_views_are_cached_and_follow_a_deepcopy() -> None:
+    ours, _ = _twin_params(3)
+    flat = FlatAdam(torch.optim.Adam(ours, lr=1e-2), ours)
+    assert flat.grad_views() is flat.grad_views()
+    twin = copy.deepcopy(flat)
+    for view in twin.grad_views():
+        assert np.shares_memory(view, twin.grad) and not np.shares_memory(view, flat.grad)

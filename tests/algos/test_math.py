@@ -166,3 +166,25 @@ def test_polyak_update() -> None:
 def test_explained_variance() -> None:
     assert math.isnan(explained_variance(np.ones(3), np.ones(3)))
     assert explained_variance(np.zeros(2), np.array([1.0, -1.0])) == pytest.approx(0.0)
+
+
+def test_gae_equals_the_step_by_step_recursion_bit_for_bit() -> None:
+    """The vectorised per-step terms do the same float32 operations as SB3's loop."""
+    rng = np.random.default_rng(1)
+    t, n, g, lam = 64, 4, 0.99, 0.95
+    rewards = rng.normal(size=(t, n)).astype(np.float32)
+    values = rng.normal(size=(t, n)).astype(np.float32)
+    starts = (rng.random((t, n)) < 0.1).astype(np.float32)
+    last_v, dones = rng.normal(size=n).astype(np.float32), np.array([1, 0, 0, 1], np.float32)
+    expected = np.zeros_like(rewards)
+    last = np.zeros(n, dtype=np.float32)
+    for i in reversed(range(t)):
+        nnt = 1.0 - dones if i == t - 1 else 1.0 - starts[i + 1]
+        nv = last_v if i == t - 1 else values[i + 1]
+        delta = rewards[i] + g * nv * nnt - values[i]
+        last = delta + g * lam * nnt * last
+        expected[i] = last
+    adv, ret = gae(rewards, values, starts, last_v, dones, g, lam)
+    assert adv.dtype == ret.dtype == np.float32
+    np.testing.assert_array_equal(adv, expected)
+    np.testing.assert_array_equal(ret, expected + values)

@@ -18,12 +18,12 @@ from torch import nn
 
 from palaestra.algos.numpy_nn import (
     FlatAdam,
+    LayerViews,
     adam_ok,
     backward,
     forward,
     linear_chain,
     one_blas_thread,
-    views,
 )
 from palaestra.algos.replay_buffer import ReplayBuffer
 
@@ -43,19 +43,7 @@ class NumpyDQNTrainer:
     ):
         self.chain, self.target_chain = chain, target_chain
         self.adam = FlatAdam(optimizer, [p for lin, _ in chain for p in (lin.weight, lin.bias)])
-        self._views_key: tuple[int, ...] = ()
-        self._views_cache: tuple[list[Any], list[Any]] = ([], [])
-
-    def _views(self) -> tuple[list[Any], list[Any]]:
-        """Numpy views of both nets, taken again only when a parameter has moved."""
-        key = tuple(
-            p.data_ptr()
-            for lin, _ in self.chain + self.target_chain
-            for p in (lin.weight, lin.bias)
-        )
-        if key != self._views_key:
-            self._views_key, self._views_cache = key, (views(self.chain), views(self.target_chain))
-        return self._views_cache
+        self._views = LayerViews(chain, target_chain)
 
     @classmethod
     def build(cls, q_net: nn.Module, q_target: nn.Module, optimizer: Any) -> NumpyDQNTrainer | None:

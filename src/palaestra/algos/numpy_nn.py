@@ -26,6 +26,7 @@ from torch import nn
 __all__ = [
     "FlatAdam",
     "Layer",
+    "LayerViews",
     "adam_ok",
     "backward",
     "forward",
@@ -63,7 +64,29 @@ def linear_chain(modules: list[nn.Module]) -> list[tuple[nn.Linear, str]] | None
 
 
 def views(chain: list[tuple[nn.Linear, str]]) -> list[Layer]:
+    """Numpy views ``(weight, bias, activation)`` of each layer's parameters."""
     return [(lin.weight.detach().numpy(), lin.bias.detach().numpy(), act) for lin, act in chain]
+
+
+class LayerViews:
+    """``views`` of several chains, taken again only when a parameter has moved.
+
+    Taking the views costs ~1 µs per tensor, more than a small layer's math; checking the
+    data pointers is cheaper. A ``deepcopy`` gives new pointers, so a copy takes its own views.
+    """
+
+    def __init__(self, *chains: list[tuple[nn.Linear, str]]) -> None:
+        self.chains = chains
+        self._params = [p for chain in chains for lin, _ in chain for p in (lin.weight, lin.bias)]
+        self._key: list[int] = []
+        self._views: list[list[Layer]] = []
+
+    def __call__(self) -> list[list[Layer]]:
+        """One list of layer views per chain."""
+        key = [p.data_ptr() for p in self._params]
+        if key != self._key:
+            self._key, self._views = key, [views(chain) for chain in self.chains]
+        return self._views
 
 
 def forward(layers: list[Layer], x: np.ndarray) -> list[np.ndarray]:
@@ -87,16 +110,28 @@ def backward(
     of ``FlatAdam.grads``), given d(loss)/d(out) taken *after* the last layer's activation
     (the head has none)."""
     g = grad_out
+    ones = _ones(g.shape[0])
     for i in range(len(layers) - 1, -1, -1):
         w, _, act = layers[i]
         if act == "relu":
             g = g * (acts[i + 1] > 0)
-        elif act == "tanh":
-            g = g * (1.0 - acts[i + 1] * acts[i + 1])
+        elif act == "tanh":  # g * (1 - a^2), with one temporary
+            d = acts[i + 1] * acts[i + 1]
+            np.subtract(1.0, d, out=d)
+            g = np.multiply(g, d, out=d)
         np.matmul(g.T, acts[i], out=out[2 * i])
-        np.sum(g, axis=0, out=out[2 * i + 1])
+        # Column sums as one BLAS call: np.sum over axis 0 costs ~4x more at 256 x 64.
+        np.matmul(ones, g, out=out[2 * i + 1])
         if i:
             g = g @ w
+
+
+@cache
+def _ones(n: int) -> np.ndarray:
+    """A read-only float32 vector of ``n`` ones (shared: batch sizes repeat)."""
+    ones = np.ones(n, dtype=np.float32)
+    ones.flags.writeable = False
+    return ones
 
 
 def adam_ok(optimizer: torch.optim.Optimizer) -> bool:
@@ -121,8 +156,9 @@ class FlatAdam:
     as views of flat torch buffers, so one step is about a dozen numpy operations over all
     weights instead of a dozen per tensor (per-tensor overhead was most of a small net's
     update), and torch (``save``, ``load``, the torch code paths) keeps seeing the same tensors.
-    Only torch tensors are kept between calls (numpy views are taken per step), so a
-    ``deepcopy`` of the model and its trainer stays wired together. The math is torch's
+    Of the parameters and state only torch tensors are kept between calls (their numpy views
+    are taken per step), so a ``deepcopy`` of the model and its trainer stays wired together;
+    the gradient views are kept and checked against the gradient buffer instead. The math is torch's
     non-fused float32 formula. The backward pass writes into ``grad_views()``.
     """
 
@@ -132,6 +168,7 @@ class FlatAdam:
         self.slices = [slice(int(a), int(b)) for a, b in itertools.pairwise(bounds)]
         self.grad = np.zeros(int(bounds[-1]), dtype=np.float32)
         self._tmp, self._tmp2 = np.empty_like(self.grad), np.empty_like(self.grad)
+        self._grad_views = self._make_grad_views()
         self._bind_params()
         self._bind_state()
 
@@ -176,9 +213,14 @@ class FlatAdam:
             for p, (st, m) in zip(self.params, self._bound)
         )
 
+    def _make_grad_views(self) -> list[np.ndarray]:
+        return [self.grad[sl].reshape(p.shape) for p, sl in zip(self.params, self.slices)]
+
     def grad_views(self) -> list[np.ndarray]:
         """Per-parameter views of the flat gradient buffer, in ``params`` order."""
-        return [self.grad[sl].reshape(p.shape) for p, sl in zip(self.params, self.slices)]
+        if self._grad_views[0].base is not self.grad:  # a deepcopy copied the views apart
+            self._grad_views = self._make_grad_views()
+        return self._grad_views
 
     def step(self) -> None:
         """Apply ``self.grad`` (already clipped) to the parameters."""

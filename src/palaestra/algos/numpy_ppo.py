@@ -18,11 +18,11 @@ import torch
 from palaestra.algos.numpy_acting import log_softmax
 from palaestra.algos.numpy_nn import (
     FlatAdam,
+    LayerViews,
     adam_ok,
     backward,
     forward,
     linear_chain,
-    views,
 )
 
 __all__ = ["NumpyPPOTrainer"]
@@ -41,6 +41,7 @@ class NumpyPPOTrainer:
         if self.head.kind == "gaussian":
             params.append(self.head.log_std)
         self.adam = FlatAdam(optimizer, params)
+        self._views = LayerViews(pi_chain, vf_chain)
 
     @classmethod
     def build(cls, policy: Any, optimizer: Any) -> NumpyPPOTrainer | None:
@@ -77,18 +78,19 @@ class NumpyPPOTrainer:
     ) -> tuple[dict[str, float], bool]:
         """One minibatch: the logged values and whether the KL limit stopped it (no update)."""
         n = obs.shape[0]
-        x = obs.reshape(n, -1).astype(np.float32)
-        pi_layers, vf_layers = views(self.pi_chain), views(self.vf_chain)
+        x = obs.reshape(n, -1).astype(np.float32, copy=False)
+        pi_layers, vf_layers = self._views()
         pi_acts, vf_acts = forward(pi_layers, x), forward(vf_layers, x)
         out, values = pi_acts[-1], vf_acts[-1][:, 0]
+        rows = np.arange(n)
         if self.head.kind == "categorical":
-            idx = actions.reshape(n).astype(np.int64)
+            idx = actions.reshape(n).astype(np.int64, copy=False)
             if self.head.offset is not None:
                 idx = idx - int(self.head.offset)
             logp_all = log_softmax(out)
             probs = np.exp(logp_all)
-            log_prob = logp_all[np.arange(n), idx]
-            entropy = -(probs * logp_all).sum(axis=1)
+            log_prob = logp_all[rows, idx]
+            entropy = -np.add.reduce(probs * logp_all, axis=1)
         else:
             log_std = self.head.log_std.detach().numpy()
             z = (actions.reshape(out.shape) - out) * np.exp(-log_std)
@@ -96,20 +98,25 @@ class NumpyPPOTrainer:
             entropy = np.full(n, (0.5 + _LOG_SQRT_2PI + log_std).sum(), dtype=np.float32)
         adv = advantages
         if normalize_advantage and n > 1:
-            adv = (adv - adv.mean()) / (adv.std(ddof=1) + 1e-8)
+            # (adv - mean) / (std(ddof=1) + 1e-8), without np.mean/np.std's Python layers
+            centred = adv - np.add.reduce(adv) / n
+            std = math.sqrt(float(np.dot(centred, centred)) / (n - 1))
+            adv = centred / np.float32(std + 1e-8)
         log_ratio = log_prob - old_log_prob
         ratio = np.exp(log_ratio)
-        clipped = np.clip(ratio, 1 - clip_range, 1 + clip_range)
+        # np.clip's Python layer costs more than these two ufuncs at these sizes
+        clipped = np.minimum(np.maximum(ratio, 1 - clip_range), 1 + clip_range)
         s1, s2 = adv * ratio, adv * clipped
         v_pred = values
         if clip_range_vf is not None:
             v_pred = old_values + np.clip(values - old_values, -clip_range_vf, clip_range_vf)
+        v_err = v_pred - returns
         metrics = {
-            "policy_loss": float(-np.minimum(s1, s2).mean()),
-            "value_loss": float(np.mean((returns - v_pred) ** 2)),
-            "entropy_loss": float(-entropy.mean()),
-            "clip_fraction": float(np.mean(np.abs(ratio - 1) > clip_range)),
-            "approx_kl": float(np.mean((ratio - 1) - log_ratio)),
+            "policy_loss": -float(np.add.reduce(np.minimum(s1, s2))) / n,
+            "value_loss": float(np.dot(v_err, v_err)) / n,
+            "entropy_loss": -float(np.add.reduce(entropy)) / n,
+            "clip_fraction": float(np.count_nonzero(np.abs(ratio - 1) > clip_range)) / n,
+            "approx_kl": float(np.add.reduce((ratio - 1) - log_ratio)) / n,
         }
         metrics["loss"] = (
             metrics["policy_loss"]
@@ -124,21 +131,21 @@ class NumpyPPOTrainer:
         d_min = adv * ((s1 < s2) + tie + ((s2 < s1) + tie) * inside)
         d_lp = -d_min * ratio / n  # d(policy_loss)/d(log_prob)
         if self.head.kind == "categorical":
-            one_hot = np.zeros_like(probs)
-            one_hot[np.arange(n), idx] = 1.0
-            d_out = d_lp[:, None] * (one_hot - probs)
-            d_out += (ent_coef / n) * probs * (logp_all + entropy[:, None])  # -dH/dlogits
+            # d_lp * (one_hot - probs) - dH/dlogits * ent_coef / n
+            d_out = (ent_coef / n) * probs * (logp_all + entropy[:, None])
+            d_out -= d_lp[:, None] * probs
+            d_out[rows, idx] += d_lp
             extra: list[np.ndarray] = []
         else:
             d_out = d_lp[:, None] * z * np.exp(-log_std)
             extra = [(d_lp[:, None] * (z * z - 1.0)).sum(axis=0) - ent_coef]
-        d_v = (2.0 * vf_coef / n) * (v_pred - returns)
+        d_v = (2.0 * vf_coef / n) * v_err
         if clip_range_vf is not None:
             d_v = d_v * (np.abs(values - old_values) <= clip_range_vf)
         grads = self.adam.grad_views()
         n_pi = 2 * len(pi_layers)
-        backward(pi_layers, pi_acts, d_out.astype(np.float32), grads[:n_pi])
-        backward(vf_layers, vf_acts, d_v[:, None].astype(np.float32), grads[n_pi:])
+        backward(pi_layers, pi_acts, d_out.astype(np.float32, copy=False), grads[:n_pi])
+        backward(vf_layers, vf_acts, d_v[:, None].astype(np.float32, copy=False), grads[n_pi:])
         if extra:
             grads[-1][...] = extra[0]
         self.adam.clip_grad_norm(max_grad_norm)

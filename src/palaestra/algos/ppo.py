@@ -173,7 +173,8 @@ class PPO(BaseAlgorithm):
 
     def _values(self, obs: Any) -> np.ndarray:
         if self._numpy is not None and isinstance(obs, np.ndarray):
-            return self._numpy[1](obs)[:, 0]
+            with one_blas_thread():  # a whole rollout at once: threads cost more than they save
+                return self._numpy[1](obs)[:, 0]
         with torch.no_grad():
             return self.policy.predict_values(self._obs_to_tensor(obs)).cpu().numpy()
 
@@ -220,8 +221,17 @@ class PPO(BaseAlgorithm):
         buf.reset()
         callback.on_rollout_start()
         dones = np.zeros(self.n_envs, dtype=bool)
+        # With numpy acting the values of the whole rollout come from one batched forward at
+        # its end (the parameters do not change during a rollout): per step, only the policy.
+        numpy_pi = None
+        if self._numpy is not None and isinstance(self._last_obs, np.ndarray):
+            numpy_pi = self._numpy[0]
+        head, values = self.policy.action_head, None
         while not buf.full:
-            actions, values, log_probs = self._act(self._last_obs)
+            if numpy_pi is not None:
+                actions, log_probs = head.act_numpy(numpy_pi(self._last_obs), self._rng, False)
+            else:
+                actions, values, log_probs = self._act(self._last_obs)
             if isinstance(self.action_space, spaces.MultiBinary):
                 actions = actions.astype(self.action_space.dtype)  # Bernoulli samples are floats
             env_actions = np.clip(actions, box.low, box.high) if box is not None else actions
@@ -251,6 +261,10 @@ class PPO(BaseAlgorithm):
                 log_probs,
             )
             self._last_obs, self._last_episode_starts = new_obs, dones
+        if numpy_pi is not None:
+            buf.values[...] = self._values(buf.observations.reshape(-1, *buf.obs_shape)).reshape(
+                buf.values.shape
+            )
         buf.compute_returns_and_advantage(self._values(self._last_obs), dones)
         callback.update_locals({"rollout_buffer": buf})
         callback.on_rollout_end()

@@ -35,17 +35,20 @@ def gae(
     ([1.31, 0.5], [1.81, 1.0])
     """
     n_steps = rewards.shape[0]
+    # The per-step terms, computed for all steps at once; only the recursion stays a loop
+    # (same operations in the same order as the step-by-step form, so the same bits).
+    next_non_terminal = np.empty_like(values, dtype=np.float32)
+    next_non_terminal[-1] = 1.0 - np.asarray(last_dones, dtype=np.float32)
+    next_non_terminal[:-1] = 1.0 - episode_starts[1:]
+    next_values = np.empty_like(values)
+    next_values[-1] = last_values
+    next_values[:-1] = values[1:]
+    delta = rewards + gamma * next_values * next_non_terminal - values
+    decay = gamma * gae_lambda * next_non_terminal
     advantages = np.zeros_like(rewards, dtype=np.float32)
     last_gae = np.zeros_like(last_values, dtype=np.float32)
     for t in reversed(range(n_steps)):
-        if t == n_steps - 1:
-            next_non_terminal = 1.0 - np.asarray(last_dones, dtype=np.float32)
-            next_values = last_values
-        else:
-            next_non_terminal = 1.0 - episode_starts[t + 1]
-            next_values = values[t + 1]
-        delta = rewards[t] + gamma * next_values * next_non_terminal - values[t]
-        last_gae = delta + gamma * gae_lambda * next_non_terminal * last_gae
+        last_gae = delta[t] + decay[t] * last_gae
         advantages[t] = last_gae
     return advantages, (advantages + values).astype(np.float32)
 

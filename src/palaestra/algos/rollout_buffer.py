@@ -61,6 +61,9 @@ class RolloutBuffer:
         self.device = torch.device(device)
         lead = (n_steps, n_envs)
         self.observations = allocate(observation_space, lead)
+        self.obs_shape = (
+            self.observations.shape[2:] if isinstance(self.observations, np.ndarray) else ()
+        )
         self.actions = allocate(action_space, lead)
         if isinstance(action_space, spaces.Box):
             self.actions = self.actions.astype(np.float32)  # unclipped Gaussian samples
@@ -85,10 +88,11 @@ class RolloutBuffer:
         actions: np.ndarray,
         rewards: np.ndarray,
         episode_starts: np.ndarray,
-        values: np.ndarray,
+        values: np.ndarray | None,
         log_probs: np.ndarray,
     ) -> None:
-        """Store one step of every env (arrays ``[n_envs, ...]``)."""
+        """Store one step of every env (arrays ``[n_envs, ...]``); ``values=None`` leaves
+        them to be written into ``self.values`` later (for the whole rollout at once)."""
         t = self.pos
         if isinstance(self.observations, dict):
             for key, sub in self.observations.items():
@@ -98,7 +102,8 @@ class RolloutBuffer:
         self.actions[t] = actions
         self.rewards[t] = rewards
         self.episode_starts[t] = episode_starts
-        self.values[t] = values
+        if values is not None:
+            self.values[t] = values
         self.log_probs[t] = log_probs
         self.pos += 1
 
