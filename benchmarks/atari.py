@@ -57,8 +57,12 @@ def gymnasium_module() -> Any:
 
 
 def single_rate(lib: Any, actions: np.ndarray) -> float:
-    """Env-steps/s of one ``lib.make(ENV_ID)`` over ``actions``, resetting at episode ends."""
-    env = lib.make(ENV_ID)
+    """Env-steps/s of one ``lib.make(ENV_ID)`` over ``actions``."""
+    return steps_per_cpu_second(lib.make(ENV_ID), actions)
+
+
+def steps_per_cpu_second(env: Any, actions: np.ndarray) -> float:
+    """Steps/s of ``env`` over ``actions``, resetting at episode ends; closes ``env``."""
     env.reset(seed=0)
     step, reset = env.step, env.reset
     start = time.process_time()
@@ -131,16 +135,7 @@ def preprocessed_rate(lib: Any, actions: np.ndarray) -> float:
     """Agent steps/s of ``lib``'s AtariPreprocessing + FrameStackObservation(4) stack."""
     base = lib.make(ENV_ID, frameskip=1)
     env = lib.wrappers.FrameStackObservation(lib.wrappers.AtariPreprocessing(base), 4)
-    env.reset(seed=0)
-    step, reset = env.step, env.reset
-    start = time.process_time()
-    for action in actions:
-        _, _, terminated, truncated, _ = step(action)
-        if terminated or truncated:
-            reset()
-    elapsed = time.process_time() - start
-    env.close()
-    return len(actions) / elapsed
+    return steps_per_cpu_second(env, actions)
 
 
 def bench_preprocessed(args: argparse.Namespace) -> None:
