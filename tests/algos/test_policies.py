@@ -158,3 +158,17 @@ def test_numpy_acting_declines_what_it_cannot_do() -> None:
     img = spaces.Box(0, 255, (36, 36, 1), np.uint8)
     assert QNetwork(img, spaces.Discrete(2), NatureCNN).numpy_acting() is None
     assert ActorCritic(BOX4, spaces.Discrete(2), activation_fn=torch.nn.ELU).numpy_acting() is None
+
+
+def test_numpy_categorical_draws_follow_the_softmax() -> None:
+    from palaestra.algos.numpy_acting import sample_categorical
+
+    logits = np.array([[0.0, 1.0, -1.0, 2.0]] * 200_000, dtype=np.float32)
+    idx, log_prob = sample_categorical(logits, np.random.default_rng(0), False)
+    expected = torch.log_softmax(torch.as_tensor(logits[0]), dim=0).numpy()
+    freq = np.bincount(idx, minlength=4) / len(idx)
+    np.testing.assert_allclose(freq, np.exp(expected), atol=0.005)  # ~5 standard errors
+    np.testing.assert_allclose(log_prob, expected[idx], rtol=1e-6, atol=1e-6)
+    mode, mode_lp = sample_categorical(logits[:3], np.random.default_rng(0), True)
+    assert mode.tolist() == [3, 3, 3]
+    np.testing.assert_allclose(mode_lp, expected[3], rtol=1e-6)

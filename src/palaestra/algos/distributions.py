@@ -16,7 +16,7 @@ import torch
 from torch import nn
 
 from palaestra import spaces
-from palaestra.algos.numpy_acting import log_softmax, sample_categorical
+from palaestra.algos.numpy_acting import sample_categorical
 
 __all__ = ["ActionHead"]
 
@@ -55,6 +55,8 @@ class ActionHead(nn.Module):
             raise TypeError(f"PPO does not support {type(action_space).__name__} action spaces")
         self.action_shape: tuple[int, ...] = tuple(action_space.shape or ())
         self.net = nn.Linear(latent_dim, out)
+        # Checked every env step by ``act_numpy``: a plain attribute, not the buffer lookup.
+        self._plain_categorical = self.kind == "categorical" and self.offset is None
 
     def act(self, latent: torch.Tensor, deterministic: bool) -> tuple[torch.Tensor, torch.Tensor]:
         """Sample (or take the mode of) actions ``[B, *shape]`` and their log-probs ``[B]``."""
@@ -121,6 +123,8 @@ class ActionHead(nn.Module):
     ) -> tuple[np.ndarray, np.ndarray]:
         """``act`` on head outputs computed in numpy (see ``numpy_acting``): same
         distributions, drawn from ``rng``; returns ``(actions, log_probs [B] float32)``."""
+        if self._plain_categorical:  # the common case: one Discrete(n) from 0
+            return sample_categorical(params, rng, deterministic)
         n = params.shape[0]
         if self.kind == "gaussian":
             log_std = self.log_std.detach().numpy()
@@ -141,16 +145,11 @@ class ActionHead(nn.Module):
             return bits.astype(np.float32).reshape(n, *self.action_shape), log_prob.astype(
                 np.float32
             )
-        if self.kind == "categorical" and self.offset is None:  # the common case, no split
-            logp = log_softmax(params)
-            idx = sample_categorical(logp, rng, deterministic)
-            return idx, logp[np.arange(n), idx]
         picks, log_prob = [], np.zeros(n, dtype=np.float32)
         for logits in np.split(params, np.cumsum(self.sizes)[:-1], axis=1):
-            logp = log_softmax(logits)
-            idx = sample_categorical(logp, rng, deterministic)
+            idx, logp = sample_categorical(logits, rng, deterministic)
             picks.append(idx)
-            log_prob += logp[np.arange(n), idx]
+            log_prob += logp
         actions = picks[0] if self.kind == "categorical" else np.stack(picks, axis=1)
         if self.offset is not None:
             actions = actions + self.offset.numpy()
