@@ -70,7 +70,9 @@ class NativeEngine:
         """One array step for every row; rows in the reset mask are then re-sampled."""
         actions, reset_mask = self._sent
         self._sent = (None, None)
-        _, reward, terminated = self.batch.step(actions)
+        # The masked rows also step: harmless, since a step draws no random numbers and the
+        # reset overwrites the whole row state. The batch does both and writes obs once.
+        _, reward, terminated = self.batch.step(actions, reset_mask)
         # The batch reuses its reward/terminated arrays (MountainCar's reward is a constant):
         # copy into ours so callers may overwrite entries.
         np.copyto(self._rewards, reward)
@@ -79,9 +81,6 @@ class NativeEngine:
         if self._limit is not None:
             np.greater_equal(self._elapsed, self._limit, out=self._truncated)
         if reset_mask is not None:
-            # The rows also stepped above: harmless, since a step draws no random numbers and
-            # the reset overwrites the whole row state.
-            self.batch.reset(mask=reset_mask)
             self._elapsed[reset_mask] = 0
         return self._rewards, self._terminated, self._truncated, None
 

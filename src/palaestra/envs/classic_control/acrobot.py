@@ -209,6 +209,7 @@ class AcrobotBatch(BatchedEnv):
 
     state_dim = 4
     reset_draws = RESET_DRAWS
+    obs_of_state = False  # fresh rows hold float32 states and get float32 cos/sin
 
     def __init__(self, num_envs: int) -> None:
         self.params = AcrobotParams()
@@ -224,16 +225,16 @@ class AcrobotBatch(BatchedEnv):
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         torque = actions - 1.0  # AVAIL_TORQUE[a] for a in {0, 1, 2}
-        *s, terminated = step_state(ARRAY, self.params, *self._state[:4], torque)  # type: ignore[call-arg]
-        for k, component in enumerate(s):
-            self._state[k] = component
+        *s, terminated = step_state(ARRAY, self.params, *self._cols, torque)  # type: ignore[call-arg]
+        for column, component in zip(self._cols, s):
+            column[...] = component
         return np.where(terminated, 0.0, -1.0), terminated
 
     def _observe(self, rows: np.ndarray | None) -> None:
         if rows is not None:  # fresh rows hold float32 states: float32 cos/sin
-            self._obs[rows] = reset_observation(self._state[:, rows].T.astype(np.float32))
+            self._obs[rows] = reset_observation(self._state[rows].astype(np.float32))
             return
-        th1, th2 = self._state[0], self._state[1]
+        th1, th2, dth1, dth2 = self._cols
         self._obs[:, 0], self._obs[:, 1] = np.cos(th1), np.sin(th1)
         self._obs[:, 2], self._obs[:, 3] = np.cos(th2), np.sin(th2)
-        self._obs[:, 4], self._obs[:, 5] = self._state[2], self._state[3]
+        self._obs[:, 4], self._obs[:, 5] = dth1, dth2

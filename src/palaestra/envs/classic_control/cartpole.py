@@ -215,9 +215,9 @@ class CartPoleBatch(BatchedEnv):
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         # The one step_state on [N] arrays: an in-place copy of it ran ~25 µs faster per 1024
         # rows but was a second CartPole physics; see BENCHMARKS.md (vector section).
-        *s, terminated = step_state(ARRAY, self.params, *self._state, actions)  # type: ignore[call-arg]
-        for k, component in enumerate(s):
-            self._state[k] = component
+        x, x_dot, theta, theta_dot = self._cols  # views: written in place below
+        new = step_state(ARRAY, self.params, x, x_dot, theta, theta_dot, actions)
+        x[...], x_dot[...], theta[...], theta_dot[...], terminated = new
         if self.sutton_barto_reward:
             self._reward[:] = np.where(terminated | self._done, -1.0, 0.0)
         else:
@@ -227,6 +227,6 @@ class CartPoleBatch(BatchedEnv):
 
     def _observe(self, rows: np.ndarray | None) -> None:
         if rows is None:
-            np.copyto(self._obs, self._state.T)
+            np.copyto(self._obs, self._state)  # float64 -> float32, as np.array(s, float32)
         else:
-            self._obs[rows] = self._state[:, rows].T
+            self._obs[rows] = self._state[rows]

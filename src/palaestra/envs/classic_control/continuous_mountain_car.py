@@ -239,15 +239,14 @@ class ContinuousMountainCarBatch(BatchedEnv):
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         rnd, lim = precision(ARRAY, self.params, self._fresh)
-        pos, vel, terminated, reward = step_state(
-            ARRAY, self.params, self._state[0], self._state[1], actions, rnd, lim
-        )
-        self._state[0], self._state[1] = pos, vel
+        pos, vel = self._cols  # views: written in place below
+        new = step_state(ARRAY, self.params, pos, vel, actions, rnd, lim)
+        pos[...], vel[...], terminated, reward = new
         self._fresh[:] = False
         return reward, terminated
 
     def _observe(self, rows: np.ndarray | None) -> None:
         if rows is None:
-            self._obs[:] = self._state.T
+            np.copyto(self._obs, self._state)
         else:
-            self._obs[rows] = self._state[:, rows].T
+            self._obs[rows] = self._state[rows]

@@ -165,15 +165,13 @@ class MountainCarBatch(BatchedEnv):
         return reset_state(uniforms, *bounds)
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        position, velocity, terminated = step_state(
-            ARRAY, self.params, self._state[0], self._state[1], actions
-        )
-        self._state[0] = position
-        self._state[1] = velocity
+        position, velocity = self._cols  # views: written in place below
+        new = step_state(ARRAY, self.params, position, velocity, actions)
+        position[...], velocity[...], terminated = new
         return self._reward, terminated
 
     def _observe(self, rows: np.ndarray | None) -> None:
         if rows is None:
-            self._obs[:] = self._state.T  # float64 -> float32, rounded as np.array(.., f32)
+            np.copyto(self._obs, self._state)  # float64 -> float32, as np.array(.., f32)
         else:
-            self._obs[rows] = self._state[:, rows].T
+            self._obs[rows] = self._state[rows]

@@ -169,15 +169,13 @@ class PendulumBatch(BatchedEnv):
         return reset_state(uniforms, *bounds)
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        th, thdot, reward, _ = step_state(
-            ARRAY, self.params, self._state[0], self._state[1], actions
-        )
-        self._state[0], self._state[1] = th, thdot
+        th, thdot = self._cols  # views: written in place below
+        th[...], thdot[...], reward, _ = step_state(ARRAY, self.params, th, thdot, actions)
         return reward, np.zeros(self.num_envs, dtype=bool)
 
     def _observe(self, rows: np.ndarray | None) -> None:
         sel = slice(None) if rows is None else rows
-        th = self._state[0, sel]
+        th = self._state[sel, 0]
         self._obs[sel, 0] = np.cos(th)
         self._obs[sel, 1] = np.sin(th)
-        self._obs[sel, 2] = self._state[1, sel]
+        self._obs[sel, 2] = self._state[sel, 1]
