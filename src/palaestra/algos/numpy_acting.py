@@ -81,8 +81,8 @@ def numpy_mlp(modules: list[nn.Module]) -> NumpyFn | None:
 
 def log_softmax(logits: np.ndarray) -> np.ndarray:
     """Row-wise, numerically stable."""
-    shifted = logits - logits.max(axis=1, keepdims=True)
-    return shifted - np.log(np.exp(shifted).sum(axis=1, keepdims=True))
+    shifted = logits - np.maximum.reduce(logits, axis=1, keepdims=True)
+    return shifted - np.log(np.add.reduce(np.exp(shifted), axis=1, keepdims=True))
 
 
 def sample_categorical(

@@ -93,7 +93,7 @@ def forward(layers: list[Layer], x: np.ndarray) -> list[np.ndarray]:
     """Activations after each layer, the input first."""
     acts = [x]
     for w, b, act in layers:
-        h = acts[-1] @ w.T
+        h = acts[-1].dot(w.T)  # ndarray.dot: less call overhead than ``@``
         h += b
         if act == "relu":
             np.maximum(h, 0.0, out=h)
@@ -123,7 +123,7 @@ def backward(
         # Column sums as one BLAS call: np.sum over axis 0 costs ~4x more at 256 x 64.
         np.matmul(ones, g, out=out[2 * i + 1])
         if i:
-            g = g @ w
+            g = g.dot(w)
 
 
 @cache

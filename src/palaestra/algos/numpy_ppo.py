@@ -132,8 +132,10 @@ class NumpyPPOTrainer:
         d_lp = -d_min * ratio / n  # d(policy_loss)/d(log_prob)
         if self.head.kind == "categorical":
             # d_lp * (one_hot - probs) - dH/dlogits * ent_coef / n
-            d_out = (ent_coef / n) * probs * (logp_all + entropy[:, None])
-            d_out -= d_lp[:, None] * probs
+            d_out = d_lp[:, None] * probs
+            np.negative(d_out, out=d_out)
+            if ent_coef:
+                d_out += (ent_coef / n) * probs * (logp_all + entropy[:, None])
             d_out[rows, idx] += d_lp
             extra: list[np.ndarray] = []
         else:

@@ -250,7 +250,7 @@ class PPO(BaseAlgorithm):
                 return False
             self._update_info_buffer(infos, dones)
             rewards = np.asarray(rewards, dtype=np.float32)
-            if dones.any():
+            if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
                 rewards = self._bootstrap_truncated(rewards, dones, infos)
             buf.add(
                 self._last_obs,
@@ -304,15 +304,15 @@ class PPO(BaseAlgorithm):
         stopped = False
         for epoch in range(self.n_epochs):
             if self._numpy_trainer is not None:
-                for arrays in self.rollout_buffer.minibatch_arrays(self.batch_size, self._rng):
-                    with one_blas_thread():
+                with one_blas_thread():  # once per epoch: it costs a few µs per entry
+                    for arrays in self.rollout_buffer.minibatch_arrays(self.batch_size, self._rng):
                         metrics, stopped = self._numpy_trainer.step(
                             *arrays, *args, self.max_grad_norm, kl_limit
                         )
-                    for key, value in metrics.items():
-                        logs[key].append(value)
-                    if stopped:
-                        break
+                        for key, value in metrics.items():
+                            logs[key].append(value)
+                        if stopped:
+                            break
             else:
                 for mb in self.rollout_buffer.minibatches(self.batch_size, self._rng):
                     values, log_prob, entropy = self.policy.evaluate_actions(

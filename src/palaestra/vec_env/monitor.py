@@ -55,7 +55,7 @@ class VecMonitor(VecEnvWrapper):
         obs, rewards, dones, infos = self.venv.step_wait()
         self.episode_returns += rewards
         self.episode_lengths += 1
-        if dones.any():
+        if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
             now = round(time.time() - self.t_start, 6)
             for i in np.flatnonzero(dones).tolist():
                 info = dict(infos[i])
