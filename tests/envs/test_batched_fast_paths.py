@@ -7,6 +7,8 @@ one-reduction bounds check of discrete actions on unusual integer dtypes.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from tests.envs.cases import CLASSES
@@ -81,3 +83,38 @@ def test_discrete_batch_check_on_integer_dtypes(dtype: str) -> None:
     if np.dtype(dtype).kind == "i":
         with pytest.raises(error.InvalidAction, match=r"rows \[2\]"):
             batch.step(np.array([0, 1, -1], dtype=dtype))
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+@pytest.mark.parametrize("sutton_barto", [False, True])
+def test_params_replaced_between_steps_reach_the_array_step(sutton_barto: bool) -> None:
+    """The array step runs on a cached copy of ``params`` (0-d array constants): replacing
+    ``params`` after steps have run must rebuild it. (A long tau also brings poles stepped
+    past termination back within bounds, the case below.)"""
+    single_cls, batch_cls = CLASSES["CartPole-v1"]
+    batch = batch_cls(N, sutton_barto_reward=sutton_barto)
+    singles = [single_cls(sutton_barto_reward=sutton_barto) for _ in range(N)]
+    _run_cartpole(batch, singles, steps=20)
+    batch.params = dataclasses.replace(batch.params, gravity=3.5, tau=0.05)
+    for env in singles:
+        env.gravity, env.tau = 3.5, 0.05
+    _run_cartpole(batch, singles, steps=50)
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+@pytest.mark.parametrize("sutton_barto", [False, True])
+def test_reward_of_a_pole_back_within_bounds_after_termination(sutton_barto: bool) -> None:
+    """Gymnasium pays a non-terminating step as usual even after an unreset termination."""
+    single_cls, batch_cls = CLASSES["CartPole-v1"]
+    batch, single = batch_cls(1, sutton_barto_reward=sutton_barto), single_cls(sutton_barto)
+    batch.reset(seed=0)
+    single.reset(seed=0)
+    rewards = []
+    for state in ([2.39, 1.0, 0.0, 0.0], [2.41, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]):
+        batch.state[0] = state  # terminates, stays out, then is put back in bounds
+        single.state = state
+        _, reward, terminated = batch.step(np.array([1]))
+        _, ref_reward, ref_terminated, _, _ = single.step(1)
+        assert (reward[0], terminated[0]) == (ref_reward, ref_terminated)
+        rewards.append(ref_reward)
+    assert rewards == ([-1.0, -1.0, 0.0] if sutton_barto else [1.0, 0.0, 1.0])

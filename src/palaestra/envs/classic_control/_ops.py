@@ -23,6 +23,7 @@ recomputes just those with Python's ``**`` (the same libm call), a few percent o
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import struct
 from typing import Any
@@ -83,6 +84,21 @@ class ScalarOps:
 
 class ArrayOps:
     """The same operations on numpy float64/bool arrays of shape ``[N]``."""
+
+    @staticmethod
+    def constants(params: Any) -> Any:
+        """A copy of a params dataclass with its floats as 0-d float64 arrays.
+
+        ``array * 0.02`` costs ~0.15 us more than ``array * np.array(0.02)`` (numpy converts
+        the Python float on every call), and a step has ~20 such products; the values and
+        results are the same float64 bits.
+        """
+        floats = {
+            f.name: np.array(getattr(params, f.name))
+            for f in dataclasses.fields(params)
+            if type(getattr(params, f.name)) is float
+        }
+        return dataclasses.replace(params, **floats)
 
     cos = staticmethod(np.cos)
     sin = staticmethod(np.sin)

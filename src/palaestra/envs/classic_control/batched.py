@@ -22,6 +22,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from palaestra.envs.classic_control._common import check_box_batch, check_discrete_batch
+from palaestra.envs.classic_control._ops import ARRAY
 from palaestra.error import ResetNeeded
 from palaestra.spaces import Box, Discrete, Space
 from palaestra.utils.seeding import np_random
@@ -43,6 +44,7 @@ class BatchedEnv:
     obs_of_state: ClassVar[bool] = True
     single_observation_space: Space[Any]
     single_action_space: Space[Any]
+    params: Any  # the env's frozen params dataclass (Gymnasium's constants)
 
     def __init__(self, num_envs: int) -> None:
         if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
@@ -72,6 +74,8 @@ class BatchedEnv:
         self._next = np.full(n, self._per_buffer)  # [N] next unused reset; per = "empty"
         self._seeded = np.zeros(n, dtype=bool)  # [N] has a generator
         self._needs_reset = np.ones(n, dtype=bool)  # [N]
+        self._params_for: Any = None  # the params _params_arrays was built from
+        self._params_arrays: Any = None
         # Both arrays only ever turn False/True: once every row is done, skip the checks.
         self._all_seeded = False
         self._all_reset = False
@@ -196,6 +200,13 @@ class BatchedEnv:
             return check_discrete_batch(actions, space, self.num_envs)
         assert isinstance(space, Box)
         return check_box_batch(actions, space, self.num_envs)
+
+    def _array_params(self) -> Any:
+        """``self.params`` with 0-d array floats for the array step, rebuilt when replaced."""
+        if self._params_for is not self.params:
+            self._params_for = self.params
+            self._params_arrays = ARRAY.constants(self.params)
+        return self._params_arrays
 
     # -- per-env parts ------------------------------------------------------------------
     def _parse_options(self, options: dict[str, Any] | None) -> Any:

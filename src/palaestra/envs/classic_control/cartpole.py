@@ -68,12 +68,9 @@ def step_state(
         x = x + p.tau * x_dot
         theta_dot = theta_dot + p.tau * thetaacc
         theta = theta + p.tau * theta_dot
-    terminated = (
-        (x < -p.x_threshold)
-        | (x > p.x_threshold)
-        | (theta < -p.theta_threshold_radians)
-        | (theta > p.theta_threshold_radians)
-    )
+    # Gymnasium's x < -t or x > t, as one comparison: equal for every value, NaN included
+    # (both False), since -t is exact. Builtin abs works on floats and arrays alike.
+    terminated = (abs(x) > p.x_threshold) | (abs(theta) > p.theta_threshold_radians)
     return x, x_dot, theta, theta_dot, terminated
 
 
@@ -125,8 +122,8 @@ class CartPoleEnv(ClassicControlEnv):
             action = check_discrete_action(action, self.action_space, 2)
         if self._s is None:
             raise error.ResetNeeded("Call reset before using step method.")
-        *s, terminated = step_state(SCALAR, self.params, *self._s, action)
-        self._s = s = tuple(s)
+        x, x_dot, theta, theta_dot, terminated = step_state(SCALAR, self.params, *self._s, action)
+        self._s = s = (x, x_dot, theta, theta_dot)
         if not terminated:
             reward = 0.0 if self._sutton_barto_reward else 1.0
         elif self.steps_beyond_terminated is None:
@@ -200,7 +197,7 @@ class CartPoleBatch(BatchedEnv):
         self.single_observation_space = observation_space(self.params)
         super().__init__(num_envs)
         n = self.num_envs
-        self._done = np.zeros(n, dtype=bool)  # [N] terminated before this step
+        self._live = np.ones(n, dtype=bool)  # [N] not terminated since the last reset
         self._reward = np.zeros(n)  # [N] float64, rewritten every step
 
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
@@ -210,19 +207,21 @@ class CartPoleBatch(BatchedEnv):
         return reset_state(uniforms, *bounds)
 
     def _after_reset(self, rows: np.ndarray) -> None:
-        self._done[rows] = False
+        self._live[rows] = True
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         # The one step_state on [N] arrays: an in-place copy of it ran ~25 µs faster per 1024
         # rows but was a second CartPole physics; see BENCHMARKS.md (vector section).
         x, x_dot, theta, theta_dot = self._cols  # views: written in place below
-        new = step_state(ARRAY, self.params, x, x_dot, theta, theta_dot, actions)
+        new = step_state(ARRAY, self._array_params(), x, x_dot, theta, theta_dot, actions)
         x[...], x_dot[...], theta[...], theta_dot[...], terminated = new
+        # The single env's rule: a terminating step pays -1 (Sutton-Barto) or, the first time
+        # only, 1; a non-terminating step pays 0 or 1, even after an earlier termination.
         if self.sutton_barto_reward:
-            self._reward[:] = np.where(terminated | self._done, -1.0, 0.0)
+            self._reward[:] = np.where(terminated, -1.0, 0.0)
         else:
-            np.logical_not(self._done, out=self._reward)  # 1.0 until done, then 0.0
-        self._done |= terminated
+            np.less_equal(terminated, self._live, out=self._reward)  # not (terminated and done)
+        np.greater(self._live, terminated, out=self._live)  # live and not terminated
         return self._reward, terminated
 
     def _observe(self, rows: np.ndarray | None) -> None:
