@@ -19,7 +19,7 @@ class Result(NamedTuple):
     err: str
 
 
-def run_cli(*argv: str) -> Result:
+def run_cli(*argv: object) -> Result:
     """``palaestra *argv`` in this process: exit code, stdout, stderr."""
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):

@@ -178,7 +178,7 @@ def _bad(tmp_path: Path) -> dict[str, tuple[list[object], int, str | re.Pattern[
 
 def test_bad_input_gives_one_line_and_exit_code(tmp_path: Path) -> None:
     for name, (argv, code, line) in _bad(tmp_path).items():
-        result = run_cli(*argv)  # type: ignore[arg-type]
+        result = run_cli(*argv)
         if isinstance(line, str):
             assert (result.code, result.err) == (code, line + "\n"), name
         else:

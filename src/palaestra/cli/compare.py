@@ -149,6 +149,10 @@ def run(args: argparse.Namespace) -> int:
     _print_table(rows, args.last)
     for label, variant in zip(labels, variants):
         print(f"  {label}: {', '.join(str(r) for r in variant.runs)}")
+    if any(v.config.get("atari") for v in variants):
+        from palaestra.cli.evaluate import GAMES_NOTE
+
+        print(f"(Atari runs: training {GAMES_NOTE})")
     envs = sorted({str(v.config.get("env_id")) for v in variants if v.config})
     plot_compare(bands, Path(args.out), " / ".join(envs) or "learning curves")
     print(f"wrote {args.out}")

@@ -20,7 +20,7 @@ from palaestra.cli.common import (
     model_file,
 )
 
-__all__ = ["Played", "add_parser", "ascii_histogram", "load_model", "play", "run"]
+__all__ = ["Played", "add_parser", "ascii_histogram", "load_model", "play", "play_saved", "run"]
 
 
 class Played(NamedTuple):
@@ -129,6 +129,51 @@ def play(
     return out
 
 
+def play_saved(
+    model: Any,
+    path: Path,
+    env: str | None,
+    episodes: int,
+    deterministic: bool = True,
+    seed: int | None = 0,
+    record: bool = False,
+) -> tuple[str, Played, float, bool]:
+    """Play the model at ``path`` on the env its run trained on (or ``--env``), built as the
+    run built it: ``(env id, what was played, render fps, whether episodes are whole games)``.
+    """
+    from palaestra.cli import pipeline
+
+    env_id, env_kwargs = model_env_id(path, env)
+    config = find_run_config(path)
+    if config is not None and pipeline.uses_vec_pipeline(config):
+        # The run's recipe (Atari wrappers, frame stack), on --env's id when one is given.
+        config = {**config, "env_id": env_id}
+        venv = pipeline.make_vec(config, 1, seed, render=record)
+        try:
+            check_spaces(model, venv, env_id)
+            played = pipeline.play_vec(model, venv, episodes, deterministic, seed, record)
+            fps = pipeline.render_fps(venv, config)
+        finally:
+            venv.close()
+        return env_id, played, fps, bool(config.get("atari"))
+    single = make_env(env_id, env_kwargs, render=record)
+    try:
+        check_spaces(model, single, env_id)
+        played = play(
+            model, single, episodes, deterministic, seed, record, obs_normalizer(path, env_id)
+        )
+        fps = float(single.metadata.get("render_fps") or 30)
+    finally:
+        single.close()
+    return env_id, played, fps, False
+
+
+GAMES_NOTE = (
+    "episodes are whole games (all lives; the unclipped score, as the Monitor under SB3's "
+    "AtariWrapper reports it)"
+)
+
+
 def ascii_histogram(values: list[int], bins: int = 10, width: int = 40) -> list[str]:
     """Rows ``"lo-hi | ####  count"`` over at most ``bins`` bins of whole numbers.
 
@@ -171,7 +216,9 @@ def add_parser(sub: Any) -> None:
         help="evaluate a saved model",
         description="Play a saved model and print its mean ± std return, its success rate "
         "(goal envs such as MountainCar: an episode that terminates before the time limit "
-        "succeeded) and a histogram of episode lengths.",
+        "succeeded) and a histogram of episode lengths. A run trained on SB3's Atari recipe "
+        "is played on that recipe again, and its episodes are whole games (all lives, the "
+        "unclipped score).",
     )
     p.add_argument("model", metavar="MODEL", help="a model.zip, or a run folder holding one")
     p.add_argument(
@@ -210,29 +257,21 @@ def run(args: argparse.Namespace) -> int:
     if args.episodes < 1:
         raise CLIError(f"--episodes must be at least 1, got {args.episodes}", "e.g. --episodes 10")
     path = model_file(args.model)
-    env_id, env_kwargs = model_env_id(path, args.env)
     model = load_model(path, args.device)
-    env = make_env(env_id, env_kwargs)
-    check_spaces(model, env, env_id)
-    played = play(
-        model,
-        env,
-        args.episodes,
-        args.deterministic,
-        args.seed,
-        False,
-        obs_normalizer(path, env_id),
+    env_id, played, _, games = play_saved(
+        model, path, args.env, args.episodes, args.deterministic, args.seed
     )
-    env.close()
     kind = "deterministic" if args.deterministic else "stochastic"
-    print(
-        f"{type(model).__name__} {path} on {env_id}: {args.episodes} episodes, {kind}, "
-        f"seed {args.seed}"
-    )
+    unit = ("game" if games else "episode") + "s" * (args.episodes != 1)
+    header = f"{type(model).__name__} {path} on {env_id}: {args.episodes} {unit}, {kind}"
+    print(f"{header}, seed {args.seed}")
+    if games:
+        print(GAMES_NOTE)
     for line in summary_lines(played, env_id):
         print(line)
     lengths = played.lengths
-    print(f"episode lengths (min {min(lengths)}, mean {np.mean(lengths):.1f}, max {max(lengths)}):")
+    unit = "game lengths in agent steps" if games else "episode lengths"
+    print(f"{unit} (min {min(lengths)}, mean {np.mean(lengths):.1f}, max {max(lengths)}):")
     for row in ascii_histogram(lengths):
         print(row)
     return 0

@@ -7,14 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.cli.common import CLIError, model_file
-from palaestra.cli.evaluate import (
-    check_spaces,
-    load_model,
-    make_env,
-    model_env_id,
-    obs_normalizer,
-    play,
-)
+from palaestra.cli.evaluate import load_model, play_saved
 
 __all__ = ["add_parser", "run"]
 
@@ -75,27 +68,17 @@ def run(args: argparse.Namespace) -> int:
         if not mp4_available():  # before playing, not after
             raise dependency_not_installed("imageio-ffmpeg", "video", "writing MP4 files")
     path = model_file(args.model)
-    env_id, env_kwargs = model_env_id(path, args.env)
     model = load_model(path, args.device)
-    env = make_env(env_id, env_kwargs, render=True)
-    check_spaces(model, env, env_id)
-    played = play(
-        model,
-        env,
-        args.episodes,
-        not args.stochastic,
-        args.seed,
-        record=True,
-        normalize=obs_normalizer(path, env_id),
+    _, played, env_fps, games = play_saved(
+        model, path, args.env, args.episodes, not args.stochastic, args.seed, record=True
     )
-    fps = args.fps or float(env.metadata.get("render_fps") or 30)
-    env.close()
+    fps = args.fps or env_fps
     from palaestra.utils.video import save_video
 
     save_video(played.frames, out, fps=fps)
     returns = ", ".join(f"{r:.1f}" for r in played.returns)
     print(
         f"wrote {out}: {len(played.frames)} frames at {fps:g} fps, "
-        f"{args.episodes} episode(s), return {returns}"
+        f"{args.episodes} {'game' if games else 'episode'}(s), return {returns}"
     )
     return 0

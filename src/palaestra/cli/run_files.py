@@ -57,7 +57,7 @@ def print_summary(
     """Steps, wall time, fps, the recent training return, a deterministic evaluation, the
     learning curve, and the list of files written."""
     from palaestra.cli.curves import read_episodes
-    from palaestra.cli.evaluate import make_env, obs_normalizer, play, summary_lines
+    from palaestra.cli.evaluate import GAMES_NOTE, play_saved, summary_lines
     from palaestra.cli.progress import format_duration
 
     env_id = config["env_id"]
@@ -76,17 +76,11 @@ def print_summary(
     else:
         print("no training episode finished yet")
     if eval_episodes > 0:
-        env = make_env(env_id, dict(config.get("env_kwargs") or {}))
-        played = play(
-            model,
-            env,
-            eval_episodes,
-            True,
-            0,
-            normalize=obs_normalizer(run_dir / MODEL_FILE, env_id),
-        )
-        env.close()
-        print(f"evaluation ({eval_episodes} episodes, deterministic, seed 0):")
+        _, played, _, games = play_saved(model, run_dir / MODEL_FILE, None, eval_episodes)
+        unit = ("game" if games else "episode") + "s" * (eval_episodes != 1)
+        print(f"evaluation ({eval_episodes} {unit}, deterministic, seed 0):")
+        if games:
+            print(f"  {GAMES_NOTE}")
         for text in summary_lines(played, env_id):
             print(f"  {text}")
     from palaestra.cli.curves import plot_learning_curve

@@ -1,7 +1,8 @@
 """The settings of a training run: preset, then ``--config`` file, then ``--set key=value``.
 
 Settings are plain data in the preset format (``policy``, ``n_envs``, ``n_timesteps``,
-``hyperparams``, ``env_kwargs``, ``normalize``) plus ``seed``; ``config.json`` records them
+``hyperparams``, ``env_kwargs``, ``normalize``, and for Atari ``atari`` and ``frame_stack``;
+see :mod:`palaestra.cli.pipeline`) plus ``seed``; ``config.json`` records them
 exactly as resolved, so a run's ``config.json`` is itself a valid ``--config`` file.
 """
 
@@ -14,6 +15,7 @@ from typing import Any
 
 from palaestra import presets
 from palaestra.cli.common import CLIError, parse_value
+from palaestra.cli.pipeline import atari_defaults, check_pipeline, is_atari_id
 
 __all__ = [
     "ALGOS",
@@ -178,6 +180,12 @@ def resolve_settings(
         used: str | None = preset
     elif presets.has_preset(algo, env_id):
         settings, used = presets.get_preset(algo, env_id), "default"
+    elif is_atari_id(env_id):
+        settings, used = {**presets.base_settings(), **atari_defaults()}, None
+        notes.append(
+            f"no preset for {algo} on {env_id}: using the {algo.upper()} defaults on SB3's "
+            "Atari recipe (AtariWrapper, 4 stacked frames, CnnPolicy)"
+        )
     else:
         settings, used = presets.base_settings(), None
         notes.append(f"no preset for {algo} on {env_id}: using the {algo.upper()} defaults")
@@ -198,8 +206,8 @@ def _positive_int(value: Any, what: str) -> int:
     return value
 
 
-def check_settings(settings: dict[str, Any]) -> None:
-    """``CLIError`` unless the top-level settings have usable types and values."""
+def check_settings(settings: dict[str, Any], env_id: str) -> None:
+    """``CLIError`` unless the top-level settings have usable types and values for ``env_id``."""
     _positive_int(settings["n_envs"], "n_envs")
     _positive_int(settings["n_timesteps"], "n_timesteps")
     seed = settings.get("seed")
@@ -214,3 +222,4 @@ def check_settings(settings: dict[str, Any]) -> None:
             f"normalize must be true/false or VecNormalize kwargs, got {settings['normalize']!r}",
             "fix it",
         )
+    check_pipeline(settings, env_id)

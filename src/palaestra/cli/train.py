@@ -5,6 +5,9 @@ Run folder: ``config.json`` (resolved settings), ``status.json`` (steps done, to
 time), ``progress.csv`` (SB3's log), ``episodes.csv`` (every episode: steps, return, length,
 terminated), ``model.zip``, ``replay_buffer.zip`` (DQN), ``checkpoints/``,
 ``learning_curve.png``, ``tb/`` (when tensorboard is installed).
+
+The env comes from :mod:`palaestra.cli.pipeline` (SB3's Atari recipe when the settings say
+``atari``), which ``eval`` and ``record`` use to rebuild it.
 """
 
 from __future__ import annotations
@@ -43,8 +46,9 @@ def add_parser(sub: Any) -> None:
         help="train DQN or PPO on an env",
         description="Train an agent. Settings come from the preset (the 'default' preset when "
         "one exists for ALGO and ENV, else the algorithm's defaults), overridden by --config, "
-        "then by --set, then by --n-envs/--timesteps/--seed. Ctrl-C saves a checkpoint that "
-        "--resume continues.",
+        "then by --set, then by --n-envs/--timesteps/--seed. Atari ids (ALE/Breakout-v5) train "
+        "on SB3's Atari recipe: AtariWrapper envs, 4 stacked frames, CnnPolicy. Ctrl-C saves a "
+        "checkpoint that --resume continues.",
     )
     p.add_argument(
         "algo", nargs="?", metavar="ALGO", help="dqn or ppo (any case); not needed with --resume"
@@ -57,7 +61,8 @@ def add_parser(sub: Any) -> None:
         "--config",
         metavar="FILE",
         help="settings file, .json or .yaml (PyYAML): preset keys (hyperparams, n_envs, "
-        "n_timesteps, policy, env_kwargs, normalize, seed) or hyperparameters at top level",
+        "n_timesteps, policy, env_kwargs, normalize, atari, frame_stack, seed) or "
+        "hyperparameters at top level",
     )
     p.add_argument("--n-envs", type=int, metavar="N", help="number of parallel envs")
     p.add_argument("--timesteps", type=int, metavar="N", help="total env steps to train for")
@@ -125,7 +130,7 @@ def _new_run_config(args: argparse.Namespace) -> tuple[dict[str, Any], list[str]
         if getattr(args, flag) is not None:
             settings[key] = getattr(args, flag)
     settings.setdefault("seed", None)
-    settings_mod.check_settings(settings)
+    settings_mod.check_settings(settings, args.env)
     config = {
         "algo": algo,
         "env_id": args.env,
@@ -165,7 +170,7 @@ def _resumed_config(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
             )
     if args.timesteps is not None:
         config["n_timesteps"] = args.timesteps
-    settings_mod.check_settings(config)
+    settings_mod.check_settings(config, str(config.get("env_id")))
     return config
 
 
@@ -181,14 +186,10 @@ def _default_out(algo: str, env_id: str) -> Path:
 
 # -- building ----------------------------------------------------------------------------------
 def _make_env(config: dict[str, Any], run_dir: Path, resume: bool, seed: int | None) -> Any:
-    from palaestra.vec_env import VecNormalize, make_vec_env
+    from palaestra.cli.pipeline import make_vec
+    from palaestra.vec_env import VecNormalize
 
-    venv = make_vec_env(
-        config["env_id"],
-        n_envs=config["n_envs"],
-        seed=seed,
-        env_kwargs=dict(config.get("env_kwargs") or {}),
-    )
+    venv = make_vec(config, config["n_envs"], seed)
     normalize = config.get("normalize") or False
     if normalize is False:
         return venv

@@ -31,7 +31,17 @@ __all__ = [
 ]
 
 # The keys of one preset besides its measurements; ``hyperparams`` holds constructor kwargs.
-SETTINGS_KEYS = ("policy", "n_envs", "n_timesteps", "hyperparams", "env_kwargs", "normalize")
+# ``atari`` (SB3's Atari recipe) and ``frame_stack`` are optional: absent means off.
+SETTINGS_KEYS = (
+    "policy",
+    "n_envs",
+    "n_timesteps",
+    "hyperparams",
+    "env_kwargs",
+    "normalize",
+    "atari",
+    "frame_stack",
+)
 
 ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU"}
 

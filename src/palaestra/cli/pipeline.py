@@ -1,0 +1,169 @@
+"""The env pipeline a run trains on, rebuilt the same way by ``eval``, ``record`` and the
+end-of-training evaluation.
+
+Most runs train on ``make_vec_env`` (under ``VecNormalize`` when asked) and are evaluated on
+one ``palaestra.make`` env. Two settings change that:
+
+- ``atari``: ``true`` or ``AtariWrapper`` kwargs. SB3's Atari recipe: ``make_atari_env``, i.e.
+  per env a ``Monitor`` then ``AtariWrapper`` (no-op starts, frame skip with max-pool, a lost
+  life ends a training episode, FIRE on reset, 84x84 gray, rewards clipped to their sign).
+  ``ALE/*-v5`` ids skip frames themselves, so Atari presets set ``env_kwargs.frameskip=1`` and
+  let the wrapper skip 4 (as RL-Zoo does); v5's sticky actions (ALE, per frame) stay.
+- ``frame_stack``: ``VecFrameStack(n_stack=frame_stack)`` on top.
+
+Such a run is evaluated on the same pipeline with one env, and an evaluation episode is a
+whole game: the Monitor under the ``AtariWrapper`` reports it (all lives, unclipped score),
+which is what SB3's ``evaluate_policy`` counts too.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from palaestra.cli.common import CLIError
+
+__all__ = [
+    "ATARI_ENTRY_POINT",
+    "atari_defaults",
+    "check_pipeline",
+    "is_atari_id",
+    "make_vec",
+    "play_vec",
+    "render_fps",
+    "uses_vec_pipeline",
+]
+
+ATARI_ENTRY_POINT = "palaestra.envs.atari.env:AtariEnv"
+ATARI_HZ = 60.0  # frames the (NTSC) Atari 2600 draws per second
+# AtariWrapper's keyword arguments (SB3's names), the only keys an ``atari`` mapping may hold.
+WRAPPER_KEYS = (
+    "noop_max",
+    "frame_skip",
+    "screen_size",
+    "terminal_on_life_loss",
+    "clip_reward",
+    "action_repeat_probability",
+)
+
+
+def is_atari_id(env_id: str) -> bool:
+    """Whether ``env_id`` is registered as an ALE game (no ale-py import)."""
+    import palaestra
+
+    return palaestra.spec(env_id).entry_point == ATARI_ENTRY_POINT
+
+
+def atari_defaults() -> dict[str, Any]:
+    """Settings for an Atari id that has no preset: the recipe, a CNN, 4 stacked frames."""
+    return {
+        "policy": "CnnPolicy",
+        "env_kwargs": {"frameskip": 1},
+        "atari": True,
+        "frame_stack": 4,
+    }
+
+
+def _stack(config: dict[str, Any]) -> int:
+    value = config.get("frame_stack")
+    return 1 if value is None else int(value)
+
+
+def uses_vec_pipeline(config: dict[str, Any]) -> bool:
+    """Whether a run's env is more than ``palaestra.make`` (Atari recipe or frame stack)."""
+    return bool(config.get("atari")) or _stack(config) > 1
+
+
+def check_pipeline(settings: dict[str, Any], env_id: str) -> None:
+    """``CLIError`` unless ``atari`` and ``frame_stack`` are usable for ``env_id``."""
+    atari = settings.get("atari", False)
+    stack = settings.get("frame_stack")
+    if stack is not None and (isinstance(stack, bool) or not isinstance(stack, int) or stack < 1):
+        raise CLIError(f"frame_stack must be a positive integer or null, got {stack!r}", "e.g. 4")
+    if not isinstance(atari, (bool, dict)):
+        raise CLIError(f"atari must be true/false or AtariWrapper kwargs, got {atari!r}", "fix it")
+    if not atari:
+        return
+    if isinstance(atari, dict):
+        unknown = sorted(set(atari) - set(WRAPPER_KEYS))
+        if unknown:
+            raise CLIError(
+                f"unknown AtariWrapper setting(s) {unknown} in atari",
+                f"valid keys: {', '.join(WRAPPER_KEYS)}",
+            )
+    if not is_atari_id(env_id):
+        raise CLIError(f"atari is set but {env_id} is not an Atari game", "drop atari")
+    if settings.get("normalize"):
+        raise CLIError("normalize does not apply to the Atari recipe", "drop normalize or atari")
+    from palaestra.envs.atari.checks import import_ale_py
+
+    import_ale_py()  # before torch is imported: a missing ale-py fails at once, in one line
+
+
+def make_vec(config: dict[str, Any], n_envs: int, seed: int | None, render: bool = False) -> Any:
+    """``n_envs`` envs of the run's pipeline (without ``VecNormalize``)."""
+    from palaestra.vec_env import VecFrameStack, make_atari_env, make_vec_env
+
+    env_id = config["env_id"]
+    env_kwargs = dict(config.get("env_kwargs") or {})
+    atari = config.get("atari") or False
+    if atari:
+        from palaestra.envs.atari.checks import import_ale_py
+
+        import_ale_py()  # eval and record reach here without check_pipeline
+        wrapper_kwargs = dict(atari) if isinstance(atari, dict) else {}
+        venv = make_atari_env(
+            env_id, n_envs=n_envs, seed=seed, wrapper_kwargs=wrapper_kwargs, env_kwargs=env_kwargs
+        )  # string Atari ids render rgb_array frames already
+    else:
+        if render:
+            env_kwargs["render_mode"] = "rgb_array"
+        venv = make_vec_env(env_id, n_envs=n_envs, seed=seed, env_kwargs=env_kwargs)
+    if _stack(config) > 1:
+        venv = VecFrameStack(venv, n_stack=_stack(config))
+    return venv
+
+
+def render_fps(venv: Any, config: dict[str, Any]) -> float:
+    """Frames per second of a recording, one rendered frame per agent step: for Atari the
+    console's 60 Hz over the wrapper's frame skip (real game speed), else the env's
+    ``render_fps`` (default 30)."""
+    atari = config.get("atari") or False
+    if atari:
+        skip = int((atari if isinstance(atari, dict) else {}).get("frame_skip", 4))
+        return ATARI_HZ / max(skip, 1)
+    metadata = venv.get_attr("metadata")[0] or {}
+    return float(metadata.get("render_fps") or 30)
+
+
+def play_vec(
+    model: Any,
+    venv: Any,
+    episodes: int,
+    deterministic: bool = True,
+    seed: int | None = 0,
+    record: bool = False,
+) -> Any:
+    """``episodes`` Monitor episodes on a one-env pipeline (whole games for Atari): returns a
+    ``Played`` with each episode's Monitor return and its length in agent steps."""
+    from palaestra.cli.evaluate import Played
+
+    out = Played([], [], [], [])
+    venv.seed(seed)
+    obs = venv.reset()
+    steps = 0
+    if record:
+        out.frames.append(venv.get_images()[0])
+    while len(out.returns) < episodes:
+        action, _ = model.predict(obs, deterministic=deterministic)
+        obs, _, dones, infos = venv.step(action)
+        steps += 1
+        if record:
+            out.frames.append(venv.get_images()[0])
+        # A lost life is a ``done`` too; only the Monitor's "episode" marks the game's end.
+        episode = infos[0].get("episode") if dones[0] else None
+        if episode is not None:
+            out.returns.append(float(episode["r"]))
+            out.lengths.append(steps)
+            out.terminated.append(not infos[0].get("TimeLimit.truncated", False))
+            steps = 0
+    return out
