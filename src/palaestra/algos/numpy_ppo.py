@@ -42,6 +42,8 @@ class NumpyPPOTrainer:
             params.append(self.head.log_std)
         self.adam = FlatAdam(optimizer, params)
         self._views = LayerViews(pi_chain, vf_chain)
+        offset = self.head.offset  # a buffer: looked up once, not per minibatch
+        self._offset = None if offset is None else int(offset)
 
     @classmethod
     def build(cls, policy: Any, optimizer: Any) -> NumpyPPOTrainer | None:
@@ -85,17 +87,19 @@ class NumpyPPOTrainer:
         rows = np.arange(n)
         if self.head.kind == "categorical":
             idx = actions.reshape(n).astype(np.int64, copy=False)
-            if self.head.offset is not None:
-                idx = idx - int(self.head.offset)
+            if self._offset is not None:
+                idx = idx - self._offset
             logp_all = log_softmax(out)
             probs = np.exp(logp_all)
             log_prob = logp_all[rows, idx]
-            entropy = -np.add.reduce(probs * logp_all, axis=1)
+            # per-row entropies only for the entropy gradient; the mean is one dot product
+            entropy = -np.add.reduce(probs * logp_all, axis=1) if ent_coef else None
+            mean_entropy = -float(np.dot(probs.ravel(), logp_all.ravel())) / n
         else:
             log_std = self.head.log_std.detach().numpy()
             z = (actions.reshape(out.shape) - out) * np.exp(-log_std)
             log_prob = (-0.5 * z * z - log_std - _LOG_SQRT_2PI).sum(axis=1)
-            entropy = np.full(n, (0.5 + _LOG_SQRT_2PI + log_std).sum(), dtype=np.float32)
+            mean_entropy = float((0.5 + _LOG_SQRT_2PI + log_std).sum())
         adv = advantages
         if normalize_advantage and n > 1:
             # (adv - mean) / (std(ddof=1) + 1e-8), without np.mean/np.std's Python layers
@@ -114,7 +118,7 @@ class NumpyPPOTrainer:
         metrics = {
             "policy_loss": -float(np.add.reduce(np.minimum(s1, s2))) / n,
             "value_loss": float(np.dot(v_err, v_err)) / n,
-            "entropy_loss": -float(np.add.reduce(entropy)) / n,
+            "entropy_loss": -mean_entropy,
             "clip_fraction": float(np.count_nonzero(np.abs(ratio - 1) > clip_range)) / n,
             "approx_kl": float(np.add.reduce((ratio - 1) - log_ratio)) / n,
         }
@@ -125,20 +129,22 @@ class NumpyPPOTrainer:
         )
         if kl_limit is not None and metrics["approx_kl"] > kl_limit:
             return metrics, True
-        # d(min(s1, s2))/d(ratio), with torch.minimum's even split on ties
-        tie = 0.5 * (s1 == s2)
-        inside = (ratio >= 1 - clip_range) & (ratio <= 1 + clip_range)
-        d_min = adv * ((s1 < s2) + tie + ((s2 < s1) + tie) * inside)
-        d_lp = -d_min * ratio / n  # d(policy_loss)/d(log_prob)
+        # d(min(s1, s2))/d(ratio) is adv where s1 < s2 or the ratio lies inside the clip range.
+        # Inside, clipped == ratio, so s1 == s2 and torch.minimum's even split of the tie gives
+        # 1/2 + 1/2 (both sides are the ratio); outside, the clipped side is a constant (a tie
+        # there needs adv == 0, a zero gradient either way).
+        d_min = adv * ((clipped == ratio) | (s1 < s2))
+        neg_d_lp = np.multiply(d_min, ratio, out=d_min)
+        neg_d_lp /= n  # -d(policy_loss)/d(log_prob)
         if self.head.kind == "categorical":
             # d_lp * (one_hot - probs) - dH/dlogits * ent_coef / n
-            d_out = d_lp[:, None] * probs
-            np.negative(d_out, out=d_out)
-            if ent_coef:
+            d_out = neg_d_lp[:, None] * probs
+            if entropy is not None:
                 d_out += (ent_coef / n) * probs * (logp_all + entropy[:, None])
-            d_out[rows, idx] += d_lp
+            d_out[rows, idx] -= neg_d_lp
             extra: list[np.ndarray] = []
         else:
+            d_lp = -neg_d_lp
             d_out = d_lp[:, None] * z * np.exp(-log_std)
             extra = [(d_lp[:, None] * (z * z - 1.0)).sum(axis=0) - ent_coef]
         d_v = (2.0 * vf_coef / n) * v_err
