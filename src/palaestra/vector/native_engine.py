@@ -45,21 +45,24 @@ class NativeEngine:
         self.render_mode: str | None = None
         n = self.num_envs
         self.obs = batch._obs  # [N, obs_dim] float32, rewritten in place by the batch
-        self._elapsed = np.zeros(n, dtype=np.int64)  # [N] steps since each row's reset
+        # Steps since a row's reset = the engine's step count minus the count at that reset:
+        # one integer per step instead of an [N] `elapsed += 1` (~0.6 us at 1024 rows).
+        self._steps = 0
+        self._reset_at = np.zeros(n, dtype=np.int64)  # [N] self._steps at each row's reset
         self._rewards = np.zeros(n)  # [N] float64
         self._terminated = np.zeros(n, dtype=bool)  # [N]
         self._truncated = np.zeros(n, dtype=bool)  # [N]
         # No time limit: truncation never happens, so the array stays all False.
         self._sent: tuple[Any, np.ndarray | None] = (None, None)
-        self._limit = np.int64(max_episode_steps) if max_episode_steps is not None else None
+        self._limit = max_episode_steps
 
     def reset(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> Infos:
         """Re-sample the masked rows (all if None); classic-control resets have empty infos."""
         self.batch.reset(seed=seeds, options=options, mask=mask)
         if mask is None:
-            self._elapsed[:] = 0
+            self._reset_at[:] = self._steps
         else:
-            self._elapsed[mask] = 0
+            self._reset_at[mask] = self._steps
         return None
 
     def step_send(self, actions: Any, reset_mask: np.ndarray | None) -> None:
@@ -77,11 +80,11 @@ class NativeEngine:
         # copy into ours so callers may overwrite entries.
         np.copyto(self._rewards, reward)
         np.copyto(self._terminated, terminated)
-        self._elapsed += 1
-        if self._limit is not None:
-            np.greater_equal(self._elapsed, self._limit, out=self._truncated)
+        self._steps += 1
+        if self._limit is not None:  # elapsed >= limit, i.e. reset_at <= steps - limit
+            np.less_equal(self._reset_at, self._steps - self._limit, out=self._truncated)
         if reset_mask is not None:
-            self._elapsed[reset_mask] = 0
+            self._reset_at[reset_mask] = self._steps
         return self._rewards, self._terminated, self._truncated, None
 
     def call(

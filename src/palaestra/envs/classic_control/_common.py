@@ -14,6 +14,7 @@ from palaestra.core import Env
 from palaestra.spaces import Box, Discrete
 
 RENDER_MODES = ["human", "rgb_array"]
+_INT64 = np.dtype(np.int64)
 
 
 def state_array(values: Any, dtype: Any = np.float64) -> np.ndarray:
@@ -98,6 +99,16 @@ def check_box_action(action: Any, space: Any) -> float:
 
 def check_discrete_batch(actions: Any, space: Discrete, num_envs: int) -> np.ndarray:
     """Validate N discrete actions at once: an int64 array ``[N]`` or InvalidAction."""
+    if (
+        type(actions) is np.ndarray
+        and actions.dtype is _INT64
+        and actions.shape == (num_envs,)
+        and space.start == 0
+        # The usual case (what Generator.integers returns): seen as unsigned, negative values
+        # are huge, so one comparison finds both bounds (count_nonzero: cheaper than a reduce).
+        and not np.count_nonzero(actions.view(np.uint64) >= int(space.n))
+    ):
+        return actions
     arr = np.asarray(actions)
     if arr.shape != (num_envs,) or arr.dtype.kind not in "iu":
         raise error.InvalidAction(
