@@ -137,10 +137,10 @@ class Autoresetter:
             if pending is not None:
                 # A row reset in place of a step reports reward 0 and not done (Gymnasium).
                 # Few rows: integer indices are ~3x cheaper than the [N] mask, three times.
-                rows = pending.nonzero()[0]
-                rewards[rows] = 0.0
-                terminated[rows] = False
-                truncated[rows] = False
+                reset_rows = pending.nonzero()[0]
+                rewards[reset_rows] = 0.0
+                terminated[reset_rows] = False
+                truncated[reset_rows] = False
             np.logical_or(terminated, truncated, out=self._ended)
             if continuing is not None:
                 self._ended &= ~continuing
