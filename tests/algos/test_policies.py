@@ -172,3 +172,15 @@ def test_numpy_categorical_draws_follow_the_softmax() -> None:
     mode, mode_lp = sample_categorical(logits[:3], np.random.default_rng(0), True)
     assert mode.tolist() == [3, 3, 3]
     np.testing.assert_allclose(mode_lp, expected[3], rtol=1e-6)
+
+
+def test_numpy_categorical_draw_at_the_top_of_the_unit_interval_stays_in_range() -> None:
+    from palaestra.algos.numpy_acting import sample_categorical
+
+    class TopRng:
+        def random(self, n: int) -> np.ndarray:
+            return np.full(n, np.nextafter(1.0, 0.0))
+
+    logits = np.random.default_rng(0).normal(scale=30, size=(10_000, 5)).astype(np.float32)
+    idx, log_prob = sample_categorical(logits, TopRng(), False)  # type: ignore[arg-type]
+    assert idx.max() <= 4 and np.isfinite(log_prob).all()

@@ -102,7 +102,8 @@ def sample_categorical(
     if deterministic:
         idx = shifted.argmax(axis=1)
     else:
+        # u < 1, so u * total < total == cdf[:, -1] (float64 product of a float32 total):
+        # at most n - 1 entries lie below, and the index needs no clamp.
         u = rng.random(logits.shape[0]) * total
         idx = np.add.reduce(cdf < u[:, None], axis=1)
-        np.minimum(idx, logits.shape[1] - 1, out=idx)
     return idx, shifted[np.arange(len(idx)), idx] - np.log(total)

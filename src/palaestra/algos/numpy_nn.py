@@ -168,9 +168,17 @@ class FlatAdam:
         self.slices = [slice(int(a), int(b)) for a, b in itertools.pairwise(bounds)]
         self.grad = np.zeros(int(bounds[-1]), dtype=np.float32)
         self._tmp, self._tmp2 = np.empty_like(self.grad), np.empty_like(self.grad)
-        self._grad_views = self._make_grad_views()
+        self._grad_views: list[np.ndarray] | None = None
+        self._np: tuple[np.ndarray, ...] | None = None  # numpy views of the torch buffers
         self._bind_params()
         self._bind_state()
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Copies (``deepcopy``, pickle) drop the cached numpy views: a copy of a view does
+        not share memory with the copied buffer, so they are taken again from the copy."""
+        state = self.__dict__.copy()
+        state["_grad_views"] = state["_np"] = None
+        return state
 
     def _bind_params(self) -> None:
         """Make the parameters views of one flat buffer, keeping their values. This moves
@@ -180,7 +188,7 @@ class FlatAdam:
             for p, sl in zip(self.params, self.slices):
                 flat[sl].copy_(p.reshape(-1))
                 p.data = flat[sl].view_as(p)
-        self._flat = flat
+        self._flat, self._np = flat, None
 
     def _bind_state(self) -> None:
         """Make the optimizer state views of flat buffers, keeping its values
@@ -197,7 +205,7 @@ class FlatAdam:
             st["step"] = steps[i]
             st["exp_avg"] = m[sl].view_as(p)
             st["exp_avg_sq"] = v[sl].view_as(p)
-        self._m, self._v, self._steps = m, v, steps
+        self._m, self._v, self._steps, self._np = m, v, steps, None
         self._bound: list[tuple[dict[str, Any], torch.Tensor]] = [
             (state[p], state[p]["exp_avg"]) for p in self.params
         ]
@@ -213,13 +221,12 @@ class FlatAdam:
             for p, (st, m) in zip(self.params, self._bound)
         )
 
-    def _make_grad_views(self) -> list[np.ndarray]:
-        return [self.grad[sl].reshape(p.shape) for p, sl in zip(self.params, self.slices)]
-
     def grad_views(self) -> list[np.ndarray]:
         """Per-parameter views of the flat gradient buffer, in ``params`` order."""
-        if self._grad_views[0].base is not self.grad:  # a deepcopy copied the views apart
-            self._grad_views = self._make_grad_views()
+        if self._grad_views is None:
+            self._grad_views = [
+                self.grad[sl].reshape(p.shape) for p, sl in zip(self.params, self.slices)
+            ]
         return self._grad_views
 
     def step(self) -> None:
@@ -228,36 +235,19 @@ class FlatAdam:
             self._bind_params()
         if not self._state_bound():
             self._bind_state()
+        if self._np is None:
+            self._np = (self._flat.numpy(), self._m.numpy(), self._v.numpy(), self._steps.numpy())
+        p, m, v, steps = self._np
         group = self.optimizer.param_groups[0]
-        lr, (beta1, beta2), eps = float(group["lr"]), group["betas"], float(group["eps"])
-        steps = self._steps.numpy()
+        hyper = float(group["lr"]), *group["betas"], float(group["eps"])
         steps += 1
         first = float(steps[0])
-        if (steps == first).all():
-            self._update(slice(None), first, lr, beta1, beta2, eps)
+        if not np.count_nonzero(steps != first):
+            _adam_update(self.grad, p, m, v, self._tmp, self._tmp2, first, *hyper)
         else:  # per-tensor step counts (state loaded from elsewhere): one update per tensor
             for sl, t in zip(self.slices, steps.tolist()):
-                self._update(sl, t, lr, beta1, beta2, eps)
-
-    def _update(
-        self, sl: slice, t: float, lr: float, beta1: float, beta2: float, eps: float
-    ) -> None:
-        g, p = self.grad[sl], self._flat.numpy()[sl]
-        m, v = self._m.numpy()[sl], self._v.numpy()[sl]
-        tmp, tmp2 = self._tmp[sl], self._tmp2[sl]
-        np.subtract(g, m, out=tmp)  # m.lerp_(g, 1 - beta1)
-        tmp *= 1.0 - beta1
-        m += tmp
-        v *= beta2  # v.mul_(beta2).addcmul_(g, g, value=1 - beta2)
-        np.multiply(g, g, out=tmp)
-        tmp *= 1.0 - beta2
-        v += tmp
-        np.sqrt(v, out=tmp)
-        tmp /= math.sqrt(1.0 - beta2**t)
-        tmp += eps
-        np.divide(m, tmp, out=tmp2)
-        tmp2 *= lr / (1.0 - beta1**t)
-        p -= tmp2
+                g, tmp, tmp2 = self.grad[sl], self._tmp[sl], self._tmp2[sl]
+                _adam_update(g, p[sl], m[sl], v[sl], tmp, tmp2, t, *hyper)
 
     def clip_grad_norm(self, max_norm: float) -> None:
         """Scale ``self.grad`` in place like ``clip_grad_norm_`` (coefficient clamped at 1)."""
@@ -265,6 +255,36 @@ class FlatAdam:
         coef = max_norm / (total + 1e-6)
         if coef < 1.0:
             self.grad *= coef
+
+
+def _adam_update(
+    g: np.ndarray,
+    p: np.ndarray,
+    m: np.ndarray,
+    v: np.ndarray,
+    tmp: np.ndarray,
+    tmp2: np.ndarray,
+    t: float,
+    lr: float,
+    beta1: float,
+    beta2: float,
+    eps: float,
+) -> None:
+    """One Adam step of ``p`` (in place, with ``m``, ``v``) at step count ``t``: torch's
+    non-fused float32 formula, with ``tmp``/``tmp2`` as scratch space."""
+    np.subtract(g, m, out=tmp)  # m.lerp_(g, 1 - beta1)
+    tmp *= 1.0 - beta1
+    m += tmp
+    v *= beta2  # v.mul_(beta2).addcmul_(g, g, value=1 - beta2)
+    np.multiply(g, g, out=tmp)
+    tmp *= 1.0 - beta2
+    v += tmp
+    np.sqrt(v, out=tmp)
+    tmp /= math.sqrt(1.0 - beta2**t)
+    tmp += eps
+    np.divide(m, tmp, out=tmp2)
+    tmp2 *= lr / (1.0 - beta1**t)
+    p -= tmp2
 
 
 @cache
