@@ -131,3 +131,17 @@ def test_threads_and_device() -> None:
     DQN("MlpPolicy", "CartPole-v1", num_threads=2)
     assert torch.get_num_threads() == 2
     torch.set_num_threads(1)
+
+
+def test_episode_infos_and_success_only_at_episode_ends() -> None:
+    model = PPO("MlpPolicy", "CartPole-v1", **SMALL)
+    episode = {"r": 1.0, "l": 1, "t": 0.0}
+    infos = [
+        {"episode": episode, "is_success": True},
+        {"is_success": False},  # not done: its success flag is not an episode's outcome
+        {"is_success": 0.0},
+        {"TimeLimit.truncated": False},
+    ]
+    model._update_info_buffer(infos, np.array([True, False, True, True]))
+    assert list(model.ep_info_buffer) == [episode]
+    assert list(model.ep_success_buffer) == [True, False]

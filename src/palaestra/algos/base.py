@@ -239,12 +239,16 @@ class BaseAlgorithm:
         return lr
 
     def _update_info_buffer(self, infos: list[dict[str, Any]], dones: np.ndarray) -> None:
-        for info, done in zip(infos, dones):
+        """Note finished episodes (``episode``) and, where an env is done, ``is_success``."""
+        for info in infos:
             episode = info.get("episode")
             if episode is not None:
                 self.ep_info_buffer.append(episode)
-            if done and info.get("is_success") is not None:
-                self.ep_success_buffer.append(bool(info["is_success"]))
+        if np.count_nonzero(dones):  # runs every env step: the success scan only at ends
+            for i in np.flatnonzero(dones).tolist():
+                success = infos[i].get("is_success")
+                if success is not None:
+                    self.ep_success_buffer.append(bool(success))
 
     # -- logging -------------------------------------------------------------------------------
     @property

@@ -227,12 +227,13 @@ class PPO(BaseAlgorithm):
         if self._numpy is not None and isinstance(self._last_obs, np.ndarray):
             numpy_pi = self._numpy[0]
         head, values = self.policy.action_head, None
+        bits = isinstance(self.action_space, spaces.MultiBinary)
         while not buf.full:
             if numpy_pi is not None:
                 actions, log_probs = head.act_numpy(numpy_pi(self._last_obs), self._rng, False)
             else:
                 actions, values, log_probs = self._act(self._last_obs)
-            if isinstance(self.action_space, spaces.MultiBinary):
+            if bits:
                 actions = actions.astype(self.action_space.dtype)  # Bernoulli samples are floats
             env_actions = np.clip(actions, box.low, box.high) if box is not None else actions
             new_obs, rewards, dones, infos = env.step(env_actions)
