@@ -144,7 +144,7 @@ def test_many_resets_draw_like_single_envs(env_id: str) -> None:
     for i, env in enumerate(singles):
         env.reset(seed=7 + i)
     rng = np.random.default_rng(0)
-    per = batch._per_buffer  # resets a row's pre-drawn uniforms hold
+    per = batch._draws.per  # resets a row's pre-drawn uniforms hold
     for k in range(4 * per):  # past two buffer refills for every env, before and after a reseed
         mask = rng.random(3) < 0.7
         seed = 1000 + k if k in (per // 2, 2 * per) else None  # reseeding drops buffered draws

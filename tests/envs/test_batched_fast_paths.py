@@ -58,7 +58,7 @@ def test_cartpole_semi_implicit_rows_match() -> None:
 
 @pytest.mark.parametrize("env_id", ["CartPole-v1", "MountainCar-v0"])
 def test_hundreds_of_resets_draw_like_single_envs(env_id: str) -> None:
-    """Several refills of every row's pre-drawn uniforms (``_per_buffer`` resets each)."""
+    """Several refills of every row's pre-drawn uniforms (``_draws.per`` resets each)."""
     single_cls, batch_cls = CLASSES[env_id]
     singles = [single_cls() for _ in range(2)]
     batch = batch_cls(2)
@@ -66,7 +66,7 @@ def test_hundreds_of_resets_draw_like_single_envs(env_id: str) -> None:
     for i, env in enumerate(singles):
         env.reset(seed=3 + i)
     all_rows = np.ones(2, dtype=bool)
-    for k in range(3 * batch._per_buffer + 2):
+    for k in range(3 * batch._draws.per + 2):
         obs = batch.reset(mask=all_rows)
         ref = np.stack([env.reset()[0] for env in singles])
         assert obs.tobytes() == ref.tobytes(), k

@@ -7,11 +7,10 @@ generators and seeding. There is no autoreset, time limit or info here: the vect
 those on top.
 
 Row ``i`` reset with ``seed=s`` uses ``np.random.default_rng(s + i)`` and draws exactly what a
-single env reset with ``seed=s + i`` draws, so the two stay identical step by step. Every reset
-of an env consumes a fixed number of uniform doubles (``reset_draws``), and numpy's
-``uniform(low, high)`` is ``low + (high - low) * random()``, so each row pre-draws the uniforms
-of several resets at once and resets become a vectorised gather: the per-row Python loop runs
-only when a row's buffer is empty (every few hundred resets) or when it is reseeded.
+single env reset with ``seed=s + i`` draws, so the two stay identical step by step. Each row's
+generator draws the uniforms of many resets ahead (:mod:`._draws`), so resetting the rows that
+ended is a vectorised gather; the per-row Python loop runs only when rows are seeded and in
+occasional top-ups.
 """
 
 from __future__ import annotations
@@ -22,16 +21,11 @@ from typing import Any, ClassVar
 import numpy as np
 
 from palaestra.envs.classic_control._common import check_box_batch, check_discrete_batch
+from palaestra.envs.classic_control._draws import PreDrawn
 from palaestra.envs.classic_control._ops import ARRAY
 from palaestra.error import ResetNeeded
 from palaestra.spaces import Box, Discrete, Space
 from palaestra.utils.seeding import np_random
-
-# Uniforms pre-drawn per row: a refill is one generator call (~1 us plus the loop around it),
-# so bigger buffers mean fewer of them; 16 MiB in all, 1 KiB to 8 KiB a row (1024 CartPoles:
-# 256 resets a refill, one refill every ~5 steps at ~48 resets a step).
-_BUFFER_BYTES = 16 << 20
-_ROW_BYTES = (1 << 10, 8 << 10)
 
 
 class BatchedEnv:
@@ -65,13 +59,7 @@ class BatchedEnv:
         self._obs = np.zeros((n, obs_dim), dtype=np.float32)  # [N, obs_dim]
         self._rngs: list[np.random.Generator | None] = [None] * n
         self.seeds: list[int | None] = [None] * n
-        row_bytes = min(max(_BUFFER_BYTES // n, _ROW_BYTES[0]), _ROW_BYTES[1])
-        self._per_buffer = max(1, row_bytes // (8 * self.reset_draws))  # resets per refill
-        # Pre-drawn uniforms: row i's block is [i*per, (i+1)*per), one reset a record.
-        self._uniforms = np.empty((n * self._per_buffer, self.reset_draws))
-        draw = np.dtype((np.void, 8 * self.reset_draws))
-        self._uniform_rows = self._uniforms.view(draw)[:, 0]  # [N * per] records of draws
-        self._next = np.full(n, self._per_buffer)  # [N] next unused reset; per = "empty"
+        self._draws = PreDrawn(self._rngs, self.reset_draws)  # reset uniforms drawn ahead
         self._seeded = np.zeros(n, dtype=bool)  # [N] has a generator
         self._needs_reset = np.ones(n, dtype=bool)  # [N]
         self._params_for: Any = None  # the params _params_arrays was built from
@@ -132,34 +120,21 @@ class BatchedEnv:
         """Re-sample the state of ``rows`` (sorted indices); observations are left to the caller."""
         if seed is not None or not self._all_seeded:
             self._seed_rows(rows, self._row_seeds(seed))
-        fresh = self._reset_state(self._take_uniforms(rows), bounds)  # [R, k]
+        fresh = self._reset_state(self._draws.take(rows), bounds)  # [R, k]
         self._state_rows[rows] = np.ascontiguousarray(fresh, dtype=np.float64).view(self._row)[:, 0]
         if not self._all_reset:
             self._needs_reset[rows] = False
             self._all_reset = not self._needs_reset.any()
         self._after_reset(rows)
 
-    def _take_uniforms(self, rows: np.ndarray) -> np.ndarray:
-        """Each row's next pre-drawn reset uniforms ``[R, draws]``; empty buffers refill first."""
-        per = self._per_buffer
-        nxt = self._next[rows]  # [R] index of each row's next unused reset
-        if rows.size and np.maximum.reduce(nxt) == per:  # some buffer is empty
-            empty = nxt == per
-            for i in rows[empty].tolist():  # once per _per_buffer resets of a row
-                rng = self._rngs[i]
-                assert rng is not None
-                rng.random(out=self._uniforms[i * per : (i + 1) * per])  # rng.random((per, draws))
-            nxt[empty] = 0
-        self._next[rows] = nxt + 1
-        taken = self._uniform_rows[rows * per + nxt]  # [R] records: one 1-D gather
-        return taken.view(np.float64).reshape(len(rows), self.reset_draws)
-
     def _seed_rows(self, rows: np.ndarray, seeds: list[int | None]) -> None:
-        """New generators for rows given a seed (or never seeded); their buffers start empty."""
+        """New generators for rows given a seed (or never seeded); their draws start over."""
+        fresh = []
         for i in rows.tolist():
             if seeds[i] is not None or self._rngs[i] is None:
                 self._rngs[i], self.seeds[i] = np_random(seeds[i])
-                self._next[i] = self._per_buffer
+                fresh.append(i)
+        self._draws.restart(np.array(fresh, dtype=np.intp))
         self._seeded[rows] = True
         self._all_seeded = bool(self._seeded.all())
 
