@@ -61,3 +61,22 @@ def test_remainder_and_clip_agree() -> None:
         ARRAY.mod(x + math.pi, 2 * math.pi), [SCALAR.mod(v + math.pi, 2 * math.pi) for v in x]
     )
     np.testing.assert_array_equal(ARRAY.clip(x, -8, 8), [SCALAR.clip(v, -8, 8) for v in x])
+
+
+def test_pick_selects_like_the_scalar_path() -> None:
+    values = (np.array(-10.0), np.array(10.0))  # 0-d constants, as the array step passes them
+    index = np.array([1, 0, 0, 1, 1])
+    picked = ARRAY.pick(index, *values)
+    assert picked.dtype == np.float64
+    assert picked.tolist() == [SCALAR.pick(i, -10.0, 10.0) for i in index.tolist()]
+    with pytest.raises(IndexError):  # a table lookup: nothing out of range slips through
+        ARRAY.pick(np.array([0, 2]), *values)
+
+
+def test_constants_are_0d_arrays_of_the_same_values() -> None:
+    from palaestra.envs.classic_control.cartpole import CartPoleParams
+
+    p = CartPoleParams()
+    c = ARRAY.constants(p)
+    assert isinstance(c.tau, np.ndarray) and c.tau.shape == () and c.tau == p.tau
+    assert c.kinematics_integrator == p.kinematics_integrator  # non-floats kept as they are

@@ -1,8 +1,9 @@
 """Two interchangeable math namespaces so each env's physics is written once.
 
 ``step_state`` functions take ``ops`` as their first argument and only use the operations
-below plus ``+ - * / < > == & |``. With :data:`SCALAR` they run on Python floats (the single
-env's fast path); with :data:`ARRAY` they run on float64 arrays of N envs (the batched engine).
+below plus ``+ - * / < > == & |`` and builtin ``abs``. With :data:`SCALAR` they run on Python
+floats (the single env's fast path); with :data:`ARRAY` they run on float64 arrays of N envs
+(the batched engine).
 
 Why this is exact: on the machines we measured (x86-64, numpy 2.4), numpy's float64
 ``np.cos``/``np.sin`` give bit-identical results to ``math.cos``/``math.sin`` (glibc libm) for
@@ -52,6 +53,11 @@ class ScalarOps:
     def where(cond: bool, a: Any, b: Any) -> Any:
         """``a if cond else b`` (both already evaluated, as with ``np.where``)."""
         return a if cond else b
+
+    @staticmethod
+    def pick(index: int, *values: float) -> float:
+        """``values[index]``: the value a discrete action selects."""
+        return values[index]
 
     @staticmethod
     def f32(x: float) -> float:
@@ -106,6 +112,15 @@ class ArrayOps:
     where = staticmethod(np.where)
     mod = staticmethod(np.remainder)
     any = staticmethod(np.any)
+
+    @staticmethod
+    def pick(index: np.ndarray, *values: Any) -> np.ndarray:
+        """``values[index]`` for each element of an integer array (``values`` are scalars).
+
+        A lookup table: ~4x cheaper than ``np.where(index == 1, b, a)`` (3.8 us at 1024 rows,
+        np.where on scalars is slow), and an index outside ``values`` raises.
+        """
+        return np.array(values, dtype=np.float64).take(index)
 
     @staticmethod
     def f32(x: np.ndarray) -> np.ndarray:

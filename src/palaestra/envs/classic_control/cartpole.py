@@ -49,7 +49,7 @@ def step_state(
     ops: Any, p: CartPoleParams, x: Any, x_dot: Any, theta: Any, theta_dot: Any, action: Any
 ) -> Any:
     """One Euler step (scalars or ``[N]`` arrays): ``(x, x_dot, theta, theta_dot, terminated)``."""
-    force = ops.where(action == 1, p.force_mag, -p.force_mag)
+    force = ops.pick(action, -p.force_mag, p.force_mag)  # action 1 pushes right
     costheta = ops.cos(theta)
     sintheta = ops.sin(theta)
     # Association exactly as Gymnasium writes it; float addition is not associative.
