@@ -4,6 +4,7 @@ Run from the repository root::
 
     .venv/bin/python benchmarks/vector_step.py           # full run (a few minutes)
     .venv/bin/python benchmarks/vector_step.py --quick   # smoke run
+    .venv/bin/python benchmarks/vector_step.py --env CartPole-v1 --sizes 1024 --no-processes --us
 
 For MountainCar-v0 and CartPole-v1 at 8, 64, 1024 and 16384 envs, in one process:
 
@@ -155,35 +156,50 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="short runs, sizes 8 and 1024")
     parser.add_argument("--seconds", type=float, default=0.4)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--env", action="append", choices=IDS, help="only this id (repeatable)")
+    parser.add_argument("--sizes", help="comma-separated numbers of envs, e.g. 1024")
+    parser.add_argument(
+        "--no-processes", action="store_true", help="skip the process-based table (8 envs)"
+    )
+    parser.add_argument(
+        "--us", action="store_true", help="add µs per vector step of native and gymnasium"
+    )
     args = parser.parse_args()
     sizes = SIZES
     if args.quick:
         args.seconds, args.repeats, sizes = 0.05, 1, [8, 1024]
+    if args.sizes:
+        sizes = [int(n) for n in args.sizes.split(",")]
+    ids = args.env or IDS
     warnings.filterwarnings("ignore")
 
+    extra = " native µs/step | gymnasium µs/step |" if args.us else ""
     print(
         "| env | envs | palaestra native | native, SB3 API | gymnasium SyncVectorEnv "
-        "| SB3 DummyVecEnv | native / gymnasium |"
+        f"| SB3 DummyVecEnv | native / gymnasium |{extra}"
     )
-    print("|---|---:|---:|---:|---:|---:|---:|")
-    for env_id in IDS:
+    print("|---|---:|---:|---:|---:|---:|---:|" + "---:|" * (2 if args.us else 0))
+    for env_id in ids:
         for n in sizes:
             r = in_process(env_id, n, args)
-            ratio = r["palaestra native"] / r["gymnasium SyncVectorEnv"]
+            native, gym = r["palaestra native"], r["gymnasium SyncVectorEnv"]
+            us = f" {n / native * 1e6:.1f} | {n / gym * 1e6:.0f} |" if args.us else ""
             print(
-                f"| {env_id} | {n} | {_fmt(r['palaestra native'])} "
+                f"| {env_id} | {n} | {_fmt(native)} "
                 f"| {_fmt(r['palaestra native (SB3 API)'])} "
-                f"| {_fmt(r['gymnasium SyncVectorEnv'])} | {_fmt(r['SB3 DummyVecEnv'])} "
-                f"| {ratio:.0f}x |",
+                f"| {_fmt(gym)} | {_fmt(r['SB3 DummyVecEnv'])} "
+                f"| {native / gym:.0f}x |{us}",
                 flush=True,
             )
+    if args.no_processes:
+        return
     print()
     print(
         "| env | envs | palaestra SubprocVecEnv | SB3 SubprocVecEnv | ratio "
         "| palaestra AsyncVectorEnv | gymnasium AsyncVectorEnv | ratio |"
     )
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
-    for env_id in IDS:
+    for env_id in ids:
         r = processes(env_id, 8, args)
         print(
             f"| {env_id} | 8 | {_fmt(r['palaestra SubprocVecEnv'])} "
