@@ -49,6 +49,10 @@ class NativeEngine:
         # one integer per step instead of an [N] `elapsed += 1` (~0.6 us at 1024 rows).
         self._steps = 0
         self._reset_at = np.zeros(n, dtype=np.int64)  # [N] self._steps at each row's reset
+        # A lower bound of _reset_at (resets only raise entries): while steps - limit is below
+        # it no row can be truncated, and the [N] comparison is skipped.
+        self._oldest = 0
+        self._compared = False  # the last step compared (so _truncated may hold True)
         self._rewards = np.zeros(n)  # [N] float64
         self._terminated = np.zeros(n, dtype=bool)  # [N]
         self._truncated = np.zeros(n, dtype=bool)  # [N]
@@ -81,10 +85,19 @@ class NativeEngine:
         np.copyto(self._rewards, reward)
         np.copyto(self._terminated, terminated)
         self._steps += 1
-        if self._limit is not None:  # elapsed >= limit, i.e. reset_at <= steps - limit
-            np.less_equal(self._reset_at, self._steps - self._limit, out=self._truncated)
+        compared = False
+        if self._limit is not None:
+            horizon = self._steps - self._limit  # rows reset at or before it are out of time
+            if horizon >= self._oldest:
+                np.less_equal(self._reset_at, horizon, out=self._truncated)
+                compared = True
+            elif self._compared:  # no row can be out of time: clear what the last one set
+                self._truncated[:] = False
+            self._compared = compared
         if reset_mask is not None:
             self._reset_at[reset_mask] = self._steps
+        if compared:
+            self._oldest = int(np.minimum.reduce(self._reset_at))
         return self._rewards, self._terminated, self._truncated, None
 
     def call(
