@@ -5,7 +5,7 @@ layer; the same matmuls in numpy cost a few. ``numpy_mlp`` turns a chain of torc
 into a numpy function over *views* of the CPU parameters, so optimizer steps, target updates
 and ``load_state_dict`` (all in place) are seen without copying. Anything it cannot express
 (convolutions, one-hot inputs, other activations, GPU tensors) returns ``None`` and the caller
-keeps the torch path. Training always uses torch.
+keeps the torch path. (Training in numpy: ``numpy_nn``, ``numpy_dqn``, ``numpy_ppo``.)
 """
 
 from __future__ import annotations

@@ -156,10 +156,10 @@ class FlatAdam:
     as views of flat torch buffers, so one step is about a dozen numpy operations over all
     weights instead of a dozen per tensor (per-tensor overhead was most of a small net's
     update), and torch (``save``, ``load``, the torch code paths) keeps seeing the same tensors.
-    Of the parameters and state only torch tensors are kept between calls (their numpy views
-    are taken per step), so a ``deepcopy`` of the model and its trainer stays wired together;
-    the gradient views are kept and checked against the gradient buffer instead. The math is torch's
-    non-fused float32 formula. The backward pass writes into ``grad_views()``.
+    Numpy views of these buffers are cached, taken again after a rebinding, and left out of
+    copies (``__getstate__``), so a ``deepcopy`` of the model and its trainer stays wired
+    together. The math is torch's non-fused float32 formula. The backward pass writes into
+    ``grad_views()``.
     """
 
     def __init__(self, optimizer: torch.optim.Optimizer, params: list[torch.Tensor]):
