@@ -47,8 +47,9 @@ class BatchedEnv:
         n, k = self.num_envs, self.state_dim
         obs_dim = self.single_observation_space.shape[0]  # type: ignore[index]
         # Row i is env i (Gymnasium's layout): observations are then one contiguous cast of
-        # the state, and a reset writes whole rows. Physics reads the columns (strided views,
-        # as fast as contiguous ones for these ufuncs).
+        # the state, and a reset writes whole rows. Physics reads the columns as strided views
+        # (~0.2 us more per op than contiguous [k, N] rows at 1024 envs, less than what the
+        # transposes of that layout cost for observations and resets).
         self._state = np.zeros((n, k))  # [N, k] float64
         self._cols = tuple(self._state[:, j] for j in range(k))  # k views of [N]
         # Whole rows as opaque records: gathering or scattering R rows by index is then 1-D
