@@ -172,3 +172,12 @@ def test_compare_says_atari_episodes_are_games(
     result = cli("compare", out, "--out", tmp_path / "c.png")
     assert result.code == 0, result.err
     assert "(Atari runs: training episodes are whole games" in result.out
+
+
+def test_eval_of_an_atari_run_on_a_non_atari_env_is_one_line(
+    cli: Callable[..., Result], atari_run: tuple[Path, Result]
+) -> None:
+    out, _ = atari_run
+    result = cli("eval", out, "--env", "CartPole-v1")
+    assert result.code == 2 and result.err.count("\n") == 1
+    assert "trained on SB3's Atari recipe; CartPole-v1 is not an Atari game" in result.err

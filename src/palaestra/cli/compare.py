@@ -149,7 +149,9 @@ def run(args: argparse.Namespace) -> int:
     _print_table(rows, args.last)
     for label, variant in zip(labels, variants):
         print(f"  {label}: {', '.join(str(r) for r in variant.runs)}")
-    if any(v.config.get("atari") for v in variants):
+    from palaestra.cli.pipeline import atari_kwargs
+
+    if any(atari_kwargs(v.config) is not None for v in variants):
         from palaestra.cli.evaluate import GAMES_NOTE
 
         print(f"(Atari runs: training {GAMES_NOTE})")

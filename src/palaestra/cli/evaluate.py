@@ -147,6 +147,12 @@ def play_saved(
     config = find_run_config(path)
     if config is not None and pipeline.uses_vec_pipeline(config):
         # The run's recipe (Atari wrappers, frame stack), on --env's id when one is given.
+        atari = pipeline.atari_kwargs(config) is not None
+        if atari and not pipeline.is_atari_id(env_id):
+            raise CLIError(
+                f"the model was trained on SB3's Atari recipe; {env_id} is not an Atari game",
+                "pass --env with an Atari id",
+            )
         config = {**config, "env_id": env_id}
         venv = pipeline.make_vec(config, 1, seed, render=record)
         try:
@@ -155,7 +161,7 @@ def play_saved(
             fps = pipeline.render_fps(venv, config)
         finally:
             venv.close()
-        return env_id, played, fps, bool(config.get("atari"))
+        return env_id, played, fps, atari
     single = make_env(env_id, env_kwargs, render=record)
     try:
         check_spaces(model, single, env_id)

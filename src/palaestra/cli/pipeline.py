@@ -25,6 +25,7 @@ from palaestra.cli.common import CLIError
 __all__ = [
     "ATARI_ENTRY_POINT",
     "atari_defaults",
+    "atari_kwargs",
     "check_pipeline",
     "is_atari_id",
     "make_vec",
@@ -63,6 +64,15 @@ def atari_defaults() -> dict[str, Any]:
     }
 
 
+def atari_kwargs(config: dict[str, Any]) -> dict[str, Any] | None:
+    """The run's ``AtariWrapper`` kwargs (``true`` and ``{}``: SB3's defaults), or None when
+    the run does not use the Atari recipe (``atari`` absent, false or null)."""
+    atari = config.get("atari")
+    if atari is None or atari is False:
+        return None
+    return dict(atari) if isinstance(atari, dict) else {}
+
+
 def _stack(config: dict[str, Any]) -> int:
     value = config.get("frame_stack")
     return 1 if value is None else int(value)
@@ -70,18 +80,18 @@ def _stack(config: dict[str, Any]) -> int:
 
 def uses_vec_pipeline(config: dict[str, Any]) -> bool:
     """Whether a run's env is more than ``palaestra.make`` (Atari recipe or frame stack)."""
-    return bool(config.get("atari")) or _stack(config) > 1
+    return atari_kwargs(config) is not None or _stack(config) > 1
 
 
 def check_pipeline(settings: dict[str, Any], env_id: str) -> None:
     """``CLIError`` unless ``atari`` and ``frame_stack`` are usable for ``env_id``."""
-    atari = settings.get("atari", False)
+    atari = settings.get("atari")
     stack = settings.get("frame_stack")
     if stack is not None and (isinstance(stack, bool) or not isinstance(stack, int) or stack < 1):
         raise CLIError(f"frame_stack must be a positive integer or null, got {stack!r}", "e.g. 4")
-    if not isinstance(atari, (bool, dict)):
+    if not isinstance(atari, (bool, dict, type(None))):
         raise CLIError(f"atari must be true/false or AtariWrapper kwargs, got {atari!r}", "fix it")
-    if not atari:
+    if atari_kwargs(settings) is None:
         return
     if isinstance(atari, dict):
         unknown = sorted(set(atari) - set(WRAPPER_KEYS))
@@ -105,12 +115,11 @@ def make_vec(config: dict[str, Any], n_envs: int, seed: int | None, render: bool
 
     env_id = config["env_id"]
     env_kwargs = dict(config.get("env_kwargs") or {})
-    atari = config.get("atari") or False
-    if atari:
+    wrapper_kwargs = atari_kwargs(config)
+    if wrapper_kwargs is not None:
         from palaestra.envs.atari.checks import import_ale_py
 
         import_ale_py()  # eval and record reach here without check_pipeline
-        wrapper_kwargs = dict(atari) if isinstance(atari, dict) else {}
         venv = make_atari_env(
             env_id, n_envs=n_envs, seed=seed, wrapper_kwargs=wrapper_kwargs, env_kwargs=env_kwargs
         )  # string Atari ids render rgb_array frames already
@@ -127,10 +136,9 @@ def render_fps(venv: Any, config: dict[str, Any]) -> float:
     """Frames per second of a recording, one rendered frame per agent step: for Atari the
     console's 60 Hz over the wrapper's frame skip (real game speed), else the env's
     ``render_fps`` (default 30)."""
-    atari = config.get("atari") or False
-    if atari:
-        skip = int((atari if isinstance(atari, dict) else {}).get("frame_skip", 4))
-        return ATARI_HZ / max(skip, 1)
+    wrapper_kwargs = atari_kwargs(config)
+    if wrapper_kwargs is not None:
+        return ATARI_HZ / max(int(wrapper_kwargs.get("frame_skip", 4)), 1)
     metadata = venv.get_attr("metadata")[0] or {}
     return float(metadata.get("render_fps") or 30)
 
