@@ -19,7 +19,7 @@ generator). Goal envs (MountainCar, Acrobot) also report the success rate: episo
 before the time limit. One row per (preset, seed) as it finishes, then per preset the medians
 and how many seeds reach the env's target (the env spec's ``reward_threshold``; -200 for
 Pendulum-v1, which has none). Run one training at a time on a quiet machine: wall times are
-the point.
+the point. Atari presets (``"atari"`` in the preset) are left to ``benchmarks/atari_presets.py``.
 """
 
 from __future__ import annotations
@@ -29,7 +29,6 @@ import datetime
 import json
 import os
 import statistics
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -123,7 +122,8 @@ def run_one(algo: str, env_id: str, name: str, preset: dict[str, Any], seed: int
     success = None
     if is_goal_env(env_id):
         limit = env.spec.max_episode_steps if env.spec is not None else None
-        success = float(np.mean([n < limit for n in lengths])) if limit else None
+        counts = np.asarray(lengths)  # a list here (return_episode_rewards=True)
+        success = float(np.mean(counts < limit)) if limit else None
     env.close()
     return Run(
         algo,
@@ -214,6 +214,8 @@ def selected(algo: str | None, env_id: str | None, name: str | None) -> list[tup
     for a, envs in presets.available().items():
         for e, names in envs.items():
             for n in names:
+                if presets.get_preset(a, e, n).get("atari"):
+                    continue  # Atari presets: benchmarks/atari_presets.py (whole games, 1 seed)
                 if (algo in (None, a)) and (env_id in (None, e)) and (name in (None, n)):
                     out.append((a, e, n))
     if not out:
@@ -296,4 +298,4 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()

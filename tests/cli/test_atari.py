@@ -181,3 +181,12 @@ def test_eval_of_an_atari_run_on_a_non_atari_env_is_one_line(
     result = cli("eval", out, "--env", "CartPole-v1")
     assert result.code == 2 and result.err.count("\n") == 1
     assert "trained on SB3's Atari recipe; CartPole-v1 is not an Atari game" in result.err
+
+
+@pytest.mark.parametrize("algo", ["ppo", "dqn"])
+def test_breakout_presets_carry_their_measurement(algo: str) -> None:
+    measured = presets.get_preset(algo, BREAKOUT)["measured"]
+    assert measured["seeds"] == [0] and measured["games"] == 20
+    for key in ("mean_return", "random_mean_return", "wall_s", "frames", "load_average_1m"):
+        assert key in measured, key
+    assert measured["command"].startswith(f"palaestra train {algo} {BREAKOUT} --seed 0")
