@@ -120,9 +120,16 @@ def make_vec(config: dict[str, Any], n_envs: int, seed: int | None, render: bool
         from palaestra.envs.atari.checks import import_ale_py
 
         import_ale_py()  # eval and record reach here without check_pipeline
-        venv = make_atari_env(
-            env_id, n_envs=n_envs, seed=seed, wrapper_kwargs=wrapper_kwargs, env_kwargs=env_kwargs
-        )  # string Atari ids render rgb_array frames already
+        try:  # string Atari ids render rgb_array frames already
+            venv = make_atari_env(
+                env_id,
+                n_envs=n_envs,
+                seed=seed,
+                wrapper_kwargs=wrapper_kwargs,
+                env_kwargs=env_kwargs,
+            )
+        except (TypeError, ValueError) as exc:  # AtariWrapper's checks of its arguments
+            raise CLIError(f"invalid atari settings {wrapper_kwargs}: {exc}", "fix atari") from None
     else:
         if render:
             env_kwargs["render_mode"] = "rgb_array"
