@@ -88,9 +88,28 @@ def add_parser(sub: Any) -> None:
         help="compare runs: table with confidence intervals, and learning curves",
         description="Group runs that differ only by seed into variants; print each variant's "
         "final mean return with a 95% confidence interval over seeds (t-distribution) and "
-        "success rate, and plot every variant's learning curve (mean ± 95% CI band).",
+        "success rate, and plot every variant's learning curve (mean ± 95% CI band). "
+        "Settings files among the arguments are variants trained first, one run per seed: "
+        "palaestra compare preset shaped.yaml --algo dqn --env MountainCar-v0 --seeds 0 1 2 "
+        "(shaped.yaml: env_wrapper: shaping:BetterRewardShaping).",
     )
-    p.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run folders written by train")
+    p.add_argument(
+        "runs",
+        nargs="+",
+        metavar="RUN_DIR|SETTINGS",
+        help="run folders written by train; or variants to train first on each of --seeds: "
+        "settings files (.yaml/.json, as for train --config) or 'preset' (the preset alone)",
+    )
+    p.add_argument("--algo", metavar="ALGO", help="algorithm the variants train (dqn or ppo)")
+    p.add_argument("--env", metavar="ENV", help="env id the variants train on")
+    p.add_argument("--seeds", nargs="+", type=int, metavar="S", help="seeds each variant trains on")
+    p.add_argument("--timesteps", type=int, metavar="N", help="steps per variant run")
+    p.add_argument(
+        "--runs-dir",
+        metavar="DIR",
+        help="where variant runs go, DIR/<variant>/seed<S> (default: runs/compare-ALGO-ENV); "
+        "finished runs there are reused",
+    )
     p.add_argument(
         "--labels",
         nargs="+",
@@ -121,8 +140,15 @@ def run(args: argparse.Namespace) -> int:
 
     if args.last < 1:
         raise CLIError(f"--last must be at least 1, got {args.last}", "e.g. --last 100")
-    variants = group_runs([Path(r) for r in args.runs])
+    from palaestra.cli.variants import train_variants
+
+    folders, names = train_variants(args)
+    variants = group_runs(folders)
     labels = default_labels(variants)
+    for i, variant in enumerate(variants):  # a trained variant is named after its file
+        named = {names.get(run) for run in variant.runs}
+        if len(named) == 1 and None not in named:
+            labels[i] = str(named.pop())
     if args.labels is not None:
         if len(args.labels) != len(variants):
             raise CLIError(

@@ -10,6 +10,11 @@ one ``palaestra.make`` env. Two settings change that:
   ``ALE/*-v5`` ids skip frames themselves, so Atari presets set ``env_kwargs.frameskip=1`` and
   let the wrapper skip 4 (as RL-Zoo does); v5's sticky actions (ALE, per frame) stay.
 - ``frame_stack``: ``VecFrameStack(n_stack=frame_stack)`` on top.
+- ``env_wrapper``: ``"module:Class"`` (or a list of them, innermost first), a wrapper class
+  that ``make_vec_env`` applies to each env over its ``Monitor`` (SB3's ``wrapper_class``), so
+  the episode log keeps the env's own returns: a reward-shaping wrapper changes what the agent
+  learns from, not what the curves and ``compare`` report. The module is imported from the
+  current folder first (``python -m`` style), so a ``shaping.py`` beside the run works.
 
 Such a run is evaluated on the same pipeline with one env, and an evaluation episode is a
 whole game: the Monitor under the ``AtariWrapper`` reports it (all lives, unclipped score),
@@ -18,6 +23,9 @@ which is what SB3's ``evaluate_policy`` counts too.
 
 from __future__ import annotations
 
+import importlib
+import sys
+from collections.abc import Callable
 from typing import Any
 
 from palaestra.cli.common import CLIError
@@ -27,6 +35,7 @@ __all__ = [
     "atari_defaults",
     "atari_kwargs",
     "check_pipeline",
+    "env_wrapper",
     "is_atari_id",
     "make_vec",
     "play_vec",
@@ -79,8 +88,50 @@ def _stack(config: dict[str, Any]) -> int:
 
 
 def uses_vec_pipeline(config: dict[str, Any]) -> bool:
-    """Whether a run's env is more than ``palaestra.make`` (Atari recipe or frame stack)."""
-    return atari_kwargs(config) is not None or _stack(config) > 1
+    """Whether a run's env is more than ``palaestra.make`` (Atari recipe, frame stack or an
+    env wrapper)."""
+    return atari_kwargs(config) is not None or _stack(config) > 1 or bool(config.get("env_wrapper"))
+
+
+def _import_wrapper(path: Any) -> Callable[..., Any]:
+    """The class named by ``"module:Class"`` (or ``"module.Class"``)."""
+    fix = "write env_wrapper as 'module:Class', e.g. shaping:BetterRewardShaping"
+    if not isinstance(path, str) or not path.strip():
+        raise CLIError(f"env_wrapper must be 'module:Class', got {path!r}", fix)
+    module_name, sep, name = path.partition(":")
+    if not sep:
+        module_name, _, name = path.rpartition(".")
+    if not module_name or not name:
+        raise CLIError(f"env_wrapper {path!r} names no module and class", fix)
+    if "" not in sys.path:  # the console script does not put the current folder on the path
+        sys.path.insert(0, "")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise CLIError(
+            f"cannot import module {module_name!r} of env_wrapper {path!r}: {exc}",
+            "run from the folder that holds it, or fix the name",
+        ) from None
+    cls = getattr(module, name, None)
+    if not callable(cls):
+        raise CLIError(f"module {module_name!r} has no class {name!r} (env_wrapper)", fix)
+    return cls
+
+
+def env_wrapper(config: dict[str, Any]) -> Callable[[Any], Any] | None:
+    """The run's ``env_wrapper`` setting as one callable (a list applies innermost first), or
+    None when it has none."""
+    value = config.get("env_wrapper")
+    if not value:
+        return None
+    classes = [_import_wrapper(v) for v in (value if isinstance(value, list) else [value])]
+
+    def wrap(env: Any) -> Any:
+        for cls in classes:
+            env = cls(env)
+        return env
+
+    return wrap
 
 
 def check_pipeline(settings: dict[str, Any], env_id: str) -> None:
@@ -91,8 +142,11 @@ def check_pipeline(settings: dict[str, Any], env_id: str) -> None:
         raise CLIError(f"frame_stack must be a positive integer or null, got {stack!r}", "e.g. 4")
     if not isinstance(atari, (bool, dict, type(None))):
         raise CLIError(f"atari must be true/false or AtariWrapper kwargs, got {atari!r}", "fix it")
+    env_wrapper(settings)  # imports it: a bad name fails before training starts
     if atari_kwargs(settings) is None:
         return
+    if settings.get("env_wrapper"):
+        raise CLIError("env_wrapper does not apply to the Atari recipe", "drop one of them")
     if isinstance(atari, dict):
         unknown = sorted(set(atari) - set(WRAPPER_KEYS))
         if unknown:
@@ -133,7 +187,13 @@ def make_vec(config: dict[str, Any], n_envs: int, seed: int | None, render: bool
     else:
         if render:
             env_kwargs["render_mode"] = "rgb_array"
-        venv = make_vec_env(env_id, n_envs=n_envs, seed=seed, env_kwargs=env_kwargs)
+        venv = make_vec_env(
+            env_id,
+            n_envs=n_envs,
+            seed=seed,
+            env_kwargs=env_kwargs,
+            wrapper_class=env_wrapper(config),
+        )
     if _stack(config) > 1:
         venv = VecFrameStack(venv, n_stack=_stack(config))
     return venv

@@ -31,7 +31,8 @@ __all__ = [
 ]
 
 # The keys of one preset besides its measurements; ``hyperparams`` holds constructor kwargs.
-# ``atari`` (SB3's Atari recipe) and ``frame_stack`` are optional: absent means off.
+# ``atari`` (SB3's Atari recipe), ``frame_stack`` and ``env_wrapper`` (a Gymnasium wrapper class
+# as ``"module:Class"``, applied to each env over its Monitor) are optional: absent means off.
 SETTINGS_KEYS = (
     "policy",
     "n_envs",
@@ -41,6 +42,7 @@ SETTINGS_KEYS = (
     "normalize",
     "atari",
     "frame_stack",
+    "env_wrapper",
 )
 
 ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU"}
