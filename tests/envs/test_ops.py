@@ -55,6 +55,43 @@ def test_f32_rounding_agrees() -> None:
     assert SCALAR.f32(1e300) == math.inf  # numpy's overflow, not struct's OverflowError
 
 
+def _f32_edge_cases() -> np.ndarray:
+    """Doubles where a float32 rounding can go wrong: ties, range bounds, specials, random."""
+    rng = np.random.default_rng(5)
+    f = np.concatenate(
+        [
+            rng.uniform(-1e3, 1e3, 100_000).astype(np.float32),
+            (rng.integers(2**23, 2**24, 100_000) * 2.0 ** rng.integers(-149, 105, 100_000)).astype(
+                np.float32
+            ),
+            np.array([1, 2**-126, 2**-149, np.finfo(np.float32).max], dtype=np.float32),
+        ]
+    )
+    f = np.concatenate([f, -f])
+    with np.errstate(over="ignore"):  # float32 max's upper neighbour is inf (mid inf)
+        up = np.nextafter(f, np.copysign(np.float32(np.inf), f))
+    lo, hi = f.astype(np.float64), up.astype(np.float64)
+    mid = lo + (hi - lo) / 2  # exact: float32 neighbours' midpoint needs <= 26 bits
+    near = np.concatenate([np.nextafter(mid, -np.inf), mid, np.nextafter(mid, np.inf)])
+    specials = [0.0, -0.0, np.inf, -np.inf, np.nan, 1e300, -1e300, 5e-324, -5e-324]
+    bounds = [2.0**-126, 2.0**-126 - 2.0**-150, 2.0**-126 - 2.0**-151, 2.0**-150, 2.0**-151]
+    bounds += [2.0**128 - 2.0**103, 2.0**128 - 2.0**103 - 2.0**75, 2.0**128, 3.4028235e38]
+    bounds += [math.nextafter(b, d) for b in bounds for d in (-math.inf, math.inf)]
+    random = rng.standard_normal(300_000) * 2.0 ** rng.uniform(-160, 140, 300_000)
+    return np.concatenate([lo, near, specials, bounds, np.negative(bounds), random])
+
+
+def test_scalar_f32_is_numpy_rounding_on_edge_cases() -> None:
+    """The Veltkamp fast path and its struct fallback round exactly like ``np.float32``."""
+    x = _f32_edge_cases()
+    with np.errstate(over="ignore"):
+        expected = x.astype(np.float32).astype(np.float64)
+    got = np.array([SCALAR.f32(v) for v in x.tolist()])
+    same = (got == expected) | (np.isnan(got) & np.isnan(expected))
+    assert same.all(), x[~same][:10]
+    assert np.array_equal(np.signbit(got), np.signbit(expected))  # -0.0 stays -0.0
+
+
 def test_remainder_and_clip_agree() -> None:
     x = np.random.default_rng(4).uniform(-50, 50, 100_000)
     np.testing.assert_array_equal(
