@@ -11,14 +11,17 @@ depend on, and we reproduce it exactly:
   force is a Python float, so the acceleration is float64;
 * the reward uses the *unclipped* action: ``100 * terminated - 0.1 * action**2``.
 
-``step_state`` expresses this with ``R`` = "round like the stored state" (identity on the first
-step after reset, float32 afterwards). Rounding a float64 result of one +, -, * of two float32
-values to float32 equals numpy's float32 operation (53 >= 2*24 + 2, so double rounding is
-innocuous). Finite out-of-range actions are clipped as in Gymnasium; NaN/inf are refused.
+``step_state`` expresses this with ``rnd`` = "round like the stored state" (identity on the
+first step after reset, float32 afterwards) and :class:`Limits`, the constants as that state
+compares with them, computed once per params. Rounding a float64 result of one +, -, * of two
+float32 values to float32 equals numpy's float32 operation (53 >= 2*24 + 2, so double rounding
+is innocuous); rounding a value that is already a float32 is skipped, since it changes nothing.
+Finite out-of-range actions are clipped as in Gymnasium; NaN/inf are refused.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, NamedTuple
@@ -41,13 +44,17 @@ from palaestra.spaces import Box
 
 
 class Limits(NamedTuple):
-    """The Python constants a step compares the state with, as numpy compares them."""
+    """Per-params constants of a step, as the state's precision sees them (see :func:`limits`)."""
 
     max_speed: Any
+    min_speed: Any  # -max_speed
     max_position: Any
     min_position: Any
     goal_position: Any
-    goal_velocity: Any
+    goal_velocity: Any  # compared with a velocity computed in the state's precision
+    goal_velocity_py: Any  # the same comparison for a velocity Gymnasium set to a Python float
+    same_goal_test: bool  # whether both thresholds give every velocity the same answer
+    power: Any  # float32 power: a float32 force times a Python float is float32 arithmetic
 
 
 @dataclass(frozen=True)
@@ -64,9 +71,34 @@ class ContinuousMountainCarParams:
     power: float = 0.0015
     gravity: float = 0.0025  # a literal in Gymnasium's step
 
-    def limits(self, ops: Any) -> Limits:
-        """The limits rounded with ``ops.f32``: what a float32 state is compared with."""
-        return Limits(*(ops.f32(float(getattr(self, name))) for name in Limits._fields))
+
+def limits(p: ContinuousMountainCarParams, rnd: Callable[[float], float]) -> Limits:
+    """The constants a step with state rounding ``rnd`` compares with, computed once per params.
+
+    ``rnd`` is float32 rounding (``SCALAR.f32``) or the identity on the first step after a
+    reset. The values are Python floats, for the single env and the batch alike.
+    Gymnasium replaces a too fast velocity (or one stopped by the wall) by a Python float ``c``
+    and compares ``c >= goal_velocity`` in float64, while we carry ``rnd(c)``;
+    ``goal_velocity_py`` is a threshold that gives ``rnd(c)`` the same answer for each such
+    ``c``: ``rnd(goal_velocity)`` where that works (always for the identity, and for the default
+    goal 0 -- then ``same_goal_test`` lets a step skip telling the two kinds of velocity apart),
+    else the smallest ``rnd(c)`` with ``c >= goal_velocity`` (rounding is monotonic).
+    """
+    speed, goal_v = float(p.max_speed), float(p.goal_velocity)
+    constants = (-speed, 0.0, speed)  # what Gymnasium may set the velocity to
+    same = all((rnd(c) >= rnd(goal_v)) == (c >= goal_v) for c in constants)
+    passing = [rnd(c) for c in constants if c >= goal_v]
+    return Limits(
+        max_speed=rnd(speed),
+        min_speed=rnd(-speed),
+        max_position=rnd(float(p.max_position)),
+        min_position=rnd(float(p.min_position)),
+        goal_position=rnd(float(p.goal_position)),
+        goal_velocity=rnd(goal_v),
+        goal_velocity_py=rnd(goal_v) if same else min(passing, default=math.inf),
+        same_goal_test=same,
+        power=SCALAR.f32(float(p.power)),
+    )
 
 
 def step_state(
@@ -76,56 +108,68 @@ def step_state(
     velocity: Any,
     action: Any,
     rnd: Callable[[Any], Any],
-    lim: Any,
+    lim: Limits,
 ) -> Any:
-    """One step: ``(position, velocity, terminated, reward)``, state rounded to float32.
+    """One step: ``(position, velocity, terminated, reward)``; the state still needs ``rnd``.
 
-    ``action`` holds float32 values. ``rnd`` rounds like the stored state and ``lim`` are the
-    limits as compared with it: identity and ``p`` itself on the first step after a reset
-    (float64 state), float32 rounding and ``p.limits(ops)`` afterwards -- see :func:`precision`.
+    ``action`` holds finite float32 values. ``rnd`` rounds like the stored state and ``lim``
+    holds :func:`limits` for it: identity on the first step after a reset (float64 state),
+    float32 rounding afterwards -- see :func:`precision`. The returned position and velocity
+    are already float32 values after a float32 state; after a float64 one the caller rounds
+    them (Gymnasium stores ``np.float32``).
     """
     cos = ops.cos(rnd(3 * position))
-    in_range = (action >= p.min_action) & (action <= p.max_action)
-    power32 = ops.f32(p.power)
+    gravity = p.gravity * cos
+    force = ops.clip(action, p.min_action, p.max_action)
     acc = ops.where(
-        in_range,
-        ops.f32(ops.f32(action * power32) - ops.f32(p.gravity * cos)),  # float32 force
-        ops.clip(action, p.min_action, p.max_action) * p.power - p.gravity * cos,  # Python force
+        force == action,  # in range: a float32 force, so float32 arithmetic (already rounded)
+        ops.f32(ops.f32(action * lim.power) - ops.f32(gravity)),
+        rnd(force * p.power - gravity),  # clipped: a Python force, float64 arithmetic
     )
-    v1 = rnd(velocity + rnd(acc))
-    too_fast, too_slow = v1 > lim.max_speed, v1 < -lim.max_speed
-    v2 = ops.where(too_fast, p.max_speed, ops.where(too_slow, -p.max_speed, v1))
-    p1 = rnd(position + rnd(v2))
-    pos = ops.where(
-        p1 > lim.max_position,
-        p.max_position,
-        ops.where(p1 < lim.min_position, p.min_position, p1),
-    )
+    v1 = rnd(velocity + acc)
+    # Gymnasium sets +-max_speed (Python floats); what is added to the position and stored is
+    # their rnd, which clip gives directly.
+    v2 = ops.clip(v1, lim.min_speed, lim.max_speed)
+    p1 = rnd(position + v2)
+    pos = ops.clip(p1, lim.min_position, lim.max_position)
     stop = (p1 <= lim.min_position) & (v2 < 0)  # the inelastic left wall
     vel = ops.where(stop, 0.0, v2)
-    # A velocity replaced by a Python constant is compared in float64, a float32 one in float32.
-    python_vel = stop | too_fast | too_slow
-    vel_ok = ops.where(python_vel, vel >= p.goal_velocity, vel >= lim.goal_velocity)
+    if lim.same_goal_test:  # the usual params: no need to know where the velocity came from
+        vel_ok = vel >= lim.goal_velocity
+    else:  # a velocity Gymnasium replaced by a Python float compares in float64
+        python_vel = stop | (v1 > lim.max_speed) | (v1 < lim.min_speed)
+        vel_ok = vel >= ops.where(python_vel, lim.goal_velocity_py, lim.goal_velocity)
     terminated = (p1 >= lim.goal_position) & vel_ok
-    reward = ops.where(terminated, 100.0, 0.0) - action * action * 0.1
-    return ops.f32(pos), ops.f32(vel), terminated, reward
+    reward = terminated * 100.0 - action * action * 0.1  # 100.0 or 0.0 minus the square
+    return pos, vel, terminated, reward
 
 
-def precision(ops: Any, p: ContinuousMountainCarParams, fresh: Any) -> tuple[Any, Limits]:
+def all_limits(p: ContinuousMountainCarParams) -> tuple[Limits, Limits]:
+    """``(exact, float32)`` :func:`limits` of ``p``: for a state fresh from a reset, and after."""
+    return limits(p, _identity), limits(p, SCALAR.f32)
+
+
+def precision(ops: Any, fresh: Any, lims: tuple[Limits, Limits]) -> tuple[Any, Limits]:
     """``(rnd, lim)`` for :func:`step_state` given which rows are fresh from a reset."""
-    lim32 = p.limits(ops)
+    exact, lim32 = lims
     if isinstance(fresh, bool):
-        return (_identity, p) if fresh else (ops.f32, lim32)  # type: ignore[return-value]
+        return (_identity, exact) if fresh else (ops.f32, lim32)
 
     def rnd(x: Any) -> Any:
         return ops.where(fresh, x, ops.f32(x))
 
-    exact = Limits(*(float(getattr(p, name)) for name in Limits._fields))
-    return rnd, Limits(*(ops.where(fresh, a, b) for a, b in zip(exact, lim32)))
+    lim = Limits(*(ops.where(fresh, a, b) for a, b in zip(exact, lim32)))
+    return rnd, lim._replace(same_goal_test=exact.same_goal_test and lim32.same_goal_test)
 
 
 def _identity(x: Any) -> Any:
     return x
+
+
+_F32 = np.dtype(np.float32)
+_SHAPE = (1,)
+_F32_RND = SCALAR.f32
+_empty = np.empty
 
 
 def spaces(p: ContinuousMountainCarParams) -> tuple[Box, Box]:
@@ -147,7 +191,7 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
         self._init_render(render_mode)
         self._s: tuple[float, float] | None = None
         self._fresh = True
-        self._lim32 = (self.params, self.params.limits(SCALAR))
+        self._lims = (self.params, *all_limits(self.params))  # (params, exact, float32)
 
     @property
     def state(self) -> np.ndarray | None:
@@ -164,22 +208,32 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Advance one step; a wrongly shaped or non-finite action raises InvalidAction."""
-        a = check_box_action(action, self.action_space)
-        if self._s is None:
-            raise error.ResetNeeded("Call reset before using step method.")
-        p = self.params
-        lim: Any
-        if self._fresh:
-            rnd, lim = _identity, p  # p has the limits as attributes
+        # The usual action (a float32 array of shape (1,)) is read without check_box_action's
+        # conversions; ``a - a`` is 0.0 exactly when ``a`` is finite.
+        if type(action) is np.ndarray and action.dtype is _F32 and action.shape == _SHAPE:
+            a = action.item()
+            if a - a != 0.0:
+                a = check_box_action(action, self.action_space)  # raises
         else:
-            if self._lim32[0] is not p:  # params replaced (env.unwrapped.power = ...)
-                self._lim32 = (p, p.limits(SCALAR))
-            rnd, lim = SCALAR.f32, self._lim32[1]
-        pos, vel, terminated, reward = step_state(SCALAR, p, *self._s, a, rnd, lim)
-        self._s, self._fresh = (pos, vel), False
+            a = check_box_action(action, self.action_space)
+        s = self._s
+        if s is None:
+            raise error.ResetNeeded("Call reset before using step method.")
+        p, lims = self.params, self._lims
+        if lims[0] is not p:  # params replaced (env.unwrapped.power = ...)
+            self._lims = lims = (p, *all_limits(p))
+        if self._fresh:
+            pos, vel, terminated, reward = step_state(SCALAR, p, s[0], s[1], a, _identity, lims[1])
+            pos, vel = _F32_RND(pos), _F32_RND(vel)
+            self._fresh = False
+        else:  # a float32 state: step_state's position and velocity are float32 values
+            pos, vel, terminated, reward = step_state(SCALAR, p, s[0], s[1], a, _F32_RND, lims[2])
+        self._s = (pos, vel)
         if self.render_mode == "human":
             self.render()
-        return np.array(self._s, dtype=np.float32), reward, terminated, False, {}
+        obs = _empty(2, _F32)  # ~2x cheaper than np.array((pos, vel), float32)
+        obs[0], obs[1] = pos, vel
+        return obs, reward, terminated, False, {}
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -227,6 +281,7 @@ class ContinuousMountainCarBatch(BatchedEnv):
         self.single_observation_space, self.single_action_space = spaces(self.params)
         super().__init__(num_envs)
         self._fresh = np.ones(self.num_envs, dtype=bool)  # [N] no step since reset
+        self._lims = (self.params, *all_limits(self.params))
 
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.6, -0.4)
@@ -238,10 +293,13 @@ class ContinuousMountainCarBatch(BatchedEnv):
         self._fresh[rows] = True
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        rnd, lim = precision(ARRAY, self.params, self._fresh)
+        p = self.params
+        if self._lims[0] is not p:
+            self._lims = (p, *all_limits(p))
+        rnd, lim = precision(ARRAY, self._fresh, self._lims[1:])
         pos, vel = self._cols  # views: written in place below
-        new = step_state(ARRAY, self.params, pos, vel, actions, rnd, lim)
-        pos[...], vel[...], terminated, reward = new
+        new_pos, new_vel, terminated, reward = step_state(ARRAY, p, pos, vel, actions, rnd, lim)
+        pos[...], vel[...] = ARRAY.f32(new_pos), ARRAY.f32(new_vel)
         self._fresh[:] = False
         return reward, terminated
 
