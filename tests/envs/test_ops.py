@@ -92,6 +92,21 @@ def test_scalar_f32_is_numpy_rounding_on_edge_cases() -> None:
     assert np.array_equal(np.signbit(got), np.signbit(expected))  # -0.0 stays -0.0
 
 
+def test_f32_where_rounds_only_where_asked() -> None:
+    """Scalar and array ``f32_where`` equal ``f32`` where the condition holds, else the input."""
+    x = _f32_edge_cases()
+    cond = np.random.default_rng(6).random(x.size) < 0.5
+    with np.errstate(over="ignore"):
+        expected = np.where(cond, x.astype(np.float32).astype(np.float64), x)
+    got = np.array([SCALAR.f32_where(c, v) for c, v in zip(cond.tolist(), x.tolist())])
+    with np.errstate(over="ignore"):
+        arr = ARRAY.f32_where(cond, x)
+    for values in (got, arr):
+        same = (values == expected) | (np.isnan(values) & np.isnan(expected))
+        assert same.all(), x[~same][:10]
+        assert np.array_equal(np.signbit(values), np.signbit(expected))
+
+
 def test_remainder_and_clip_agree() -> None:
     x = np.random.default_rng(4).uniform(-50, 50, 100_000)
     np.testing.assert_array_equal(

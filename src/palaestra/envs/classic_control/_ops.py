@@ -82,6 +82,21 @@ class ScalarOps:
             return float(_f32(x))
 
     @staticmethod
+    def f32_where(cond: bool, x: float) -> float:
+        """``f32(x)`` if ``cond`` else ``x``: one call where a rounding depends on a condition.
+
+        The fast path of :meth:`f32` is repeated here rather than called: a Python call costs
+        about as much as the rounding itself.
+        """
+        if not cond:
+            return x
+        c = x * (2.0**29 + 1)
+        h = c - (c - x)
+        if 2.0**-252 <= h * h < 2.0**256:
+            return h
+        return ScalarOps.f32(x)
+
+    @staticmethod
     def mod(x: float, m: float) -> float:
         """Python's ``%``, which equals ``np.remainder`` on float64 (same fmod + sign fix)."""
         return x % m
@@ -140,6 +155,11 @@ class ArrayOps:
     def f32(x: np.ndarray) -> np.ndarray:
         """Round each element to the nearest float32, kept as float64."""
         return np.asarray(x, dtype=np.float32).astype(np.float64)
+
+    @staticmethod
+    def f32_where(cond: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Each element rounded to float32 where ``cond`` holds, else kept as it is."""
+        return np.where(cond, ArrayOps.f32(x), x)
 
     @staticmethod
     def pow2(x: np.ndarray) -> np.ndarray:

@@ -59,6 +59,7 @@ class Limits:
     goal_velocity: Any  # compared with a velocity computed in the state's precision
     goal_velocity_py: Any  # the same comparison for a velocity Gymnasium set to a Python float
     same_goal_test: bool  # whether both thresholds give every velocity the same answer
+    float32_state: Any  # whether rnd is float32 rounding (else the identity)
     power: Any  # float32 power: a float32 force times a Python float is float32 arithmetic
 
 
@@ -102,6 +103,7 @@ def limits(p: ContinuousMountainCarParams, rnd: Callable[[float], float]) -> Lim
         goal_velocity=rnd(goal_v),
         goal_velocity_py=rnd(goal_v) if same else min(passing, default=math.inf),
         same_goal_test=same,
+        float32_state=rnd is not _identity,
         power=SCALAR.f32(float(p.power)),
     )
 
@@ -126,11 +128,14 @@ def step_state(
     cos = ops.cos(rnd(3 * position))
     gravity = p.gravity * cos
     force = ops.clip(action, p.min_action, p.max_action)
+    in_range = force == action
     acc = ops.where(
-        force == action,  # in range: a float32 force, so float32 arithmetic (already rounded)
-        ops.f32(ops.f32(action * lim.power) - ops.f32(gravity)),
-        rnd(force * p.power - gravity),  # clipped: a Python force, float64 arithmetic
+        in_range,
+        ops.f32(action * lim.power) - ops.f32(gravity),  # a float32 force: float32 arithmetic
+        force * p.power - gravity,  # a clipped force is a Python float: float64 arithmetic
     )
+    # A float32 result, or a float64 one that the state's precision rounds (one call for both).
+    acc = ops.f32_where(in_range | lim.float32_state, acc)
     v1 = rnd(velocity + acc)
     # Gymnasium sets +-max_speed (Python floats); what is added to the position and stored is
     # their rnd, which clip gives directly.
