@@ -181,7 +181,6 @@ def _identity(x: Any) -> Any:
 
 _FIELDS = [f.name for f in dataclasses.fields(Limits)]
 _F32 = np.dtype(np.float32)
-_SHAPE = (1,)
 _F32_RND = SCALAR.f32
 _empty = np.empty
 
@@ -223,13 +222,15 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Advance one step; a wrongly shaped or non-finite action raises InvalidAction."""
         # The usual action (a float32 array of shape (1,)) is read without check_box_action's
-        # conversions; ``a - a`` is 0.0 exactly when ``a`` is finite.
-        if type(action) is np.ndarray and action.dtype is _F32 and action.shape == _SHAPE:
+        # conversions: item() refuses any other size, and ``a - a`` is 0.0 iff ``a`` is finite.
+        try:
+            if type(action) is not np.ndarray or action.dtype is not _F32 or action.ndim != 1:
+                raise ValueError
             a = action.item()
             if a - a != 0.0:
-                a = check_box_action(action, self.action_space)  # raises
-        else:
-            a = check_box_action(action, self.action_space)
+                raise ValueError
+        except ValueError:
+            a = check_box_action(action, self.action_space)  # converts, or raises InvalidAction
         s = self._s
         if s is None:
             raise error.ResetNeeded("Call reset before using step method.")
