@@ -9,31 +9,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from tests.algos.tutorial_blocks import SHAPING_WRAPPERS
 from tests.cli.conftest import Result
 
-SHAPING = '''
-import palaestra as gym
-
-
-class BetterRewardShaping(gym.RewardWrapper):
-    """The tutorial's wrapper: a bonus for new rightward progress."""
-
-    def __init__(self, env):
-        super().__init__(env)
-        self.best_position = -1.2
-
-    def reset(self, **kwargs):
-        self.best_position = -1.2
-        return self.env.reset(**kwargs)
-
-    def reward(self, reward):
-        position = self.env.unwrapped.state[0]
-        if position > self.best_position:
-            bonus = (position - self.best_position) * 10
-            self.best_position = position
-            return reward + bonus
-        return reward
-
+# The tutorial's shaping wrappers (one copy of its text) and its two-action wrapper.
+SHAPING = (
+    SHAPING_WRAPPERS
+    + '''
 
 class TwoActions(gym.ActionWrapper):
     """The tutorial's SimplifiedActionWrapper: push left or right only."""
@@ -45,6 +27,7 @@ class TwoActions(gym.ActionWrapper):
     def action(self, action):
         return 0 if action == 0 else 2
 '''
+)
 TINY = ("--timesteps", 300, "--set", "learning_starts=100")
 
 
@@ -60,6 +43,7 @@ def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     (tmp_path / "two.json").write_text(json.dumps({"env_wrapper": [f"{name}:TwoActions"]}))
     monkeypatch.chdir(tmp_path)
     monkeypatch.delitem(sys.modules, name, raising=False)
+    monkeypatch.setattr(sys, "path", list(sys.path))  # the CLI may add the current folder
     return tmp_path
 
 
