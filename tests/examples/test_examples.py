@@ -75,7 +75,8 @@ def test_tabular_mountain_car(tmp_path: Path) -> None:
 
     out = run_example("tabular_mountain_car.py", "--out", tmp_path)
     assert re.search(rf"^trained on 200,000 MountainCar steps in {NUMBER} s", out, re.M), out
-    match = re.search(rf"greedy policy over 100 episodes: success (\d+)%, mean length ({NUMBER})", out)
+    greedy = rf"greedy policy over 100 episodes: success (\d+)%, mean length ({NUMBER})"
+    match = re.search(greedy, out)
     assert match, out
     assert 0 <= int(match[1]) <= 100 and 1 <= float(match[2]) <= 200
     with Image.open(tmp_path / "mountain_car.gif") as gif:
