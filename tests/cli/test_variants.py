@@ -153,3 +153,34 @@ def test_compare_refuses_an_unfinished_variant_run(
     (run / "config.json").write_text("{}")
     r = cli("compare", "preset", "--algo", "dqn", "--env", "MountainCar-v0", "--seeds", 0)
     assert r.code == 2 and "holds an unfinished run" in r.err and "--resume" in r.err
+
+
+def test_eval_of_a_normalized_run_with_env_wrapper_normalizes(workdir: Path) -> None:
+    """An env_wrapper run is evaluated on its pipeline: the saved VecNormalize statistics must
+    be applied there too, exactly as on the plain single-env path."""
+    from tests.cli.conftest import run_cli
+
+    from palaestra.algos import PPO
+    from palaestra.cli.evaluate import obs_normalizer, play, play_saved
+
+    (workdir / "same.py").write_text(
+        "import palaestra as gym\n\nclass Same(gym.Wrapper):\n    pass\n", encoding="utf-8"
+    )
+    out = workdir / "run"
+    r = run_cli("train", "ppo", "CartPole-v1", "--timesteps", 2048, "--seed", 0, "--out", out,
+                "--set", "normalize=true", "--set", "env_wrapper=same:Same",
+                "--progress", "none", "--eval-episodes", 0)  # fmt: skip
+    assert r.code == 0, r.err
+    model = PPO.load(out / "model.zip")
+    _, piped, _, _ = play_saved(model, out / "model.zip", None, 5, seed=3)
+
+    import palaestra
+
+    plain = palaestra.make("CartPole-v1")
+    normalize = obs_normalizer(out / "model.zip", "CartPole-v1")
+    assert normalize is not None
+    expected = play(model, plain, 5, seed=3, normalize=normalize)
+    unnormalized = play(model, palaestra.make("CartPole-v1"), 5, seed=3)
+    assert piped.lengths == expected.lengths
+    assert piped.returns == expected.returns
+    assert expected.lengths != unnormalized.lengths  # the statistics change what it plays

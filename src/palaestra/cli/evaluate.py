@@ -83,14 +83,15 @@ def check_spaces(model: Any, env: Any, env_id: str) -> None:
             )
 
 
-def obs_normalizer(path: Path, env_id: str) -> Any:
-    """The run's saved observation normalisation (``normalize`` presets), or None."""
+def obs_normalizer(path: Path, env_id: str, venv: Any = None) -> Any:
+    """The run's saved observation normalisation (``normalize`` presets), or None. ``venv``
+    gives the observation space when the run's pipeline changes it (default: ``env_id``'s)."""
     stats = path.parent / NORMALIZE_FILE
     if not stats.is_file():
         return None
     from palaestra.vec_env import VecNormalize, make_vec_env
 
-    normalizer = VecNormalize.load(str(stats), make_vec_env(env_id, n_envs=1))
+    normalizer = VecNormalize.load(str(stats), venv or make_vec_env(env_id, n_envs=1))
     normalizer.training = False
     return normalizer.normalize_obs
 
@@ -157,7 +158,10 @@ def play_saved(
         venv = pipeline.make_vec(config, 1, seed, render=record)
         try:
             check_spaces(model, venv, env_id)
-            played = pipeline.play_vec(model, venv, episodes, deterministic, seed, record)
+            normalize = obs_normalizer(path, env_id, venv)
+            played = pipeline.play_vec(
+                model, venv, episodes, deterministic, seed, record, normalize
+            )
             fps = pipeline.render_fps(venv, config)
         finally:
             venv.close()

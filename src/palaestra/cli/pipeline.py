@@ -217,9 +217,11 @@ def play_vec(
     deterministic: bool = True,
     seed: int | None = 0,
     record: bool = False,
+    normalize: Any = None,
 ) -> Any:
     """``episodes`` Monitor episodes on a one-env pipeline (whole games for Atari): returns a
-    ``Played`` with each episode's Monitor return and its length in agent steps."""
+    ``Played`` with each episode's Monitor return and its length in agent steps. ``normalize``
+    maps observations as the run's ``VecNormalize`` did in training."""
     from palaestra.cli.evaluate import Played
 
     out = Played([], [], [], [])
@@ -229,7 +231,9 @@ def play_vec(
     if record:
         out.frames.append(venv.get_images()[0])
     while len(out.returns) < episodes:
-        action, _ = model.predict(obs, deterministic=deterministic)
+        action, _ = model.predict(
+            obs if normalize is None else normalize(obs), deterministic=deterministic
+        )
         obs, _, dones, infos = venv.step(action)
         steps += 1
         if record:
