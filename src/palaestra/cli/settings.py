@@ -1,8 +1,8 @@
 """The settings of a training run: preset, then ``--config`` file, then ``--set key=value``.
 
 Settings are plain data in the preset format (``policy``, ``n_envs``, ``n_timesteps``,
-``hyperparams``, ``env_kwargs``, ``normalize``, and for Atari ``atari`` and ``frame_stack``;
-see :mod:`palaestra.cli.pipeline`) plus ``seed``; ``config.json`` records them
+``hyperparams``, ``env_kwargs``, ``normalize``, ``env_wrapper``, and for Atari ``atari`` and
+``frame_stack``; see :mod:`palaestra.cli.pipeline`) plus ``seed``; ``config.json`` records them
 exactly as resolved, so a run's ``config.json`` is itself a valid ``--config`` file.
 """
 

@@ -61,8 +61,8 @@ def add_parser(sub: Any) -> None:
         "--config",
         metavar="FILE",
         help="settings file, .json or .yaml (PyYAML): preset keys (hyperparams, n_envs, "
-        "n_timesteps, policy, env_kwargs, normalize, atari, frame_stack, seed) or "
-        "hyperparameters at top level",
+        "n_timesteps, policy, env_kwargs, normalize, env_wrapper ('module:Class'), atari, "
+        "frame_stack, seed) or hyperparameters at top level",
     )
     p.add_argument("--n-envs", type=int, metavar="N", help="number of parallel envs")
     p.add_argument("--timesteps", type=int, metavar="N", help="total env steps to train for")
