@@ -108,3 +108,8 @@ def dependency_not_installed(package: str, extra: str, purpose: str) -> Dependen
     return DependencyNotInstalled(
         f'{package} is not installed, run `pip install "palaestra[{extra}]"` (needed for {purpose})'
     )
+
+
+# Run state (exact resume)
+class RunStateError(Error, ValueError):
+    """A run state cannot be saved by, or does not fit, the object it is restored into."""

@@ -11,12 +11,26 @@ import torch
 
 import palaestra as gym
 from palaestra.algos import DQN, PPO, ModelFileError
-from palaestra.algos.callbacks import CheckpointCallback
+from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 from palaestra.algos.schedules import LinearSchedule
 
 from .toys import Toy
 
 OBS = np.random.default_rng(0).normal(size=(32, 4)).astype(np.float32)
+
+
+class _RecordLR(BaseCallback):
+    """The optimizer's learning rate at the start of each collection."""
+
+    def __init__(self, out: list[float]) -> None:
+        super().__init__()
+        self.out = out
+
+    def _on_rollout_start(self) -> None:
+        self.out.append(self.model.optimizer.param_groups[0]["lr"])
+
+    def _on_step(self) -> bool:
+        return True
 
 
 def _dqn(**kw: object) -> DQN:
@@ -99,11 +113,16 @@ def test_resume_continues_schedules_and_replay_buffer(tmp_path: Path) -> None:
         full.optimizer.param_groups[0]["lr"]
     )
     assert resumed.replay_buffer.size() == 399
-    # SB3 would restart at progress 0.5 of a 600-step budget; we do not go backwards.
+    # A finished run given 100 more steps trains as a 500-step run would from step 400:
+    # progress 0.2, so the linear learning rate is 2e-4, not a silent 0 (as SB3).
     again = DQN.load(tmp_path / "rl_model_400_steps.zip", env="CartPole-v1")
-    again.learn(100, reset_num_timesteps=False)
+    again.load_replay_buffer(tmp_path / "rl_model_replay_buffer_400_steps.zip")
+    before = [p.detach().clone() for p in again.q_net.parameters()]
+    lrs: list[float] = []
+    again.learn(100, callback=_RecordLR(lrs), reset_num_timesteps=False)
+    assert lrs[1] == pytest.approx(1e-3 * (1 - 404 / 500))  # set by the first update
+    assert not all(torch.equal(a, b) for a, b in zip(before, again.q_net.parameters()))
     assert again.exploration_rate == pytest.approx(0.05)
-    assert again.optimizer.param_groups[0]["lr"] == pytest.approx(0.0)
 
 
 @pytest.mark.parametrize("make", [_dqn, _ppo])

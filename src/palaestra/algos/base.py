@@ -1,21 +1,31 @@
 """What DQN and PPO share: env wrapping, device/threads, seeding, progress and schedules,
 episode statistics, logging, ``predict``'s shape rules, and save/load (through ``saving``).
 
-Progress and resuming: ``progress_remaining`` goes from 1 to 0 over a ``learn`` call, as in
-SB3. With ``reset_num_timesteps=False`` SB3 recomputes it over the summed budget, so after a
-reload schedules jump back (a finished linear learning rate restarts at half its initial
-value). Here a resumed call continues from the stored progress and reaches 0 at the end of
-the new call: a checkpoint taken at 25% and resumed for the remaining 75% of the steps
-follows exactly the schedules of an uninterrupted run, and a finished run stays at its final
-epsilon and learning rate.
+Progress and resuming: ``progress_remaining = 1 - num_timesteps / total`` as in SB3, where
+``total`` is the run's budget: ``total_timesteps`` of a fresh ``learn``, and with
+``reset_num_timesteps=False`` the steps already done plus the new ``total_timesteps``. So a run
+stopped at step t of T and continued with ``learn(T - t, reset_num_timesteps=False)`` follows
+the schedules of the run never stopped, to the bit; and a finished run given more steps trains
+as if it had been planned for the larger budget from the start (a linear learning rate that
+reached 0 at T picks up at ``lr0 * (1 - T / T')``), never at a silent zero learning rate.
+
+Exact resume: a saved model holds what its ``learn`` loop needs to continue (the current
+observations, a partial rollout, the counters of an unfinished collection, the generators it
+draws from). ``load(path, env=venv)`` continues from the saved observations when ``venv`` is
+the env the model was saved with and has not been stepped by a ``learn`` since (or had its
+run state restored next to the model, as ``palaestra train --resume`` does); any other env
+starts new episodes, as in SB3.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import time
+import warnings
 from collections import deque
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -85,7 +95,9 @@ class BaseAlgorithm:
             torch.set_num_threads(threads)
         self.num_timesteps, self._episode_num, self._n_updates = 0, 0, 0
         self._total_timesteps, self._num_timesteps_at_start = 0, 0
-        self._progress_remaining, self._progress_at_start = 1.0, 1.0
+        self._progress_remaining = 1.0
+        self._torch_rng_to_restore: torch.Tensor | None = None
+        self._learning = False  # inside learn's loop (see _learning_session)
         self._stats_window_size = stats_window_size
         self.ep_info_buffer: deque[dict[str, Any]] = deque(maxlen=stats_window_size)
         self.ep_success_buffer: deque[bool] = deque(maxlen=stats_window_size)
@@ -159,6 +171,17 @@ class BaseAlgorithm:
     def _on_n_envs_changed(self) -> None:
         """Rebuild per-env buffers (subclasses)."""
 
+    def _on_env_reset(self, restart: bool) -> None:
+        """``learn`` is about to reset the env (``restart``: and the step count): drop what an
+        unfinished collection left that only fits the old episodes (subclasses)."""
+
+    def _loop_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        """What an unfinished collection holds, for the model file (subclasses)."""
+        return {}, {}
+
+    def _load_loop_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
+        """Restore ``_loop_state`` output; ``ValueError``/``KeyError`` if it does not fit."""
+
     def _make_optimizer(
         self,
         params: list[torch.nn.Parameter],
@@ -206,17 +229,29 @@ class BaseAlgorithm:
         if self.env is None:
             raise ValueError("This model has no environment: pass env= to load() or call set_env()")
         self.start_time = time.time_ns()
+        saving.forget_env_token(self.env)  # stepping it ends "as saved"
         if reset_num_timesteps or self._last_obs is None:
             if reset_num_timesteps:
                 self.num_timesteps, self._episode_num = 0, 0
                 self.ep_info_buffer.clear()
                 self.ep_success_buffer.clear()
-                self._progress_remaining = 1.0
+            self._on_env_reset(restart=reset_num_timesteps)
             self._last_obs = self.env.reset()
             self._last_episode_starts = np.ones((self.env.num_envs,), dtype=bool)
-        self._progress_at_start = self._progress_remaining
+        elif self._torch_rng_to_restore is not None:
+            # A loaded model continuing its run draws on from where it was saved.
+            torch.set_rng_state(self._torch_rng_to_restore)
+        self._torch_rng_to_restore = None
         self._num_timesteps_at_start = self.num_timesteps
         self._total_timesteps = self.num_timesteps + int(total_timesteps)
+        self._update_progress()
+        lr = self.lr_schedule(self._progress_remaining)
+        if lr == 0:
+            warnings.warn(
+                f"the learning rate is 0 at the start of this learn call (progress remaining "
+                f"{self._progress_remaining:.3g}): updates will not change the weights",
+                stacklevel=3,
+            )
         if not self._custom_logger:
             self._logger = self._make_logger(tb_log_name, reset_num_timesteps)
         cb = convert_callback(callback)
@@ -225,11 +260,21 @@ class BaseAlgorithm:
         cb.init_callback(self)
         return cb
 
+    @contextlib.contextmanager
+    def _learning_session(self) -> Iterator[None]:
+        """Marks the body of ``learn``: a model saved from a callback inside it keeps no
+        observations to continue from (the env moves on after the save)."""
+        self._learning = True
+        try:
+            yield
+        finally:
+            self._learning = False
+
     def _update_progress(self) -> None:
-        """Linear in env steps from the progress at the start of this call down to 0."""
-        span = max(self._total_timesteps - self._num_timesteps_at_start, 1)
-        done = (self.num_timesteps - self._num_timesteps_at_start) / span
-        self._progress_remaining = max(self._progress_at_start * (1.0 - done), 0.0)
+        """SB3's ``1 - num_timesteps / total``, one formula for fresh, resumed and extended
+        runs (so a resumed run computes exactly the values the uninterrupted one did)."""
+        progress = 1.0 - float(self.num_timesteps) / float(self._total_timesteps)
+        self._progress_remaining = max(progress, 0.0)  # the last rollout may overshoot
 
     def _update_learning_rate(self) -> float:
         lr = self.lr_schedule(self._progress_remaining)

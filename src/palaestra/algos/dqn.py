@@ -53,7 +53,9 @@ class DQN(BaseAlgorithm):
     """
 
     supported_action_spaces = (spaces.Discrete,)
-    _extra_counters = ("_n_calls", "exploration_rate")
+    # The collection counters make a run stopped mid-collection train at the same steps
+    # after a resume as without the stop.
+    _extra_counters = ("_n_calls", "exploration_rate", "_collected_steps", "_collected_episodes")
 
     def __init__(
         self,
@@ -107,6 +109,7 @@ class DQN(BaseAlgorithm):
             exploration_initial_eps, exploration_final_eps, exploration_fraction
         )
         self.exploration_rate, self._n_calls = 0.0, 0
+        self._collected_steps = self._collected_episodes = 0  # of the collection under way
         self.replay_buffer: ReplayBuffer | FrameReplayBuffer | None = None
         self._init_common(
             policy,
@@ -162,6 +165,7 @@ class DQN(BaseAlgorithm):
         self._make_replay_buffer()
 
     def _make_replay_buffer(self) -> None:
+        self._no_timeouts = np.zeros(self.n_envs, dtype=bool)
         if self.optimize_memory_usage:
             self.replay_buffer = FrameReplayBuffer(
                 self.buffer_size,
@@ -225,61 +229,79 @@ class DQN(BaseAlgorithm):
         reset_num_timesteps: bool = True,
         progress_bar: bool = False,
     ) -> DQN:
-        """Collect ``train_freq`` steps (or episodes), then do ``gradient_steps`` updates."""
+        """Collect ``train_freq`` steps (or episodes), then do ``gradient_steps`` updates.
+
+        A callback that stops training ends the loop after its step is fully recorded (the
+        transition stored, counters advanced), so a saved model continues exactly."""
         callback = self._setup_learn(
             total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
         )
         callback.on_training_start(self._callback_locals(), {})
-        assert self.replay_buffer is not None
-        env, n_envs, (freq, unit) = self.env, self.n_envs, self.train_freq
-        target_every = max(self.target_update_interval // n_envs, 1)  # in env.step calls, as SB3
-        timeouts = np.zeros(n_envs, dtype=bool)
+        freq, unit = self.train_freq
         running = True
-        while running and self.num_timesteps < self._total_timesteps:
-            callback.on_rollout_start()
-            steps = episodes = 0
-            while (steps if unit == "step" else episodes) < freq:
-                actions = self._sample_actions()
-                new_obs, rewards, dones, infos = env.step(actions)
-                self.num_timesteps += n_envs
-                steps += 1
-                callback.update_locals(
-                    {
-                        "actions": actions,
-                        "new_obs": new_obs,
-                        "rewards": rewards,
-                        "dones": dones,
-                        "infos": infos,
-                    }
-                )
-                if not callback.on_step():
-                    running = False
-                    break
-                self._update_info_buffer(infos, dones)
-                next_obs = new_obs
-                if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
-                    next_obs, timeouts = self._real_next_obs(new_obs, dones, infos)
-                self.replay_buffer.add(self._last_obs, next_obs, actions, rewards, dones, timeouts)
-                timeouts[:] = False
-                self._last_obs = new_obs
-                self._update_progress()
-                self._n_calls += 1
-                if self._n_calls % target_every == 0:
-                    polyak_update(self._q_params, self.q_net_target.parameters(), self.tau)
-                self.exploration_rate = self.exploration_schedule(self._progress_remaining)
-                self.logger.record("rollout/exploration_rate", self.exploration_rate)
-                for _ in range(int(dones.sum())):
-                    episodes += 1
-                    self._episode_num += 1
-                    if log_interval is not None and self._episode_num % log_interval == 0:
-                        self._dump_logs()
-            callback.on_rollout_end()
-            if running and self.num_timesteps > self.learning_starts:
-                gradient_steps = self.gradient_steps if self.gradient_steps >= 0 else steps * n_envs
-                if gradient_steps > 0:
-                    self.train(gradient_steps, self.batch_size)
+        with self._learning_session():
+            while running and self.num_timesteps < self._total_timesteps:
+                callback.on_rollout_start()
+                while (
+                    running
+                    and (self._collected_steps if unit == "step" else self._collected_episodes)
+                    < freq
+                ):
+                    running = self._collect_step(callback, log_interval)
+                callback.on_rollout_end()
+                if not running:
+                    break  # the collection stays open: a resumed run completes it
+                if self.num_timesteps > self.learning_starts:
+                    steps = self._collected_steps * self.n_envs
+                    gradient_steps = self.gradient_steps if self.gradient_steps >= 0 else steps
+                    if gradient_steps > 0:
+                        self.train(gradient_steps, self.batch_size)
+                self._collected_steps = self._collected_episodes = 0
         callback.on_training_end()
         return self
+
+    def _collect_step(self, callback: Any, log_interval: int | None) -> bool:
+        """One env step of every env, stored; False if a callback asked to stop."""
+        assert self.replay_buffer is not None
+        n_envs = self.n_envs
+        actions = self._sample_actions()
+        new_obs, rewards, dones, infos = self.env.step(actions)
+        self.num_timesteps += n_envs
+        self._collected_steps += 1
+        callback.update_locals(
+            {
+                "actions": actions,
+                "new_obs": new_obs,
+                "rewards": rewards,
+                "dones": dones,
+                "infos": infos,
+            }
+        )
+        running = bool(callback.on_step())
+        self._update_info_buffer(infos, dones)
+        next_obs, timeouts = new_obs, self._no_timeouts  # [n_envs] all False
+        if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
+            next_obs, timeouts = self._real_next_obs(new_obs, dones, infos)
+        self.replay_buffer.add(self._last_obs, next_obs, actions, rewards, dones, timeouts)
+        self._last_obs = new_obs
+        self._update_progress()
+        self._n_calls += 1
+        target_every = max(self.target_update_interval // n_envs, 1)  # in env.step calls, as SB3
+        if self._n_calls % target_every == 0:
+            polyak_update(self._q_params, self.q_net_target.parameters(), self.tau)
+        self.exploration_rate = self.exploration_schedule(self._progress_remaining)
+        self.logger.record("rollout/exploration_rate", self.exploration_rate)
+        for _ in range(int(dones.sum())):
+            self._collected_episodes += 1
+            self._episode_num += 1
+            if log_interval is not None and self._episode_num % log_interval == 0:
+                self._dump_logs()
+        return running
+
+    def _on_env_reset(self, restart: bool) -> None:
+        # The open collection counted steps of the old episodes (which a buffer loaded from
+        # a checkpoint may not hold): start a new one.
+        self._collected_steps = self._collected_episodes = 0
 
     def _real_next_obs(
         self, new_obs: Any, dones: np.ndarray, infos: list[dict[str, Any]]

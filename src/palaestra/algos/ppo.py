@@ -195,32 +195,39 @@ class PPO(BaseAlgorithm):
         reset_num_timesteps: bool = True,
         progress_bar: bool = False,
     ) -> PPO:
-        """Alternate ``n_steps``-per-env rollouts and ``n_epochs`` of minibatch updates."""
+        """Alternate ``n_steps``-per-env rollouts and ``n_epochs`` of minibatch updates.
+
+        A callback that stops training ends the rollout after its step is stored; the partial
+        rollout stays in the buffer (and in a saved model), and the next ``learn`` completes it,
+        so a stopped and resumed run updates at the same steps as one never stopped."""
         callback = self._setup_learn(
             total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
         )
         callback.on_training_start(self._callback_locals(), {})
         iteration = 0
-        while self.num_timesteps < self._total_timesteps:
-            if not self._collect_rollout(callback):
-                break
-            iteration += 1
-            self._update_progress()
-            if log_interval is not None and iteration % log_interval == 0:
-                self.logger.record("time/iterations", iteration, exclude="tensorboard")
-                self._record_episode_stats()
-                self.logger.dump(step=self.num_timesteps)
-            self.train()
+        with self._learning_session():
+            while self.num_timesteps < self._total_timesteps:
+                if not self._collect_rollout(callback):
+                    break
+                iteration += 1
+                self._update_progress()
+                if log_interval is not None and iteration % log_interval == 0:
+                    self.logger.record("time/iterations", iteration, exclude="tensorboard")
+                    self._record_episode_stats()
+                    self.logger.dump(step=self.num_timesteps)
+                self.train()
+                self.rollout_buffer.reset()
         callback.on_training_end()
         return self
 
+    def _on_env_reset(self, restart: bool) -> None:
+        self.rollout_buffer.reset()  # a partial rollout only continues its own episodes
+
     def _collect_rollout(self, callback: Any) -> bool:
-        """Fill the rollout buffer; False if a callback asked to stop."""
+        """Fill the rest of the rollout buffer; False if a callback asked to stop."""
         env, buf = self.env, self.rollout_buffer
         box = self.action_space if isinstance(self.action_space, spaces.Box) else None
-        buf.reset()
         callback.on_rollout_start()
-        dones = np.zeros(self.n_envs, dtype=bool)
         # With numpy acting the values of the whole rollout come from one batched forward at
         # its end (the parameters do not change during a rollout): per step, only the policy.
         numpy_pi = None
@@ -247,8 +254,7 @@ class PPO(BaseAlgorithm):
                     "infos": infos,
                 }
             )
-            if not callback.on_step():
-                return False
+            running = callback.on_step()
             self._update_info_buffer(infos, dones)
             rewards = np.asarray(rewards, dtype=np.float32)
             if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
@@ -262,11 +268,15 @@ class PPO(BaseAlgorithm):
                 log_probs,
             )
             self._last_obs, self._last_episode_starts = new_obs, dones
+            if not running:
+                return False
         if numpy_pi is not None:
             buf.values[...] = self._values(buf.observations.reshape(-1, *buf.obs_shape)).reshape(
                 buf.values.shape
             )
-        buf.compute_returns_and_advantage(self._values(self._last_obs), dones)
+        # The last step's dones (also after a resume that found the buffer already full).
+        assert self._last_episode_starts is not None
+        buf.compute_returns_and_advantage(self._values(self._last_obs), self._last_episode_starts)
         callback.update_locals({"rollout_buffer": buf})
         callback.on_rollout_end()
         return True
@@ -382,6 +392,12 @@ class PPO(BaseAlgorithm):
             "seed": self.seed,
             "stats_window_size": self._stats_window_size,
         }
+
+    def _loop_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        return self.rollout_buffer.partial_state()
+
+    def _load_loop_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
+        self.rollout_buffer.load_partial_state(meta, arrays)
 
     def _schedules(self) -> dict[str, Any]:
         return {

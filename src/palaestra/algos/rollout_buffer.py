@@ -107,6 +107,44 @@ class RolloutBuffer:
         self.log_probs[t] = log_probs
         self.pos += 1
 
+    # -- a rollout cut short, for exact resume ------------------------------------------
+    def _columns(self) -> dict[str, np.ndarray]:
+        """The per-step arrays ``add`` writes, by name (dict observations as ``obs/<key>``)."""
+        obs = self.observations
+        cols = {f"obs/{k}": v for k, v in obs.items()} if isinstance(obs, dict) else {"obs": obs}
+        cols.update(
+            actions=self.actions,
+            rewards=self.rewards,
+            episode_starts=self.episode_starts,
+            values=self.values,
+            log_probs=self.log_probs,
+        )
+        return cols
+
+    def partial_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        """The steps stored so far (none once a rollout has been trained on)."""
+        if self.pos == 0:
+            return {"pos": 0}, {}
+        return {"pos": self.pos}, {k: v[: self.pos].copy() for k, v in self._columns().items()}
+
+    def load_partial_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
+        """Restore ``partial_state`` output; ``ValueError`` if it does not fit this buffer."""
+        pos = meta.get("pos", 0) if isinstance(meta, dict) else None
+        if isinstance(pos, bool) or not isinstance(pos, int) or not 0 <= pos <= self.n_steps:
+            raise ValueError(f"rollout position {pos!r} is not in [0, {self.n_steps}]")
+        cols = self._columns() if pos else {}
+        if set(arrays) != set(cols):
+            raise ValueError(f"rollout arrays {sorted(arrays)} do not match {sorted(cols)}")
+        for key, col in cols.items():
+            if arrays[key].shape != col[:pos].shape or arrays[key].dtype != col.dtype:
+                raise ValueError(
+                    f"rollout {key!r} is {arrays[key].dtype}{list(arrays[key].shape)}, "
+                    f"expected {col.dtype}{list(col[:pos].shape)}"
+                )
+        for key, col in cols.items():
+            col[:pos] = arrays[key]
+        self.pos = pos
+
     def compute_returns_and_advantage(self, last_values: np.ndarray, dones: np.ndarray) -> None:
         """GAE over the full rollout; ``last_values``/``dones`` are for the next observation."""
         self.advantages, self.returns = gae(

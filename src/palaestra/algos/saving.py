@@ -1,7 +1,18 @@
-"""Save, load and parameter transfer for algorithms, on top of ``model_io``'s safe archives."""
+"""Save, load and parameter transfer for algorithms, on top of ``model_io``'s safe archives.
+
+A model file also holds the state of its ``learn`` loop (``meta["run"]`` and the ``run/``
+arrays: the current observations, episode statistics, the torch generator, and what each
+algorithm adds in ``_loop_state``), so that a loaded model continues a run exactly. The
+current observations only make sense with the env they came from: saving tags that env with a
+fresh token, and loading restores them only into an env carrying the same token (the same
+object, not stepped by ``learn`` since, or one whose run state was restored from a file saved
+with the model, see :func:`bind_env_token`).
+"""
 
 from __future__ import annotations
 
+import uuid
+import weakref
 from typing import Any
 
 import numpy as np
@@ -19,9 +30,33 @@ from palaestra.algos.model_io import (
 from palaestra.algos.schedules import schedule_from_json, schedule_to_json
 from palaestra.algos.spaces_util import space_from_json, space_to_json
 
-__all__ = ["load_model", "save_model", "set_parameters"]
+__all__ = [
+    "bind_env_token",
+    "env_token",
+    "forget_env_token",
+    "load_model",
+    "save_model",
+    "set_parameters",
+]
 
 COUNTERS = ("num_timesteps", "_episode_num", "_n_updates", "_progress_remaining")
+_ENV_TOKENS: weakref.WeakKeyDictionary[Any, str] = weakref.WeakKeyDictionary()
+
+
+def env_token(env: Any) -> str | None:
+    """The token ``env`` got when a model last saved it (None if stepped since)."""
+    return None if env is None else _ENV_TOKENS.get(env)
+
+
+def bind_env_token(env: Any, token: str) -> None:
+    """Declare ``env`` to be in the state a model file tagged ``token`` was saved with."""
+    _ENV_TOKENS[env] = token
+
+
+def forget_env_token(env: Any) -> None:
+    """``env`` is being stepped: no saved model's observations fit it any more."""
+    if env is not None:
+        _ENV_TOKENS.pop(env, None)
 
 
 def save_model(model: Any, path: Any) -> None:
@@ -49,7 +84,75 @@ def save_model(model: Any, path: Any) -> None:
     }
     arrays = {f"policy/{k}": v.detach().cpu().numpy() for k, v in model.policy.state_dict().items()}
     arrays.update(opt_arrays)
+    meta["run"], run_arrays = _run_state(model)
+    arrays.update(run_arrays)
     write_archive(path, "model", meta, arrays)
+    if meta["run"]["env_token"] is not None:
+        bind_env_token(model.env, meta["run"]["env_token"])
+
+
+def _run_state(model: Any) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """What ``learn`` needs to continue exactly (see the module docstring)."""
+    arrays: dict[str, np.ndarray] = {"run/torch_rng": torch.get_rng_state().numpy()}
+    obs = None if model._learning else model._last_obs  # mid-learn: the env moves on
+    token = None
+    if obs is not None and model.env is not None:
+        token = uuid.uuid4().hex
+        if isinstance(obs, dict):
+            arrays.update({f"run/last_obs/{k}": np.asarray(v) for k, v in obs.items()})
+        else:
+            arrays["run/last_obs"] = np.asarray(obs)
+        arrays["run/last_episode_starts"] = np.asarray(model._last_episode_starts, dtype=bool)
+    loop_meta, loop_arrays = ({}, {}) if token is None else model._loop_state()
+    arrays.update({f"run/loop/{k}": v for k, v in loop_arrays.items()})
+    meta = {
+        "env_token": token,
+        "obs_keys": sorted(obs) if isinstance(obs, dict) else None,
+        "episodes": [
+            {"r": float(e["r"]), "l": int(e["l"]), "t": float(e.get("t", 0.0))}
+            for e in model.ep_info_buffer
+        ],
+        "successes": [bool(s) for s in model.ep_success_buffer],
+        "loop": loop_meta,
+    }
+    return meta, arrays
+
+
+def _load_run_state(model: Any, meta: Any, arrays: dict[str, np.ndarray], source: str) -> None:
+    """Inverse of ``_run_state``; files saved before it existed have no ``run`` entry."""
+    if meta is None:
+        return
+    try:
+        model.ep_info_buffer.extend(dict(e) for e in meta["episodes"])
+        model.ep_success_buffer.extend(bool(s) for s in meta["successes"])
+        rng = arrays.get("run/torch_rng")
+        if rng is not None:
+            probe = torch.Generator()
+            probe.set_state(torch.from_numpy(rng.copy()))  # refuses a malformed state
+            model._torch_rng_to_restore = probe.get_state()
+        loop = {k[len("run/loop/") :]: v for k, v in arrays.items() if k.startswith("run/loop/")}
+        model._load_loop_state(meta["loop"], loop)
+        token = meta["env_token"]
+        if token is None or model.env is None or env_token(model.env) != token:
+            return  # another env: learn() starts new episodes
+        keys = meta["obs_keys"]
+        if keys is None:
+            obs: Any = arrays["run/last_obs"]
+        else:
+            obs = {k: arrays[f"run/last_obs/{k}"] for k in keys}
+        starts = arrays["run/last_episode_starts"]
+    except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+        raise ModelFileError(f"{source}: malformed run state ({exc!r})") from exc
+    n = model.env.num_envs
+    space = model.env.observation_space  # (normalised observations may leave its bounds)
+    shapes = (
+        {"": (obs.shape, space.shape)}
+        if keys is None
+        else {k: (obs[k].shape, space[k].shape) for k in keys}
+    )
+    if starts.shape != (n,) or any(got != (n, *want) for got, want in shapes.values()):
+        raise ModelFileError(f"{source}: saved observations do not fit the env ({n} envs)")
+    model._last_obs, model._last_episode_starts = obs, starts
 
 
 def load_model(
@@ -98,6 +201,7 @@ def load_model(
         model._rng.bit_generator.state = meta["rng"]
     except (TypeError, ValueError, KeyError) as exc:
         raise ModelFileError(f"{path}: malformed generator state") from exc
+    _load_run_state(model, meta.get("run"), arrays, str(path))
     return model
 
 

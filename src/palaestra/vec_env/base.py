@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 
 from palaestra.spaces import Space
+from palaestra.utils import run_state
+from palaestra.utils.run_state import State
 
 Indices = int | Iterable[int] | None
 StepReturn = tuple[Any, np.ndarray, np.ndarray, list[dict[str, Any]]]
@@ -22,6 +24,9 @@ StepReturn = tuple[Any, np.ndarray, np.ndarray, list[dict[str, Any]]]
 
 class VecEnv:
     """Base of SB3-style vector envs: ``num_envs`` envs with *single* observation/action spaces."""
+
+    # What exact resume saves (utils.run_state); None: this env cannot save its state.
+    RUN_STATE: tuple[str, ...] | None = None
 
     def __init__(
         self, num_envs: int, observation_space: Space[Any], action_space: Space[Any]
@@ -43,6 +48,18 @@ class VecEnv:
         if self.render_mode == "rgb_array":
             modes = ["human", "rgb_array"]
         self.metadata: dict[str, Any] = {"render_modes": modes}
+
+    # -- exact resume ---------------------------------------------------------------------
+    def get_run_state(self) -> State:
+        """Everything stepping changes (env rows and their generators, counters, episode and
+        normalisation statistics) as JSON + arrays, so that :meth:`set_run_state` on an env
+        built the same way continues exactly from here. ``RunStateError`` for envs whose state
+        palaestra cannot see (arbitrary Python envs in ``DummyVecEnv``/``SubprocVecEnv``)."""
+        return run_state.capture(self)
+
+    def set_run_state(self, state: State) -> None:
+        """Continue from a :meth:`get_run_state` state (checked whole before anything changes)."""
+        run_state.restore(self, state)
 
     # -- to implement ---------------------------------------------------------------------
     def reset(self) -> Any:

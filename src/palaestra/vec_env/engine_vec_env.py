@@ -16,6 +16,7 @@ import numpy as np
 
 from palaestra import error
 from palaestra.core import Env
+from palaestra.utils.run_state import State, supports_run_state
 from palaestra.vec_env.base import Indices, StepReturn, VecEnv
 from palaestra.vector.autoreset import Autoresetter, Transition
 from palaestra.vector.engine import Engine, LoopEngine
@@ -31,6 +32,8 @@ __all__ = ["BatchedVecEnv", "DummyVecEnv", "EngineVecEnv", "SubprocVecEnv"]
 
 class EngineVecEnv(VecEnv):
     """An SB3 ``VecEnv`` whose envs are run by ``engine``; rewards come as ``reward_dtype``."""
+
+    RUN_STATE = ("_driver", "_seeds")  # exact resume, where the engine has a run state
 
     def __init__(self, engine: Engine, reward_dtype: Any = np.float32) -> None:
         self.engine = engine
@@ -108,6 +111,17 @@ class EngineVecEnv(VecEnv):
                 "terminal_observation": t.final_obs[j],
             }
         return infos
+
+    def get_run_state(self) -> State:
+        """The engine's rows, generators and counters (native batches only: the state of
+        arbitrary Python envs is not palaestra's to see)."""
+        if not supports_run_state(self.engine):
+            raise error.RunStateError(
+                f"{type(self).__name__} cannot save its envs' state (they are Python objects "
+                "palaestra cannot see into); exact resume needs a native batch "
+                "(make_vec_env on a built-in id, without wrapper_class)"
+            )
+        return super().get_run_state()
 
     def close(self) -> None:
         """Close the envs (and stop workers); idempotent."""

@@ -21,6 +21,8 @@ class VecFrameStack(VecEnvWrapper):
     channel-first images (SB3's rule). A finished env's stack restarts from zeros.
     """
 
+    RUN_STATE = ("venv", "stacked")  # exact resume (utils.run_state)
+
     def __init__(self, venv: VecEnv, n_stack: int, channels_order: str | None = None) -> None:
         space = venv.observation_space
         if not isinstance(space, Box):

@@ -20,6 +20,8 @@ class VecMonitor(VecEnvWrapper):
     True
     """
 
+    RUN_STATE = ("venv", "episode_count", "episode_returns", "episode_lengths")
+
     def __init__(
         self, venv: VecEnv, filename: str | None = None, info_keywords: tuple[str, ...] = ()
     ) -> None:

@@ -22,6 +22,8 @@ _FORMAT = "palaestra.VecNormalize/1"
 class VecNormalize(VecEnvWrapper):
     """SB3's ``VecNormalize``: same arguments, same arithmetic (``obs`` and ``rewards``)."""
 
+    RUN_STATE = ("venv", "obs_rms", "ret_rms", "returns")  # exact resume (utils.run_state)
+
     def __init__(
         self,
         venv: VecEnv,

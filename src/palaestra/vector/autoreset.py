@@ -81,6 +81,8 @@ def _copy_obs(item: Any) -> Any:
 class Autoresetter:
     """Drives an engine in one autoreset mode; remembers which rows have finished."""
 
+    RUN_STATE = ("engine", "_ended")  # for exact resume (utils.run_state)
+
     def __init__(self, engine: Engine, mode: AutoresetMode | str) -> None:
         self.engine = engine
         self.mode = mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)

@@ -24,6 +24,19 @@ if TYPE_CHECKING:  # the classic-control modules load only when a batch is made
 class NativeEngine:
     """Engine over a ``BatchedEnv``; ``max_episode_steps`` None means no time limit."""
 
+    # For exact resume (utils.run_state): the batch, the time-limit counters, and the last
+    # step's outputs (``_truncated`` is only cleared when a comparison ran).
+    RUN_STATE = (
+        "batch",
+        "_steps",
+        "_reset_at",
+        "_oldest",
+        "_compared",
+        "_rewards",
+        "_terminated",
+        "_truncated",
+    )
+
     def __init__(
         self,
         batch: BatchedEnv,

@@ -38,6 +38,8 @@ class RunningMeanStd:
     (array([2., 4.]), array([1., 4.]))
     """
 
+    RUN_STATE = ("mean", "var", "count")  # exact resume (utils.run_state)
+
     def __init__(
         self, epsilon: float = 1e-4, shape: tuple[int, ...] = (), dtype: Any = np.float64
     ) -> None:

@@ -28,6 +28,9 @@ class PreDrawn:
     to :meth:`restart`.
     """
 
+    # What exact resume saves (utils.run_state); the generators belong to the batch.
+    RUN_STATE = ("_uniforms", "_pos", "_live", "_budget")
+
     def __init__(self, rngs: list[np.random.Generator | None], draws: int) -> None:
         n = len(rngs)
         row_bytes = min(max(_BUFFER_BYTES // n, _ROW_BYTES[0]), _ROW_BYTES[1])

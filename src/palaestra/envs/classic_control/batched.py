@@ -39,6 +39,19 @@ class BatchedEnv:
     single_observation_space: Space[Any]
     single_action_space: Space[Any]
     params: Any  # the env's frozen params dataclass (Gymnasium's constants)
+    # Everything a step or reset changes, for exact resume (utils.run_state); subclasses
+    # with more per-row state extend it. ``params`` is construction, not run state.
+    RUN_STATE: ClassVar[tuple[str, ...]] = (
+        "_state",
+        "_obs",
+        "_rngs",
+        "seeds",
+        "_draws",
+        "_seeded",
+        "_needs_reset",
+        "_all_seeded",
+        "_all_reset",
+    )
 
     def __init__(self, num_envs: int) -> None:
         if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:

@@ -189,6 +189,7 @@ class CartPoleBatch(BatchedEnv):
 
     state_dim = 4
     reset_draws = RESET_DRAWS
+    RUN_STATE = (*BatchedEnv.RUN_STATE, "_live")
 
     def __init__(self, num_envs: int, sutton_barto_reward: bool = False) -> None:
         self.params = CartPoleParams()

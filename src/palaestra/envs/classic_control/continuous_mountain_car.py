@@ -290,6 +290,7 @@ class ContinuousMountainCarBatch(BatchedEnv):
 
     state_dim = 2
     reset_draws = RESET_DRAWS
+    RUN_STATE = (*BatchedEnv.RUN_STATE, "_fresh")
 
     def __init__(self, num_envs: int, goal_velocity: float = 0) -> None:
         self.params = ContinuousMountainCarParams(goal_velocity=goal_velocity)
