@@ -141,49 +141,131 @@ def _status(out: Path) -> dict[str, object]:
     return json.loads((out / "status.json").read_text())
 
 
-def test_ctrl_c_saves_checkpoint_and_resume_reaches_the_total(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+DQN_ARGS = ["dqn", "CartPole-v1", "--timesteps", 600, "--seed", 3, "--n-envs", 1,
+            "--set", "learning_starts=50", "--set", "train_freq=4", "--set", "gradient_steps=1",
+            "--checkpoint-every", 60, "--progress", "none", "--eval-episodes", 0]  # fmt: skip
+PPO_ARGS = ["ppo", "CartPole-v1", "--n-envs", 4, "--timesteps", 512, "--seed", 1,
+            "--set", "n_steps=16", "--set", "batch_size=32", "--set", "n_epochs=1",
+            "--checkpoint-every", 100, "--progress", "none", "--eval-episodes", 0]  # fmt: skip
+
+
+def _params(path: Path, algo: type) -> dict[str, torch.Tensor]:
+    return algo.load(path).policy.state_dict()
+
+
+def _assert_same_params(a: Path, b: Path, algo: type) -> None:
+    pa, pb = _params(a, algo), _params(b, algo)
+    assert pa.keys() == pb.keys()
+    for key in pa:
+        assert torch.equal(pa[key], pb[key]), key
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """The DQN and PPO runs of the resume tests, never stopped."""
+    runs = {}
+    for name, args in (("dqn", DQN_ARGS), ("ppo", PPO_ARGS)):
+        out = tmp_path_factory.mktemp("full") / name
+        result = run_cli("train", *args, "--out", out)
+        assert result.code == 0, result.err
+        runs[name] = out
+    return runs
+
+
+def test_second_ctrl_c_keeps_the_last_checkpoint_and_resume_is_exact(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, uninterrupted: dict[str, Path]
 ) -> None:
     out = tmp_path / "run"
     monkeypatch.setattr(train, "EXTRA_CALLBACKS", [_InterruptAt(200)])
-    result = run_cli("train", "dqn", "CartPole-v1", "--timesteps", 600, "--seed", 3, "--n-envs", 1,
-                     "--set", "learning_starts=50", "--set", "train_freq=4",
-                     "--set", "gradient_steps=1", "--out", out, "--progress", "none")  # fmt: skip
+    result = run_cli("train", *DQN_ARGS, "--out", out)
     assert result.code == 130
-    lines = result.err.strip().splitlines()
-    assert lines[-1] == (
-        f"palaestra: interrupted at 200/600 steps; checkpoint saved in {out} "
-        f"(resume with: palaestra train --resume {out})"
+    assert result.err.strip().splitlines()[-1] == (
+        f"palaestra: stopped at once at 200/600 steps; --resume continues from the checkpoint "
+        f"at 180 steps (palaestra train --resume {out})"
     )
     status = _status(out)
     assert (status["status"], status["num_timesteps"], status["total_timesteps"]) == (
         "interrupted",
-        200,
+        180,
         600,
     )
-    checkpoint = DQN.load(out / "model.zip")
-    checkpoint.load_replay_buffer(out / "replay_buffer.zip")
-    assert checkpoint.num_timesteps == 200
-    assert checkpoint.replay_buffer is not None and checkpoint.replay_buffer.size() == 199
+    assert status["checkpoint"] == "resume/step_180"
+    checkpoint = DQN.load(out / "resume" / "step_180" / "model.zip")
+    checkpoint.load_replay_buffer(out / "resume" / "step_180" / "replay_buffer.zip")
+    assert checkpoint.num_timesteps == 180
+    assert checkpoint.replay_buffer is not None and checkpoint.replay_buffer.size() == 180
+    assert not (out / "model.zip").exists()  # the torn in-memory model was not saved
     episodes_before = _rows(out / "episodes.csv")
     progress_before = (out / "progress.csv").read_text().splitlines()
 
     monkeypatch.setattr(train, "EXTRA_CALLBACKS", [])
     result = run_cli("train", "--resume", out, "--progress", "none", "--eval-episodes", 0)
     assert result.code == 0, result.err
-    assert "from step 200 to 600 steps" in result.err
+    assert "from step 180 to 600 steps" in result.err
     assert _status(out)["status"] == "finished" and _status(out)["num_timesteps"] == 600
     resumed = DQN.load(out / "model.zip")
     assert resumed.num_timesteps == 600
-    # The schedules ran to their end over the two segments together.
     assert resumed._progress_remaining == 0.0
     assert resumed.exploration_rate == pytest.approx(resumed.exploration_final_eps)
+    _assert_same_params(out / "model.zip", uninterrupted["dqn"] / "model.zip", DQN)
     episodes = _rows(out / "episodes.csv")
     assert episodes[: len(episodes_before)] == episodes_before  # appended, not rewritten
     assert int(episodes[-1]["steps"]) > 200
     progress = (out / "progress.csv").read_text().splitlines()
     assert progress[1 : len(progress_before)] == progress_before[1:]
     assert len(progress) > len(progress_before)
+
+
+class _StopRequestAt(BaseCallback):
+    """Asks for a graceful stop (what the first Ctrl-C or SIGTERM does) at given steps."""
+
+    def __init__(self, steps: list[int]) -> None:
+        super().__init__()
+        self.steps = steps
+
+    def _on_step(self) -> bool:
+        if self.steps and self.num_timesteps >= self.steps[0]:
+            self.steps.pop(0)
+            os.kill(os.getpid(), signal.SIGINT)
+        return True
+
+
+@pytest.mark.parametrize("algo", ["dqn", "ppo"])
+def test_graceful_stops_anywhere_resume_to_the_same_bits(
+    algo: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, uninterrupted: dict[str, Path]
+) -> None:
+    args, cls = (DQN_ARGS, DQN) if algo == "dqn" else (PPO_ARGS, PPO)
+    out = tmp_path / "run"
+    # Stops inside rollouts, right after a checkpoint, on a rollout's last step.
+    stops = [37, 101, 188, 256, 444] if algo == "dqn" else [12, 100, 200, 256, 380]
+    for i, at in enumerate(stops):
+        monkeypatch.setattr(train, "EXTRA_CALLBACKS", [_StopRequestAt([at])])
+        first = ["train", *args, "--out", out] if i == 0 else ["train", "--resume", out]
+        result = run_cli(*first, "--progress", "none", "--eval-episodes", 0)
+        assert result.code == 130, result.err
+        assert _status(out)["status"] == "interrupted"
+        assert _status(out)["num_timesteps"] >= at
+    monkeypatch.setattr(train, "EXTRA_CALLBACKS", [])
+    result = run_cli("train", "--resume", out, "--progress", "none", "--eval-episodes", 0)
+    assert result.code == 0, result.err
+    assert "note:" not in result.err  # exact: no "starts new episodes"
+    _assert_same_params(out / "model.zip", uninterrupted[algo] / "model.zip", cls)
+    assert len(list((out / "resume").iterdir())) == 2  # the newest KEEP checkpoints
+
+
+def test_extended_finished_run_trains(tmp_path: Path, uninterrupted: dict[str, Path]) -> None:
+    import shutil
+
+    out = tmp_path / "run"
+    shutil.copytree(uninterrupted["ppo"], out)
+    before = _params(out / "model.zip", PPO)
+    result = run_cli("train", "--resume", out, "--timesteps", 1024, "--progress", "none",
+                     "--eval-episodes", 0)  # fmt: skip
+    assert result.code == 0, result.err
+    assert "note: extending the run from 512 to 1,024 steps" in result.err
+    after = _params(out / "model.zip", PPO)
+    assert any(not torch.equal(before[k], after[k]) for k in before)
+    assert PPO.load(out / "model.zip").num_timesteps == 1024
 
 
 def test_ppo_interrupt_then_resume_to_the_same_total(
@@ -194,7 +276,8 @@ def test_ppo_interrupt_then_resume_to_the_same_total(
     args = ["--set", "n_steps=16", "--set", "batch_size=32", "--set", "n_epochs=1"]
     result = run_cli("train", "ppo", "CartPole-v1", "--n-envs", 4, "--timesteps", 512,
                      *args, "--out", out, "--progress", "bar", "--eval-episodes", 0)  # fmt: skip
-    assert result.code == 130 and _status(out)["num_timesteps"] == 300
+    # Stopped at once at 300: the status points at the last checkpoint (every 51 steps).
+    assert result.code == 130 and _status(out)["num_timesteps"] == 256
     assert re.search(r"\d+/512 \[", result.err)  # the tqdm bar
     monkeypatch.setattr(train, "EXTRA_CALLBACKS", [])
     result = run_cli("train", "--resume", out, "--progress", "none", "--eval-episodes", 0)

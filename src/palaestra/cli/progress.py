@@ -80,6 +80,8 @@ class LiveProgress(BaseCallback):
         return f"{np.mean([e['r'] for e in buffer]):.2f}" if buffer else "-"
 
     def _on_training_start(self) -> None:
+        if self._start_time:  # learn goes on after a checkpoint: one bar, one clock
+            return
         self._start_time = self._last_print = time.perf_counter()
         self._start_steps = self.model.num_timesteps
         if self.mode == "bar":
@@ -117,9 +119,6 @@ class LiveProgress(BaseCallback):
             f"mean return {self._mean_return()} | ETA {format_duration(max(left, 0.0))}"
         )
 
-    def _on_training_end(self) -> None:
-        self.close()
-
     def close(self) -> None:
         """Finish the bar (idempotent)."""
         if self.bar is not None:
@@ -134,6 +133,7 @@ class GracefulStop(BaseCallback):
     def __init__(self) -> None:
         super().__init__()
         self.requested = False
+        self.finish_at = sys.maxsize  # steps at which a stop no longer stops (the run's end)
         self._previous: Any = None
 
     def install(self) -> None:
@@ -156,7 +156,8 @@ class GracefulStop(BaseCallback):
         print("\nstopping at the next step (Ctrl-C again to stop now)", file=sys.stderr)
 
     def _on_step(self) -> bool:
-        return not self.requested
+        # A stop asked for during the last step lets the run finish (its final update).
+        return not self.requested or self.num_timesteps >= self.finish_at
 
 
 class AppendingCSV(CSVOutputFormat):

@@ -20,28 +20,26 @@ from palaestra.cli.common import (
     write_json,
 )
 
-__all__ = ["print_summary", "save_run"]
+__all__ = ["print_summary", "write_status"]
 
 
-def save_run(
-    model: Any, run_dir: Path, config: dict[str, Any], total: int, wall: float, state: str
+def write_status(
+    run_dir: Path,
+    state: str,
+    steps: int,
+    total: int,
+    wall: float,
+    checkpoint: str | None,
 ) -> None:
-    """Model, replay buffer (DQN), normalisation statistics and ``status.json``: all that
-    ``--resume`` needs."""
-    from palaestra.vec_env import VecNormalize
-
-    model.save(run_dir / MODEL_FILE)
-    if config["algo"] == "dqn":
-        model.save_replay_buffer(run_dir / REPLAY_FILE)
-    if isinstance(model.get_env(), VecNormalize):
-        model.get_env().save(str(run_dir / NORMALIZE_FILE))
+    """``status.json``: where the run stands and which checkpoint ``--resume`` continues."""
     write_json(
         run_dir / STATUS_FILE,
         {
             "status": state,
-            "num_timesteps": int(model.num_timesteps),
+            "num_timesteps": int(steps),
             "total_timesteps": int(total),
             "wall_time_s": round(wall, 3),
+            "checkpoint": checkpoint,
         },
     )
 

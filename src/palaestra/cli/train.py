@@ -185,7 +185,8 @@ def _default_out(algo: str, env_id: str) -> Path:
 
 
 # -- building ----------------------------------------------------------------------------------
-def _make_env(config: dict[str, Any], run_dir: Path, resume: bool, seed: int | None) -> Any:
+def _make_env(config: dict[str, Any], seed: int | None, saved: Path | None = None) -> Any:
+    """The run's vector env; ``saved``: the folder whose ``vecnormalize.npz`` to continue."""
     from palaestra.cli.pipeline import make_vec
     from palaestra.vec_env import VecNormalize
 
@@ -193,28 +194,41 @@ def _make_env(config: dict[str, Any], run_dir: Path, resume: bool, seed: int | N
     normalize = config.get("normalize") or False
     if normalize is False:
         return venv
-    if resume and (run_dir / NORMALIZE_FILE).is_file():
-        return VecNormalize.load(str(run_dir / NORMALIZE_FILE), venv)
+    if saved is not None and (saved / NORMALIZE_FILE).is_file():
+        return VecNormalize.load(str(saved / NORMALIZE_FILE), venv)
     kwargs = dict(normalize) if isinstance(normalize, dict) else {}
     kwargs.setdefault("gamma", config["hyperparams"].get("gamma", 0.99))
     return VecNormalize(venv, **kwargs)
 
 
-def _make_model(config: dict[str, Any], venv: Any, run_dir: Path, resume: bool) -> Any:
-    from palaestra import presets
+def _resume(config: dict[str, Any], run_dir: Path) -> tuple[Any, bool]:
+    """The model and env of the newest complete checkpoint (or, for run folders written before
+    checkpoints held the env, the run folder's own files); whether the resume is exact."""
     from palaestra.algos.model_io import ModelFileError
+    from palaestra.cli.checkpoint import latest_checkpoint, load_env_state
+
+    folder = latest_checkpoint(run_dir) or run_dir
+    venv = _make_env(config, config["seed"], folder)
+    exact = load_env_state(folder, venv)
+    cls = settings_mod.algo_class(config["algo"])
+    try:
+        model = cls.load(folder / MODEL_FILE, env=venv, device=config["device"])
+        if config["algo"] == "dqn" and (folder / REPLAY_FILE).is_file():
+            model.load_replay_buffer(folder / REPLAY_FILE)
+    except FileNotFoundError:
+        raise CLIError(f"{run_dir} has no {MODEL_FILE} to resume from", "check DIR") from None
+    except (ModelFileError, ValueError) as exc:
+        raise CLIError(f"cannot resume {run_dir}: {exc}", "start a new run") from None
+    seed = config["seed"]
+    if not exact and seed is not None:
+        venv.seed(seed + model.num_timesteps)  # new episodes, not a replay of the first ones
+    return model, exact
+
+
+def _make_model(config: dict[str, Any], venv: Any) -> Any:
+    from palaestra import presets
 
     cls = settings_mod.algo_class(config["algo"])
-    if resume:
-        try:
-            model = cls.load(run_dir / MODEL_FILE, env=venv, device=config["device"])
-            if config["algo"] == "dqn" and (run_dir / REPLAY_FILE).is_file():
-                model.load_replay_buffer(run_dir / REPLAY_FILE)
-        except FileNotFoundError:
-            raise CLIError(f"{run_dir} has no {MODEL_FILE} to resume from", "check DIR") from None
-        except (ModelFileError, ValueError) as exc:
-            raise CLIError(f"cannot resume {run_dir}: {exc}", "start a new run") from None
-        return model
     try:
         hyper = presets.resolve(config["hyperparams"])
         return cls(
@@ -290,18 +304,25 @@ def run(args: argparse.Namespace) -> int:
     import torch
 
     torch.set_num_threads(1)  # the small nets here are fastest on one thread
-    seed = config["seed"]
-    venv = _make_env(config, run_dir, resume, seed)
-    model = _make_model(config, venv, run_dir, resume)
     total = config["n_timesteps"]
     if resume:
+        model, exact = _resume(config, run_dir)
         if model.num_timesteps >= total:
             raise CLIError(
                 f"{run_dir} already trained {model.num_timesteps:,} of its {total:,} steps",
                 f"pass --timesteps larger than {model.num_timesteps} to train further",
             )
-        if seed is not None:
-            venv.seed(seed + model.num_timesteps)  # new episodes, not a replay of the first ones
+        if not exact:
+            notes.append("the run's envs cannot save their state: the resume starts new episodes")
+        if total > int(status.get("total_timesteps", total)):
+            notes.append(
+                f"extending the run from {status['total_timesteps']:,} to {total:,} steps: the "
+                f"schedules continue as a {total:,}-step run would from step "
+                f"{model.num_timesteps:,} (progress remaining "
+                f"{1 - model.num_timesteps / total:.3f})"
+            )
+    else:
+        model = _make_model(config, _make_env(config, config["seed"]))
     for note in notes:  # after every check: bad input gets its error line only
         eprint(f"note: {note}")
     run_dir.mkdir(parents=True, exist_ok=True)
@@ -319,25 +340,24 @@ def _train(
     resume: bool,
     progress_mode: str,
 ) -> int:
-    from palaestra.algos.callbacks import CallbackList, CheckpointCallback
+    """Train to ``total`` steps, ending ``learn`` at each checkpoint to write it between two
+    consistent steps and continuing (exactly: see :mod:`palaestra.cli.checkpoint`)."""
+    from palaestra.algos.callbacks import CallbackList
+    from palaestra.cli.checkpoint import CheckpointDue, publish, write_checkpoint
     from palaestra.cli.progress import EpisodeLog, GracefulStop, LiveProgress
-    from palaestra.cli.run_files import print_summary, save_run
+    from palaestra.cli.run_files import print_summary, write_status
 
     model.set_logger(_make_logger(run_dir, args.verbose))
     episodes = EpisodeLog(run_dir / EPISODES_FILE)
     stop = GracefulStop()
-    callbacks: list[Any] = [episodes, stop]
+    stop.finish_at = total
+    every = args.checkpoint_every if args.checkpoint_every is not None else total // 10
+    due = CheckpointDue(every, total)
+    callbacks: list[Any] = [episodes, stop, due]
     progress = None
     if progress_mode != "none":
         progress = LiveProgress(total, progress_mode)
         callbacks.append(progress)
-    every = args.checkpoint_every if args.checkpoint_every is not None else total // 10
-    if every > 0:
-        callbacks.append(
-            CheckpointCallback(
-                max(every // model.n_envs, 1), str(run_dir / "checkpoints"), name_prefix="model"
-            )
-        )
     callbacks.extend(EXTRA_CALLBACKS)
     start_steps = model.num_timesteps
     eprint(
@@ -347,17 +367,30 @@ def _train(
         f"{'from step ' + format(start_steps, ',') + ' ' if resume else ''}to {total:,} steps "
         f"-> {run_dir}"
     )
-    interrupted = False
+    wall_before = float(status.get("wall_time_s", 0.0))
+    saved = status.get("checkpoint")
+    at_once = stopped = False
     stop.install()
     start = time.perf_counter()
     try:
-        model.learn(
-            total - start_steps,
-            callback=CallbackList(callbacks),
-            reset_num_timesteps=not resume,
-        )
-    except KeyboardInterrupt:
-        interrupted = True
+        first = not resume
+        while model.num_timesteps < total:
+            due.plan(model.num_timesteps)
+            model.learn(
+                total - model.num_timesteps,
+                callback=CallbackList(callbacks),
+                reset_num_timesteps=first,
+            )
+            first = False
+            if model.num_timesteps >= total or not due.reached(model.num_timesteps):
+                stopped = model.num_timesteps < total  # Ctrl-C, SIGTERM or a callback
+                break
+            folder, _ = write_checkpoint(model, run_dir, config["algo"])
+            saved = str(folder.relative_to(run_dir))
+            wall = wall_before + time.perf_counter() - start
+            write_status(run_dir, "running", model.num_timesteps, total, wall, saved)
+    except KeyboardInterrupt:  # a second Ctrl-C: the model may be mid-update, so not saved
+        at_once = True
     finally:
         seconds = time.perf_counter() - start
         stop.uninstall()
@@ -365,10 +398,21 @@ def _train(
         if progress is not None:
             progress.close()
         model.logger.close()
-    interrupted = interrupted or stop.requested
-    wall = float(status.get("wall_time_s", 0.0)) + seconds
-    save_run(model, run_dir, config, total, wall, "interrupted" if interrupted else "finished")
-    if interrupted:
+    wall = wall_before + seconds
+    if at_once:
+        steps = int(saved.rsplit("_", 1)[1]) if saved else 0
+        write_status(run_dir, "interrupted", steps, total, wall, saved)
+        where = f"the checkpoint at {steps:,} steps" if saved else "nothing (no checkpoint yet)"
+        eprint(
+            f"palaestra: stopped at once at {model.num_timesteps:,}/{total:,} steps; "
+            f"--resume continues from {where} (palaestra train --resume {run_dir})"
+        )
+        return 130
+    folder, _ = write_checkpoint(model, run_dir, config["algo"])
+    publish(folder, run_dir)
+    state = "interrupted" if stopped else "finished"
+    write_status(run_dir, state, model.num_timesteps, total, wall, str(folder.relative_to(run_dir)))
+    if stopped:
         eprint(
             f"palaestra: interrupted at {model.num_timesteps:,}/{total:,} steps; checkpoint "
             f"saved in {run_dir} (resume with: palaestra train --resume {run_dir})"

@@ -1,0 +1,177 @@
+"""A run folder's resumable state: complete checkpoints, and the newest one to resume from.
+
+A checkpoint is a folder ``resume/step_<N>/`` with all that ``train --resume`` needs to go on
+exactly where the run was:
+
+- ``model.zip``: weights, optimizer, and the learn loop's state (current observations, a
+  partial PPO rollout, DQN's open collection, generators);
+- ``env_state.zip``: the native batch's rows, generators and counters, the episode and
+  normalisation statistics (absent when the envs cannot save their state: then a resume
+  starts new episodes and is not exact);
+- ``replay_buffer.zip`` (DQN) and ``vecnormalize.npz`` (when normalising).
+
+It is written as ``resume/.step_<N>.tmp`` and renamed once complete, so whatever stops the
+process (a crash, ``kill -9``, a second Ctrl-C) leaves every earlier checkpoint whole; the
+newest ``KEEP`` are kept. Each model is also linked as ``checkpoints/model_<N>_steps.zip``
+(SB3's ``CheckpointCallback`` name), kept for evaluation, and the final state's files as the
+run folder's ``model.zip``, ``replay_buffer.zip`` and ``vecnormalize.npz``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+from pathlib import Path
+from typing import Any
+
+from palaestra.algos.callbacks import BaseCallback
+from palaestra.cli.common import MODEL_FILE, NORMALIZE_FILE, REPLAY_FILE, CLIError
+
+__all__ = [
+    "ENV_STATE_FILE",
+    "KEEP",
+    "RESUME_DIR",
+    "CheckpointDue",
+    "checkpoints",
+    "latest_checkpoint",
+    "load_env_state",
+    "publish",
+    "write_checkpoint",
+]
+
+RESUME_DIR = "resume"
+ENV_STATE_FILE = "env_state.zip"
+KEEP = 2
+_NAME = re.compile(r"step_(\d+)")
+
+
+class CheckpointDue(BaseCallback):
+    """Ends ``learn`` at the first step at or past the next multiple of ``every`` steps, so
+    the checkpoint is written between two whole steps; never on the last step (which must
+    still run the final update). ``every`` 0: never."""
+
+    def __init__(self, every: int, total: int) -> None:
+        super().__init__()
+        self.every, self.total = every, total
+        self.at: int | None = None
+
+    def plan(self, steps: int) -> None:
+        """Aim at the first multiple of ``every`` after ``steps``."""
+        self.at = (steps // self.every + 1) * self.every if self.every > 0 else None
+
+    def reached(self, steps: int) -> bool:
+        """Whether ``learn`` returned because the checkpoint is due."""
+        return self.at is not None and self.at <= steps < self.total
+
+    def _on_step(self) -> bool:
+        return not self.reached(self.num_timesteps)
+
+
+def checkpoints(run_dir: Path) -> list[Path]:
+    """The complete checkpoints of a run, oldest first."""
+    folder = run_dir / RESUME_DIR
+    if not folder.is_dir():
+        return []
+    found = [(int(m.group(1)), p) for p in folder.iterdir() if (m := _NAME.fullmatch(p.name))]
+    return [p for _, p in sorted(found) if (p / MODEL_FILE).is_file()]
+
+
+def latest_checkpoint(run_dir: Path) -> Path | None:
+    """The newest complete checkpoint, or None (a run folder from before checkpoints)."""
+    found = checkpoints(run_dir)
+    return found[-1] if found else None
+
+
+def write_checkpoint(model: Any, run_dir: Path, algo: str) -> tuple[Path, bool]:
+    """Write the model's and its env's state as ``resume/step_<N>``; returns the folder and
+    whether the env state is in it (False: the envs cannot save theirs)."""
+    from palaestra.algos.model_io import write_archive
+    from palaestra.algos.saving import env_token
+    from palaestra.error import RunStateError
+    from palaestra.vec_env import VecNormalize
+
+    steps = int(model.num_timesteps)
+    final = run_dir / RESUME_DIR / f"step_{steps}"
+    tmp = run_dir / RESUME_DIR / f".step_{steps}.tmp"
+    shutil.rmtree(tmp, ignore_errors=True)  # a leftover of a process killed while writing
+    tmp.mkdir(parents=True)
+    venv = model.get_env()
+    model.save(tmp / MODEL_FILE)  # tags venv: env_state below carries the same token
+    if algo == "dqn":
+        model.save_replay_buffer(tmp / REPLAY_FILE)
+    if isinstance(venv, VecNormalize):
+        venv.save(str(tmp / NORMALIZE_FILE))
+    try:
+        meta, arrays = venv.get_run_state()
+        has_env = True
+    except RunStateError:
+        has_env = False
+    if has_env:
+        token = env_token(venv)
+        write_archive(tmp / ENV_STATE_FILE, "env_state", {"state": meta, "token": token}, arrays)
+    _sync_dir(tmp)
+    if final.exists():  # the same step saved twice (a stop right after a checkpoint)
+        shutil.rmtree(final)
+    os.replace(tmp, final)
+    _sync_dir(final.parent)
+    _link(final / MODEL_FILE, run_dir / "checkpoints" / f"model_{steps}_steps.zip")
+    for old in checkpoints(run_dir)[:-KEEP]:
+        shutil.rmtree(old, ignore_errors=True)
+    return final, has_env
+
+
+def publish(folder: Path, run_dir: Path) -> None:
+    """Make a checkpoint's model, replay buffer and statistics the run folder's own files."""
+    for name in (MODEL_FILE, REPLAY_FILE, NORMALIZE_FILE):
+        if (folder / name).is_file():
+            _link(folder / name, run_dir / name)
+
+
+def load_env_state(folder: Path, venv: Any) -> bool:
+    """Restore a checkpoint's env state into ``venv`` (built as the run builds it) and mark
+    ``venv`` as the env its model was saved with; False when the checkpoint has none."""
+    from palaestra.algos.model_io import ModelFileError, read_archive
+    from palaestra.algos.saving import bind_env_token
+    from palaestra.error import RunStateError
+
+    path = folder / ENV_STATE_FILE
+    if not path.is_file():
+        return False
+    try:
+        meta, arrays = read_archive(path, "env_state")
+        token = meta.get("token")
+        if not isinstance(token, str):
+            raise ModelFileError(f"{path}: no env token")
+        venv.set_run_state((meta.get("state"), arrays))
+    except (ModelFileError, RunStateError) as exc:
+        raise CLIError(f"cannot resume from {folder}: {exc}", "start a new run") from None
+    bind_env_token(venv, token)
+    return True
+
+
+def _link(source: Path, target: Path) -> None:
+    """``target`` becomes ``source``'s content atomically: a hard link (no copy) where the file
+    system has them, else a copy, under a temporary name then renamed."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    tmp.unlink(missing_ok=True)
+    try:
+        os.link(source, tmp)
+    except OSError:
+        shutil.copyfile(source, tmp)
+    os.replace(tmp, target)
+
+
+def _sync_dir(folder: Path) -> None:
+    """Persist a folder's entries (renames, new files) where the OS allows it."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
