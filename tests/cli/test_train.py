@@ -346,3 +346,35 @@ def test_out_folder_holding_a_run_is_not_overwritten(ppo_run: tuple[Path, Result
     assert result.err.strip() == (
         f"palaestra: error: {out} already holds a run (choose another --out, or --resume {out})"
     )
+
+
+def test_kill_9_then_resume_ends_as_the_uninterrupted_run(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+    import time
+
+    args = ["dqn", "CartPole-v1", "--timesteps", 6000, "--seed", 2, "--n-envs", 2,
+            "--set", "learning_starts=100", "--checkpoint-every", 500,
+            "--progress", "none", "--eval-episodes", 0]  # fmt: skip
+    full = tmp_path / "full"
+    assert run_cli("train", *args, "--out", full).code == 0
+    out = tmp_path / "killed"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(map(str, sys.path))}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "palaestra", "train", *map(str, args), "--out", str(out)],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.monotonic() + 60
+        while not (out / "resume" / "step_1500").exists():  # a few checkpoints, then kill
+            assert proc.poll() is None and time.monotonic() < deadline
+            time.sleep(0.01)
+        proc.kill()  # SIGKILL: nothing of palaestra's runs after this
+    finally:
+        proc.wait(10)
+    assert _status(out)["status"] == "running"
+    result = run_cli("train", "--resume", out, "--progress", "none", "--eval-episodes", 0)
+    assert result.code == 0, result.err
+    _assert_same_params(out / "model.zip", full / "model.zip", DQN)
