@@ -11,8 +11,14 @@ surprising, palaestra differs on purpose:
   ``policy_kwargs`` resolve only in ``torch.nn``/``torch.optim``/``palaestra.algos`` unless
   passed through ``custom_objects``; callables (schedules) are stored exactly when they are
   ``ConstantSchedule``/``LinearSchedule``, as a 1001-point table otherwise;
-- ``load`` + ``learn(reset_num_timesteps=False)`` continues epsilon and the learning rate
-  where they stopped (SB3 recomputes progress over the summed budget and jumps back);
+- exact resume: a model file also holds its ``learn`` loop's state (current observations,
+  a partial PPO rollout, DQN's open collection, episode statistics, generators), so
+  ``save`` + ``load(path, env=the same env)`` + ``learn(T - t, reset_num_timesteps=False)``
+  ends bit-identical to a run never stopped (with another env, new episodes start, as in
+  SB3). Schedules use SB3's ``1 - num_timesteps / total``; a finished run given more steps
+  trains as a run planned for the larger budget would, and ``learn`` warns when the learning
+  rate is 0. The step on which a callback stops training is stored and counted before
+  ``learn`` returns (SB3 drops it), which is what makes a stop resumable;
 - DQN draws one epsilon coin per env (SB3: one for all envs);
 - a function callback returning ``None`` keeps training (SB3 stops);
 - ``progress_bar=True`` needs tqdm only; channel-last images need no ``VecTransposeImage``;
