@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from palaestra.cli import run_folder
 from palaestra.cli import settings as settings_mod
 from palaestra.cli.common import (
     CONFIG_FILE,
@@ -85,6 +86,7 @@ def add_parser(sub: Any) -> None:
         help="continue the run in DIR (after Ctrl-C, or to a larger --timesteps) with its "
         "saved settings, model and replay buffer",
     )
+    run_folder.add_allow_import(p, "--resume")
     p.add_argument(
         "--device", default="auto", metavar="DEV", help="torch device: auto (default), cpu, cuda"
     )
@@ -161,7 +163,11 @@ def _resumed_config(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
             f"{', '.join(given)} cannot change them",
             "drop them, or start a new run",
         )
-    config = read_json(run_dir / CONFIG_FILE, "run config")
+    # Checked, and refused if it names a module the command line did not allow, before
+    # check_settings below imports its env_wrapper.
+    config = run_folder.read_run_config(
+        run_dir / CONFIG_FILE, args.allow_import, run_folder.RESUME_KEYS
+    )
     for key, value in (("algo", args.algo), ("env_id", args.env)):
         if value is not None and str(value).lower() != str(config.get(key)).lower():
             raise CLIError(
@@ -272,6 +278,12 @@ def run(args: argparse.Namespace) -> int:
         config = _resumed_config(args, run_dir)
         status = read_json(run_dir / STATUS_FILE, "run status")
     else:
+        if args.allow_import:
+            raise CLIError(
+                "--allow-import applies to --resume (a new run imports what its --config "
+                "and --set name)",
+                "drop --allow-import",
+            )
         config, notes = _new_run_config(args)
         run_dir = Path(args.out) if args.out else _default_out(config["algo"], config["env_id"])
         if (run_dir / CONFIG_FILE).exists():
