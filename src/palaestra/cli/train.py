@@ -30,7 +30,6 @@ from palaestra.cli.common import (
     STATUS_FILE,
     CLIError,
     eprint,
-    read_json,
     write_json,
 )
 
@@ -48,8 +47,9 @@ def add_parser(sub: Any) -> None:
         description="Train an agent. Settings come from the preset (the 'default' preset when "
         "one exists for ALGO and ENV, else the algorithm's defaults), overridden by --config, "
         "then by --set, then by --n-envs/--timesteps/--seed. Atari ids (ALE/Breakout-v5) train "
-        "on SB3's Atari recipe: AtariWrapper envs, 4 stacked frames, CnnPolicy. Ctrl-C saves a "
-        "checkpoint that --resume continues.",
+        "on SB3's Atari recipe: AtariWrapper envs, 4 stacked frames, CnnPolicy. Ctrl-C or SIGTERM "
+        "stops at the next step and saves a checkpoint that --resume continues (exit code 130, "
+        "143 for SIGTERM); a second signal stops at once.",
     )
     p.add_argument(
         "algo", nargs="?", metavar="ALGO", help="dqn or ppo (any case); not needed with --resume"
@@ -276,7 +276,7 @@ def run(args: argparse.Namespace) -> int:
     if resume:
         run_dir = Path(args.resume)
         config = _resumed_config(args, run_dir)
-        status = read_json(run_dir / STATUS_FILE, "run status")
+        status = run_folder.read_status(run_dir / STATUS_FILE)  # before any env or model
     else:
         if args.allow_import:
             raise CLIError(
@@ -385,7 +385,7 @@ def _train(
             f"palaestra: interrupted at {model.num_timesteps:,}/{total:,} steps; checkpoint "
             f"saved in {run_dir} (resume with: palaestra train --resume {run_dir})"
         )
-        return 130
+        return stop.exit_code  # 130 after Ctrl-C, 143 after SIGTERM
     print_summary(
         args.eval_episodes, config, model, run_dir, model.num_timesteps - start_steps, seconds
     )
