@@ -75,10 +75,14 @@ def test_an_action_wrapper_is_kept_for_eval_and_record(
     r = cli("train", "dqn", "MountainCar-v0", *TINY, "--config", "two.json", "--seed", 0,
             "--out", out, "--progress", "none", "--eval-episodes", 0)  # fmt: skip
     assert r.code == 0, r.err
-    r = cli("eval", out, "--episodes", 1)
+    # The run folder names the module; eval and record import it only when asked to.
+    assert "--allow-import shaping_mod" in cli("eval", out, "--episodes", 1).err
+    r = cli("eval", out, "--episodes", 1, "--allow-import", "shaping_mod")
     assert r.code == 0, r.err
     assert "mean return: -200.00" in r.out
-    r = cli("record", out, "--out", workdir / "agent.gif", "--episodes", 1)
+    assert "note: importing module 'shaping_mod' for env_wrapper 'shaping_mod:TwoActions'" in r.err
+    r = cli("record", out, "--out", workdir / "agent.gif", "--episodes", 1,
+            "--allow-import", "shaping_mod")  # fmt: skip
     assert r.code == 0, r.err
     assert (workdir / "agent.gif").stat().st_size > 0
 

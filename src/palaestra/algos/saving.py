@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from palaestra.algos.hyperparams import check_model_file
 from palaestra.algos.model_io import (
     ModelFileError,
     decode_classes,
@@ -162,6 +163,7 @@ def load_model(
     algo = meta.get("algo")
     if algo != cls.__name__:
         raise ModelFileError(f"{path} holds a {algo} model; load it with {algo}.load()")
+    check_model_file(algo, meta, str(path))  # types, ranges, allowed keys: before any use
     try:
         hyper = dict(meta["hyperparameters"])
         for name, sched in meta["schedules"].items():

@@ -3,7 +3,9 @@
 
 Every failure the user can fix prints one line, ``palaestra: error: <what> (<fix>)``, and
 exits with 2 (bad input) or 1 (a runtime failure, e.g. a missing optional package); Ctrl-C
-exits with 130. ``PALAESTRA_DEBUG=1`` shows the traceback of unexpected errors instead.
+exits with 130 (``train``: 143 after SIGTERM). ``sys.exit`` called while a command runs (a
+callback, an env wrapper) prints its message and exits non-zero: the command did not finish.
+``PALAESTRA_DEBUG=1`` shows the traceback of unexpected errors instead.
 """
 
 from __future__ import annotations
@@ -68,16 +70,29 @@ def _report(exc: BaseException) -> int:
     )
 
 
+def _stopped(exc: SystemExit) -> CLIError:
+    """The line for ``sys.exit(code)`` raised while a command ran: the command did not finish,
+    so the exit code is never 0 (``sys.exit(3)``: 3; a message or 0: 1)."""
+    code = exc.code
+    if isinstance(code, int) and not isinstance(code, bool) and code != 0:
+        return CLIError(f"stopped by sys.exit({code}) before the command finished", "", code)
+    what = "" if code is None or code == 0 else f": {code}"
+    return CLIError(f"stopped by sys.exit before the command finished{what}", "", 1)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one command; returns the exit code (``sys.exit(main())``)."""
     try:
         parser = build_parser()
-        args: Any = parser.parse_args(argv)
+        try:
+            args: Any = parser.parse_args(argv)
+        except SystemExit as exc:  # --help and --version (usage errors are CLIError)
+            return exc.code if isinstance(exc.code, int) else 0
         if args.command is None:
             raise CLIError("no command given", f"choose one of {', '.join(COMMANDS)}")
         return int(args.func(args))
-    except SystemExit as exc:  # --help and --version
-        return exc.code if isinstance(exc.code, int) else 0
+    except SystemExit as exc:  # sys.exit() inside the command: a callback, a user's wrapper
+        return _report(_stopped(exc))
     except KeyboardInterrupt:
         print("palaestra: interrupted", file=sys.stderr)
         return 130

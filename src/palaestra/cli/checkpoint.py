@@ -26,13 +26,14 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.algos.callbacks import BaseCallback
-from palaestra.cli.common import MODEL_FILE, NORMALIZE_FILE, REPLAY_FILE, CLIError
+from palaestra.cli.common import MODEL_FILE, NORMALIZE_FILE, REPLAY_FILE
 
 __all__ = [
     "ENV_STATE_FILE",
     "KEEP",
     "RESUME_DIR",
     "CheckpointDue",
+    "checkpoint_steps",
     "checkpoints",
     "latest_checkpoint",
     "load_env_state",
@@ -75,6 +76,14 @@ def checkpoints(run_dir: Path) -> list[Path]:
         return []
     found = [(int(m.group(1)), p) for p in folder.iterdir() if (m := _NAME.fullmatch(p.name))]
     return [p for _, p in sorted(found) if (p / MODEL_FILE).is_file()]
+
+
+def checkpoint_steps(folder: Path) -> int:
+    """The step count a checkpoint folder was written at."""
+    match = _NAME.fullmatch(folder.name)
+    if match is None:
+        raise ValueError(f"{folder} is not a checkpoint folder")
+    return int(match.group(1))
 
 
 def latest_checkpoint(run_dir: Path) -> Path | None:
@@ -128,26 +137,27 @@ def publish(folder: Path, run_dir: Path) -> None:
             _link(folder / name, run_dir / name)
 
 
-def load_env_state(folder: Path, venv: Any) -> bool:
+def load_env_state(folder: Path, venv: Any) -> str | None:
     """Restore a checkpoint's env state into ``venv`` (built as the run builds it) and mark
-    ``venv`` as the env its model was saved with; False when the checkpoint has none."""
+    ``venv`` as the env its model was saved with. None when done, else why not (the resume
+    then starts new episodes): no env state saved, or one that does not fit ``venv``."""
     from palaestra.algos.model_io import ModelFileError, read_archive
     from palaestra.algos.saving import bind_env_token
     from palaestra.error import RunStateError
 
     path = folder / ENV_STATE_FILE
     if not path.is_file():
-        return False
+        return "the run's envs cannot save their state"
     try:
         meta, arrays = read_archive(path, "env_state")
         token = meta.get("token")
         if not isinstance(token, str):
             raise ModelFileError(f"{path}: no env token")
-        venv.set_run_state((meta.get("state"), arrays))
+        venv.set_run_state((meta.get("state"), arrays))  # all or nothing
     except (ModelFileError, RunStateError) as exc:
-        raise CLIError(f"cannot resume from {folder}: {exc}", "start a new run") from None
+        return f"the saved env state does not fit the env ({exc})"
     bind_env_token(venv, token)
-    return True
+    return None
 
 
 def _link(source: Path, target: Path) -> None:

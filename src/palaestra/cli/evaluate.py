@@ -12,6 +12,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from palaestra.cli import run_folder
 from palaestra.cli.common import (
     NORMALIZE_FILE,
     CLIError,
@@ -45,9 +46,10 @@ def load_model(path: Path, device: str = "auto") -> Any:
     return classes[algo].load(path, device=device)
 
 
-def model_env_id(path: Path, env: str | None) -> tuple[str, dict[str, Any]]:
-    """``(env id, env kwargs)``: ``--env`` if given, else the run's ``config.json``."""
-    config = find_run_config(path)
+def model_env_id(
+    path: Path, env: str | None, config: dict[str, Any] | None
+) -> tuple[str, dict[str, Any]]:
+    """``(env id, env kwargs)``: ``--env`` if given, else the run's ``config``."""
     kwargs = dict(config.get("env_kwargs") or {}) if config else {}
     if env is not None:
         if config and config.get("env_id") != env:
@@ -138,14 +140,17 @@ def play_saved(
     deterministic: bool = True,
     seed: int | None = 0,
     record: bool = False,
+    run_config: dict[str, Any] | None = None,
 ) -> tuple[str, Played, float, bool]:
     """Play the model at ``path`` on the env its run trained on (or ``--env``), built as the
     run built it: ``(env id, what was played, render fps, whether episodes are whole games)``.
+    ``run_config``: the run's ``config.json`` as the command read and checked it
+    (:func:`palaestra.cli.run_folder.find_run_config`); None reads it from beside ``path``.
     """
     from palaestra.cli import pipeline
 
-    env_id, env_kwargs = model_env_id(path, env)
-    config = find_run_config(path)
+    config = find_run_config(path) if run_config is None else run_config
+    env_id, env_kwargs = model_env_id(path, env, config)
     if config is not None and pipeline.uses_vec_pipeline(config):
         # The run's recipe (Atari wrappers, frame stack), on --env's id when one is given.
         atari = pipeline.atari_kwargs(config) is not None
@@ -259,6 +264,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument(
         "--device", default="auto", metavar="DEV", help="torch device: auto (default), cpu, cuda"
     )
+    run_folder.add_allow_import(p, "eval")
     p.set_defaults(func=run)
 
 
@@ -267,9 +273,10 @@ def run(args: argparse.Namespace) -> int:
     if args.episodes < 1:
         raise CLIError(f"--episodes must be at least 1, got {args.episodes}", "e.g. --episodes 10")
     path = model_file(args.model)
+    config = run_folder.find_run_config(path, args.allow_import, args.env)
     model = load_model(path, args.device)
     env_id, played, _, games = play_saved(
-        model, path, args.env, args.episodes, args.deterministic, args.seed
+        model, path, args.env, args.episodes, args.deterministic, args.seed, run_config=config
     )
     kind = "deterministic" if args.deterministic else "stochastic"
     unit = ("game" if games else "episode") + "s" * (args.episodes != 1)

@@ -14,7 +14,10 @@ one ``palaestra.make`` env. Two settings change that:
   that ``make_vec_env`` applies to each env over its ``Monitor`` (SB3's ``wrapper_class``), so
   the episode log keeps the env's own returns: a reward-shaping wrapper changes what the agent
   learns from, not what the curves and ``compare`` report. The module is imported from the
-  current folder first (``python -m`` style), so a ``shaping.py`` beside the run works.
+  current folder first (``python -m`` style), so a ``shaping.py`` beside the run works; the
+  name must be a ``palaestra.Wrapper`` subclass. A module named by a run folder (``eval``,
+  ``record``, ``train --resume``) is imported only when the command line allows it
+  (:mod:`palaestra.cli.run_folder`).
 
 Such a run is evaluated on the same pipeline with one env, and an evaluation episode is a
 whole game: the Monitor under the ``AtariWrapper`` reports it (all lives, unclipped score),
@@ -41,6 +44,7 @@ __all__ = [
     "play_vec",
     "render_fps",
     "uses_vec_pipeline",
+    "wrapper_module",
 ]
 
 ATARI_ENTRY_POINT = "palaestra.envs.atari.env:AtariEnv"
@@ -93,16 +97,28 @@ def uses_vec_pipeline(config: dict[str, Any]) -> bool:
     return atari_kwargs(config) is not None or _stack(config) > 1 or bool(config.get("env_wrapper"))
 
 
-def _import_wrapper(path: Any) -> Callable[..., Any]:
-    """The class named by ``"module:Class"`` (or ``"module.Class"``)."""
-    fix = "write env_wrapper as 'module:Class', e.g. shaping:BetterRewardShaping"
+WRAPPER_FIX = "write env_wrapper as 'module:Class', e.g. shaping:BetterRewardShaping"
+
+
+def wrapper_module(path: Any) -> tuple[str, str]:
+    """``"module:Class"`` (or ``"module.Class"``) -> ``(module, class name)``; ``CLIError``
+    for anything else. Imports nothing."""
     if not isinstance(path, str) or not path.strip():
-        raise CLIError(f"env_wrapper must be 'module:Class', got {path!r}", fix)
+        raise CLIError(f"env_wrapper must be 'module:Class', got {path!r}", WRAPPER_FIX)
     module_name, sep, name = path.partition(":")
     if not sep:
         module_name, _, name = path.rpartition(".")
     if not module_name or not name:
-        raise CLIError(f"env_wrapper {path!r} names no module and class", fix)
+        raise CLIError(f"env_wrapper {path!r} names no module and class", WRAPPER_FIX)
+    return module_name, name
+
+
+def _import_wrapper(path: Any) -> type[Any]:
+    """The wrapper class named by ``"module:Class"``: a ``palaestra.Wrapper`` subclass, never
+    just any callable (``"os:system"`` would run a shell command on the env's repr)."""
+    from palaestra.core import Wrapper
+
+    module_name, name = wrapper_module(path)
     if "" not in sys.path:  # the console script does not put the current folder on the path
         sys.path.insert(0, "")
     try:
@@ -113,8 +129,14 @@ def _import_wrapper(path: Any) -> Callable[..., Any]:
             "run from the folder that holds it, or fix the name",
         ) from None
     cls = getattr(module, name, None)
-    if not callable(cls):
-        raise CLIError(f"module {module_name!r} has no class {name!r} (env_wrapper)", fix)
+    if cls is None:
+        raise CLIError(f"module {module_name!r} has no class {name!r} (env_wrapper)", WRAPPER_FIX)
+    if not (isinstance(cls, type) and issubclass(cls, Wrapper)):
+        kind = "a class but no Wrapper" if isinstance(cls, type) else f"a {type(cls).__name__}"
+        raise CLIError(
+            f"env_wrapper {path!r} is {kind}, not a wrapper class",
+            "name a subclass of palaestra.Wrapper (gym.Wrapper, gym.RewardWrapper, ...)",
+        )
     return cls
 
 

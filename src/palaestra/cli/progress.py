@@ -1,5 +1,5 @@
 """Callbacks ``palaestra train`` adds to ``learn``: the episode log behind the learning curve,
-the live progress line, and the graceful stop on Ctrl-C."""
+the live progress line, and the graceful stop on Ctrl-C or SIGTERM."""
 
 from __future__ import annotations
 
@@ -127,33 +127,55 @@ class LiveProgress(BaseCallback):
 
 
 class GracefulStop(BaseCallback):
-    """The first Ctrl-C asks ``learn`` to stop at the next env step (so the model is saved
-    between two consistent steps); a second one interrupts at once."""
+    """The first Ctrl-C (SIGINT) or SIGTERM asks ``learn`` to stop at the next env step (so
+    the model is saved between two consistent steps); a second one interrupts at once.
+
+    SIGTERM is what ``timeout``, batch schedulers and ``docker stop`` send before they kill:
+    it gets the same checkpoint as Ctrl-C. ``exit_code`` is the shell's 128 + signal number
+    (130 for Ctrl-C, 143 for SIGTERM)."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
     def __init__(self) -> None:
         super().__init__()
         self.requested = False
         self.finish_at = sys.maxsize  # steps at which a stop no longer stops (the run's end)
-        self._previous: Any = None
+        self.signum: int | None = None  # the first signal received
+        self._previous: dict[int, Any] = {}
+
+    @property
+    def exit_code(self) -> int:
+        """130 (Ctrl-C, or a KeyboardInterrupt raised inside ``learn``), 143 after SIGTERM."""
+        return 128 + (self.signum or signal.SIGINT)
 
     def install(self) -> None:
-        """Take over SIGINT (main thread only; elsewhere Ctrl-C stays a KeyboardInterrupt)."""
-        try:
-            self._previous = signal.signal(signal.SIGINT, self._handle)
-        except ValueError:  # not the main thread
-            self._previous = None
+        """Take over SIGINT and SIGTERM (main thread only; elsewhere they keep their
+        handlers)."""
+        for signum in self.SIGNALS:
+            try:
+                self._previous[signum] = signal.signal(signum, self._handle)
+            except ValueError:  # not the main thread
+                return
 
     def uninstall(self) -> None:
-        """Give SIGINT back to whoever had it."""
-        if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
-            self._previous = None
+        """Give the signals back to whoever had them."""
+        for signum, previous in self._previous.items():
+            if previous is not None:  # None: a handler not set from Python, cannot restore
+                signal.signal(signum, previous)
+        self._previous = {}
 
     def _handle(self, signum: int, frame: FrameType | None) -> None:
         if self.requested:
             raise KeyboardInterrupt
-        self.requested = True
-        print("\nstopping at the next step (Ctrl-C again to stop now)", file=sys.stderr)
+        self.requested, self.signum = True, signum
+        if signum == signal.SIGINT:
+            note = "stopping at the next step (Ctrl-C again to stop now)"
+        else:
+            name = signal.Signals(signum).name
+            note = (
+                f"{name} received: stopping at the next step ({name} or Ctrl-C again to stop now)"
+            )
+        print(f"\n{note}", file=sys.stderr, flush=True)
 
     def _on_step(self) -> bool:
         # A stop asked for during the last step lets the run finish (its final update).

@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from palaestra.cli import run_folder
 from palaestra.cli import settings as settings_mod
 from palaestra.cli.common import (
     CONFIG_FILE,
@@ -29,7 +30,6 @@ from palaestra.cli.common import (
     STATUS_FILE,
     CLIError,
     eprint,
-    read_json,
     write_json,
 )
 
@@ -47,8 +47,9 @@ def add_parser(sub: Any) -> None:
         description="Train an agent. Settings come from the preset (the 'default' preset when "
         "one exists for ALGO and ENV, else the algorithm's defaults), overridden by --config, "
         "then by --set, then by --n-envs/--timesteps/--seed. Atari ids (ALE/Breakout-v5) train "
-        "on SB3's Atari recipe: AtariWrapper envs, 4 stacked frames, CnnPolicy. Ctrl-C saves a "
-        "checkpoint that --resume continues.",
+        "on SB3's Atari recipe: AtariWrapper envs, 4 stacked frames, CnnPolicy. Ctrl-C or SIGTERM "
+        "stops at the next step and saves a checkpoint that --resume continues (exit code 130, "
+        "143 for SIGTERM); a second signal stops at once.",
     )
     p.add_argument(
         "algo", nargs="?", metavar="ALGO", help="dqn or ppo (any case); not needed with --resume"
@@ -85,6 +86,7 @@ def add_parser(sub: Any) -> None:
         help="continue the run in DIR (after Ctrl-C, or to a larger --timesteps) with its "
         "saved settings, model and replay buffer",
     )
+    run_folder.add_allow_import(p, "--resume")
     p.add_argument(
         "--device", default="auto", metavar="DEV", help="torch device: auto (default), cpu, cuda"
     )
@@ -161,7 +163,11 @@ def _resumed_config(args: argparse.Namespace, run_dir: Path) -> dict[str, Any]:
             f"{', '.join(given)} cannot change them",
             "drop them, or start a new run",
         )
-    config = read_json(run_dir / CONFIG_FILE, "run config")
+    # Checked, and refused if it names a module the command line did not allow, before
+    # check_settings below imports its env_wrapper.
+    config = run_folder.read_run_config(
+        run_dir / CONFIG_FILE, args.allow_import, run_folder.RESUME_KEYS
+    )
     for key, value in (("algo", args.algo), ("env_id", args.env)):
         if value is not None and str(value).lower() != str(config.get(key)).lower():
             raise CLIError(
@@ -201,15 +207,16 @@ def _make_env(config: dict[str, Any], seed: int | None, saved: Path | None = Non
     return VecNormalize(venv, **kwargs)
 
 
-def _resume(config: dict[str, Any], run_dir: Path) -> tuple[Any, bool]:
+def _resume(config: dict[str, Any], run_dir: Path) -> tuple[Any, str | None]:
     """The model and env of the newest complete checkpoint (or, for run folders written before
-    checkpoints held the env, the run folder's own files); whether the resume is exact."""
+    checkpoints held the env, the run folder's own files); None when the resume is exact, else
+    why it starts new episodes."""
     from palaestra.algos.model_io import ModelFileError
     from palaestra.cli.checkpoint import latest_checkpoint, load_env_state
 
     folder = latest_checkpoint(run_dir) or run_dir
     venv = _make_env(config, config["seed"], folder)
-    exact = load_env_state(folder, venv)
+    inexact = load_env_state(folder, venv)
     cls = settings_mod.algo_class(config["algo"])
     try:
         model = cls.load(folder / MODEL_FILE, env=venv, device=config["device"])
@@ -220,9 +227,9 @@ def _resume(config: dict[str, Any], run_dir: Path) -> tuple[Any, bool]:
     except (ModelFileError, ValueError) as exc:
         raise CLIError(f"cannot resume {run_dir}: {exc}", "start a new run") from None
     seed = config["seed"]
-    if not exact and seed is not None:
+    if inexact and seed is not None:
         venv.seed(seed + model.num_timesteps)  # new episodes, not a replay of the first ones
-    return model, exact
+    return model, inexact
 
 
 def _make_model(config: dict[str, Any], venv: Any) -> Any:
@@ -284,8 +291,14 @@ def run(args: argparse.Namespace) -> int:
     if resume:
         run_dir = Path(args.resume)
         config = _resumed_config(args, run_dir)
-        status = read_json(run_dir / STATUS_FILE, "run status")
+        status = run_folder.read_status(run_dir / STATUS_FILE)  # before any env or model
     else:
+        if args.allow_import:
+            raise CLIError(
+                "--allow-import applies to --resume (a new run imports what its --config "
+                "and --set name)",
+                "drop --allow-import",
+            )
         config, notes = _new_run_config(args)
         run_dir = Path(args.out) if args.out else _default_out(config["algo"], config["env_id"])
         if (run_dir / CONFIG_FILE).exists():
@@ -306,14 +319,14 @@ def run(args: argparse.Namespace) -> int:
     torch.set_num_threads(1)  # the small nets here are fastest on one thread
     total = config["n_timesteps"]
     if resume:
-        model, exact = _resume(config, run_dir)
+        model, inexact = _resume(config, run_dir)
         if model.num_timesteps >= total:
             raise CLIError(
                 f"{run_dir} already trained {model.num_timesteps:,} of its {total:,} steps",
                 f"pass --timesteps larger than {model.num_timesteps} to train further",
             )
-        if not exact:
-            notes.append("the run's envs cannot save their state: the resume starts new episodes")
+        if inexact:
+            notes.append(f"{inexact}: the resume starts new episodes (not an exact resume)")
         if total > int(status.get("total_timesteps", total)):
             notes.append(
                 f"extending the run from {status['total_timesteps']:,} to {total:,} steps: the "
@@ -343,7 +356,13 @@ def _train(
     """Train to ``total`` steps, ending ``learn`` at each checkpoint to write it between two
     consistent steps and continuing (exactly: see :mod:`palaestra.cli.checkpoint`)."""
     from palaestra.algos.callbacks import CallbackList
-    from palaestra.cli.checkpoint import CheckpointDue, publish, write_checkpoint
+    from palaestra.cli.checkpoint import (
+        CheckpointDue,
+        checkpoint_steps,
+        latest_checkpoint,
+        publish,
+        write_checkpoint,
+    )
     from palaestra.cli.progress import EpisodeLog, GracefulStop, LiveProgress
     from palaestra.cli.run_files import print_summary, write_status
 
@@ -368,7 +387,7 @@ def _train(
         f"-> {run_dir}"
     )
     wall_before = float(status.get("wall_time_s", 0.0))
-    saved = status.get("checkpoint")
+    saved = latest_checkpoint(run_dir)  # what a stop at once leaves to resume from
     at_once = stopped = False
     stop.install()
     start = time.perf_counter()
@@ -385,10 +404,11 @@ def _train(
             if model.num_timesteps >= total or not due.reached(model.num_timesteps):
                 stopped = model.num_timesteps < total  # Ctrl-C, SIGTERM or a callback
                 break
-            folder, _ = write_checkpoint(model, run_dir, config["algo"])
-            saved = str(folder.relative_to(run_dir))
+            saved, _ = write_checkpoint(model, run_dir, config["algo"])
             wall = wall_before + time.perf_counter() - start
-            write_status(run_dir, "running", model.num_timesteps, total, wall, saved)
+            write_status(
+                run_dir, "running", model.num_timesteps, total, wall, _relative(saved, run_dir)
+            )
     except KeyboardInterrupt:  # a second Ctrl-C: the model may be mid-update, so not saved
         at_once = True
     finally:
@@ -400,25 +420,29 @@ def _train(
         model.logger.close()
     wall = wall_before + seconds
     if at_once:
-        steps = int(saved.rsplit("_", 1)[1]) if saved else 0
-        write_status(run_dir, "interrupted", steps, total, wall, saved)
+        steps = checkpoint_steps(saved) if saved else 0
+        write_status(run_dir, "interrupted", steps, total, wall, _relative(saved, run_dir))
         where = f"the checkpoint at {steps:,} steps" if saved else "nothing (no checkpoint yet)"
         eprint(
             f"palaestra: stopped at once at {model.num_timesteps:,}/{total:,} steps; "
             f"--resume continues from {where} (palaestra train --resume {run_dir})"
         )
-        return 130
+        return stop.exit_code
     folder, _ = write_checkpoint(model, run_dir, config["algo"])
     publish(folder, run_dir)
     state = "interrupted" if stopped else "finished"
-    write_status(run_dir, state, model.num_timesteps, total, wall, str(folder.relative_to(run_dir)))
+    write_status(run_dir, state, model.num_timesteps, total, wall, _relative(folder, run_dir))
     if stopped:
         eprint(
             f"palaestra: interrupted at {model.num_timesteps:,}/{total:,} steps; checkpoint "
             f"saved in {run_dir} (resume with: palaestra train --resume {run_dir})"
         )
-        return 130
+        return stop.exit_code  # 130 after Ctrl-C, 143 after SIGTERM
     print_summary(
         args.eval_episodes, config, model, run_dir, model.num_timesteps - start_steps, seconds
     )
     return 0
+
+
+def _relative(folder: Path | None, run_dir: Path) -> str | None:
+    return None if folder is None else folder.relative_to(run_dir).as_posix()

@@ -1,0 +1,284 @@
+"""A run folder read back by ``eval``, ``record`` and ``train --resume``: data, never code.
+
+Users share run folders, so their files are checked like any input. Following what
+``config.json`` names can run code: an ``env_wrapper`` (``"shaping:BetterRewardShaping"``)
+imports its module, and an ``env_id`` of the form ``module:Name-v0`` imports ``module``
+(Gymnasium's convention). A run folder names such a module; only the command line may allow it:
+``--allow-import MODULE`` (repeatable). Without it the command stops with one line saying what
+was refused and how to allow it, before anything is imported; with it, a note says what will
+be imported. Settings given on the command line for a new run (``train --config``/``--set``,
+``compare`` settings files) are the user's own request and need no flag.
+
+The values are checked too before they reach a constructor: the keys ``train`` writes and
+their types, the sizes that allocate (``n_envs``, ``frame_stack``, the Atari screen) within
+limits, and ``hyperparams`` through :func:`palaestra.algos.hyperparams.check_run_hyperparams`.
+``status.json`` is checked when a resume starts, before any env or model is built.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import reprlib
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from palaestra import presets
+from palaestra.cli import settings
+from palaestra.cli.common import CONFIG_FILE, CLIError, eprint, read_json
+from palaestra.cli.pipeline import wrapper_module
+
+__all__ = [
+    "CONFIG_KEYS",
+    "RESUME_KEYS",
+    "add_allow_import",
+    "check_imports",
+    "check_run_config",
+    "find_run_config",
+    "modules_named",
+    "read_run_config",
+    "read_status",
+]
+
+# The keys ``train`` writes to config.json, and what ``--resume`` needs among them.
+CONFIG_KEYS = frozenset(
+    {*presets.SETTINGS_KEYS, "seed", "algo", "env_id", "preset", "device", "palaestra_version"}
+    | {"measured"}  # a preset's results, accepted by --config and dropped
+)
+RESUME_KEYS = ("algo", "env_id", "policy", "n_envs", "n_timesteps", "hyperparams")
+MAX_N_ENVS = 4096
+MAX_FRAME_STACK = 256
+MAX_STEPS = 10**15
+_DEVICE = re.compile(r"auto|cpu|mps|cuda(:\d{1,3})?")
+_NORMALIZE_KEYS = {
+    "training": bool,
+    "norm_obs": bool,
+    "norm_reward": bool,
+    "clip_obs": float,
+    "clip_reward": float,
+    "gamma": float,
+    "epsilon": float,
+}
+# AtariWrapper's arguments: (type, lowest, highest); the screen is allocated per env and frame.
+_ATARI_LIMITS: dict[str, tuple[type, float, float]] = {
+    "noop_max": (int, 0, 10_000),
+    "frame_skip": (int, 1, 1_000),
+    "screen_size": (int, 1, 1_024),
+    "terminal_on_life_loss": (bool, 0, 1),
+    "clip_reward": (bool, 0, 1),
+    "action_repeat_probability": (float, 0.0, 1.0),
+}
+
+
+def add_allow_import(parser: Any, what: str) -> None:
+    """The ``--allow-import MODULE`` option of a command that reads a run folder."""
+    parser.add_argument(
+        "--allow-import",
+        action="append",
+        default=[],
+        metavar="MODULE",
+        help=f"let {what} import MODULE when the run's config.json names it (env_wrapper "
+        "'MODULE:Class', env_id 'MODULE:Name-v0'); repeatable. Without it a run folder "
+        "runs no code.",
+    )
+
+
+# -- imports -----------------------------------------------------------------------------------
+def _env_id_module(env_id: str) -> str | None:
+    """The module ``palaestra.make(env_id)`` would import first (``resolve_id``'s rule), or
+    None. ``gymnasium:<id>`` uses the installed Gymnasium, whose own ``module:`` prefix counts."""
+    module, sep, _ = env_id.removeprefix("gymnasium:").rpartition(":")
+    return module if sep else None
+
+
+def modules_named(config: dict[str, Any]) -> list[tuple[str, str, str]]:
+    """``(setting, value, module)`` for each module following ``config`` would import."""
+    out: list[tuple[str, str, str]] = []
+    env_id = config.get("env_id")
+    if isinstance(env_id, str) and (module := _env_id_module(env_id)):
+        out.append(("env_id", env_id, module))
+    wrappers = config.get("env_wrapper") or []
+    for path in wrappers if isinstance(wrappers, list) else [wrappers]:
+        out.append(("env_wrapper", path, wrapper_module(path)[0]))
+    return out
+
+
+def check_imports(config: dict[str, Any], source: str, allowed: Sequence[str]) -> None:
+    """``CLIError`` for the first module ``config`` names that ``allowed`` does not hold (the
+    fix lists every flag needed); a note on stderr for each module that will be imported."""
+    named = modules_named(config)
+    refused = [(s, v, m) for s, v, m in named if m not in allowed]
+    if refused:
+        setting, value, module = refused[0]
+        flags = " ".join(f"--allow-import {m}" for m in dict.fromkeys(m for _, _, m in refused))
+        raise CLIError(
+            f"{source} names {setting} {value!r}, which would import module {module!r}; "
+            "palaestra runs no code named by a run folder",
+            f"pass {flags} to allow it",
+        )
+    for setting, value, module in named:
+        eprint(f"note: importing module {module!r} for {setting} {value!r} of {source} (allowed)")
+    unused = sorted(set(allowed) - {m for _, _, m in named})
+    if unused:
+        eprint(f"note: --allow-import {', '.join(unused)}: {source} names no such module")
+
+
+# -- values ------------------------------------------------------------------------------------
+def _fail(source: str, key: str, value: Any, expected: str) -> CLIError:
+    return CLIError(
+        f"{source}: {key} must be {expected}, got {reprlib.repr(value)}",
+        "fix the file, or start a new run",
+    )
+
+
+def _integer(source: str, key: str, value: Any, low: int, high: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise _fail(source, key, value, f"an integer from {low} to {high}")
+
+
+def _check_atari(source: str, atari: Any) -> None:
+    if atari is None or isinstance(atari, bool):
+        return
+    if not isinstance(atari, dict):
+        raise _fail(source, "atari", atari, "true/false or AtariWrapper kwargs")
+    for key, value in atari.items():
+        if key not in _ATARI_LIMITS:
+            raise _fail(source, "atari", key, f"a mapping with keys among {sorted(_ATARI_LIMITS)}")
+        kind, low, high = _ATARI_LIMITS[key]
+        ok = isinstance(value, bool) if kind is bool else not isinstance(value, bool)
+        ok = ok and isinstance(value, (int, float) if kind is float else kind)
+        if not ok or not low <= value <= high:
+            raise _fail(source, f"atari.{key}", value, f"a {kind.__name__} from {low} to {high}")
+
+
+def _check_normalize(source: str, normalize: Any) -> None:
+    if normalize is None or isinstance(normalize, bool):
+        return
+    if not isinstance(normalize, dict):
+        raise _fail(source, "normalize", normalize, "true/false or VecNormalize kwargs")
+    for key, value in normalize.items():
+        kind = _NORMALIZE_KEYS.get(key)
+        if kind is None:
+            raise _fail(
+                source, "normalize", key, f"a mapping with keys among {sorted(_NORMALIZE_KEYS)}"
+            )
+        ok = isinstance(value, bool) if kind is bool else not isinstance(value, bool)
+        if kind is float:
+            ok = ok and isinstance(value, (int, float)) and math.isfinite(value) and value >= 0
+        if not ok:
+            raise _fail(source, f"normalize.{key}", value, f"a {kind.__name__}")
+
+
+def _check_keys(config: dict[str, Any], source: str, required: Sequence[str]) -> None:
+    unknown = sorted(str(k) for k in config if k not in CONFIG_KEYS)
+    if unknown:
+        raise CLIError(
+            f"{source} holds unknown key(s) {unknown}",
+            f"a run's config.json holds only {', '.join(sorted(CONFIG_KEYS))}",
+        )
+    missing = [k for k in required if k not in config]
+    if missing:
+        raise CLIError(f"{source} lacks {', '.join(missing)}", "fix the file, or start a new run")
+
+
+def _check_names(config: dict[str, Any], source: str) -> None:
+    for key in ("algo", "env_id", "policy", "preset", "palaestra_version", "device"):
+        if key not in config or (key == "preset" and config[key] is None):  # null: no preset
+            continue
+        value = config[key]
+        if not isinstance(value, str) or not 0 < len(value) <= 200:
+            raise _fail(source, key, value, "a name")
+    if "algo" in config and config["algo"].lower() not in settings.ALGOS:
+        raise _fail(source, "algo", config["algo"], f"one of {', '.join(settings.ALGOS)}")
+    if "device" in config and not _DEVICE.fullmatch(config["device"]):
+        raise _fail(source, "device", config["device"], "auto, cpu, mps or cuda[:N]")
+    if config.get("seed") is not None:
+        _integer(source, "seed", config["seed"], 0, 2**64 - 1)
+
+
+def _check_pipeline(config: dict[str, Any], source: str) -> None:
+    """The env settings: sizes within limits, the shapes ``pipeline`` expects."""
+    for key, high in (("n_envs", MAX_N_ENVS), ("n_timesteps", MAX_STEPS)):
+        if key in config:
+            _integer(source, key, config[key], 1, high)
+    if config.get("frame_stack") is not None:
+        _integer(source, "frame_stack", config["frame_stack"], 1, MAX_FRAME_STACK)
+    env_kwargs = config.get("env_kwargs")
+    if env_kwargs is not None and not (
+        isinstance(env_kwargs, dict) and all(isinstance(k, str) for k in env_kwargs)
+    ):
+        raise _fail(source, "env_kwargs", env_kwargs, "a mapping of keyword arguments")
+    wrappers = config.get("env_wrapper")
+    listed = wrappers if isinstance(wrappers, list) else [wrappers]
+    if wrappers is not None and not (len(listed) <= 16 and all(isinstance(w, str) for w in listed)):
+        raise _fail(source, "env_wrapper", wrappers, "'module:Class' or a list of them")
+    _check_atari(source, config.get("atari"))
+    _check_normalize(source, config.get("normalize"))
+
+
+def check_run_config(
+    config: dict[str, Any], source: str, required: Sequence[str] = ("env_id",)
+) -> None:
+    """``CLIError`` unless ``config`` holds only the keys ``train`` writes, ``required`` among
+    them, with usable types and values within limits. Imports no user module."""
+    _check_keys(config, source, required)
+    _check_names(config, source)
+    _check_pipeline(config, source)
+    if "hyperparams" in config:
+        from palaestra.algos.hyperparams import check_run_hyperparams
+
+        algo = settings.check_algo(str(config.get("algo")))
+        names = set(settings.hyperparameter_names(algo))
+        try:
+            check_run_hyperparams(algo, config["hyperparams"], names, source)
+        except ValueError as exc:
+            raise CLIError(str(exc), "fix the file, or start a new run") from None
+
+
+def read_run_config(
+    path: Path,
+    allowed: Sequence[str],
+    required: Sequence[str] = ("env_id",),
+    env_id: str | None = None,
+) -> dict[str, Any]:
+    """``config.json`` at ``path``, checked (:func:`check_run_config`) and with every module it
+    names allowed by ``allowed`` (:func:`check_imports`). ``env_id`` (``--env``) replaces the
+    run's id, whose module is then not imported."""
+    config = read_json(path, "run config")
+    check_run_config(config, str(path), required)
+    check_imports(config if env_id is None else {**config, "env_id": env_id}, str(path), allowed)
+    return config
+
+
+def find_run_config(
+    model_path: Path, allowed: Sequence[str], env_id: str | None = None
+) -> dict[str, Any] | None:
+    """The checked ``config.json`` of the run a model file belongs to (its folder, or the
+    folder above for ``checkpoints/``), or None (``common.find_run_config``'s search)."""
+    for folder in (model_path.parent, model_path.parent.parent):
+        candidate = folder / CONFIG_FILE
+        if candidate.is_file():
+            return read_run_config(candidate, allowed, env_id=env_id)
+    if allowed:
+        eprint(f"note: --allow-import {', '.join(allowed)}: no config.json beside {model_path}")
+    return None
+
+
+def read_status(path: Path) -> dict[str, Any]:
+    """``status.json`` at ``path``: ``CLIError`` unless it is a mapping whose step counts are
+    integers >= 0 (the total >= 1), whose wall time is a finite number >= 0 and whose state is
+    a name. Keys it does not know are left alone."""
+    status = read_json(path, "run status")
+    source = str(path)
+    for key in ("status", "num_timesteps", "total_timesteps", "wall_time_s"):
+        if key not in status:
+            raise CLIError(f"{source} lacks {key}", "fix the file, or start a new run")
+    if not isinstance(status["status"], str):
+        raise _fail(source, "status", status["status"], "a name")
+    _integer(source, "num_timesteps", status["num_timesteps"], 0, MAX_STEPS)
+    _integer(source, "total_timesteps", status["total_timesteps"], 1, MAX_STEPS)
+    wall = status["wall_time_s"]
+    if isinstance(wall, bool) or not isinstance(wall, (int, float)) or not 0 <= wall < math.inf:
+        raise _fail(source, "wall_time_s", wall, "a number of seconds >= 0")
+    return status
