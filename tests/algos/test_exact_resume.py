@@ -109,3 +109,46 @@ def test_checkpoint_saved_inside_learn_keeps_no_observations(tmp_path: Path) -> 
     model.learn(64, callback=CheckpointCallback(8, str(tmp_path)))
     loaded = PPO.load(tmp_path / "rl_model_16_steps.zip", env=venv)
     assert loaded._last_obs is None and loaded.rollout_buffer.pos == 0
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "message"),
+    [
+        ("num_timesteps", "many", "counter num_timesteps='many' is not a non-negative integer"),
+        ("num_timesteps", -5, "counter num_timesteps=-5 is not a non-negative integer"),
+        ("_progress_remaining", 3.0, r"counter _progress_remaining=3.0 is not in \[0, 1\]"),
+        ("_n_updates", True, "counter _n_updates=True is not a non-negative integer"),
+    ],
+)
+def test_bad_counters_in_a_model_file(
+    name: str, value: object, message: str, tmp_path: Path
+) -> None:
+    from palaestra.algos import ModelFileError
+    from palaestra.algos.model_io import read_archive, write_archive
+
+    PPO("MlpPolicy", "CartPole-v1", n_steps=16, batch_size=16).save(tmp_path / "m.zip")
+    meta, arrays = read_archive(tmp_path / "m.zip", "model")
+    meta["counters"][name] = value
+    write_archive(tmp_path / "m.zip", "model", meta, arrays)
+    with pytest.raises(ModelFileError, match=message):
+        PPO.load(tmp_path / "m.zip")
+
+
+def test_malformed_run_state_in_a_model_file(tmp_path: Path) -> None:
+    from palaestra.algos import ModelFileError
+    from palaestra.algos.model_io import read_archive, write_archive
+
+    venv = make_vec_env("CartPole-v1", n_envs=2, seed=0)
+    model = PPO("MlpPolicy", venv, n_steps=16, batch_size=32, seed=0)
+    model.learn(100, callback=StopAt(10))
+    model.save(tmp_path / "m.zip")
+    meta, arrays = read_archive(tmp_path / "m.zip", "model")
+    meta["run"]["loop"]["pos"] = 99
+    write_archive(tmp_path / "m.zip", "model", meta, arrays)
+    with pytest.raises(ModelFileError, match=r"malformed run state.*rollout position 99"):
+        PPO.load(tmp_path / "m.zip", env=venv)
+    meta["run"]["loop"]["pos"] = 5
+    arrays["run/torch_rng"] = arrays["run/torch_rng"][:7]
+    write_archive(tmp_path / "m.zip", "model", meta, arrays)
+    with pytest.raises(ModelFileError, match="malformed run state"):
+        PPO.load(tmp_path / "m.zip", env=venv)

@@ -198,13 +198,29 @@ def load_model(
     optimizer_from_arrays(model.optimizer, meta["optimizer"], arrays, "optimizer")
     for name, value in counters.items():
         if name in (*COUNTERS, *model._extra_counters):
-            setattr(model, name, value)
+            setattr(model, name, _counter(name, value, str(path)))
     try:
         model._rng.bit_generator.state = meta["rng"]
     except (TypeError, ValueError, KeyError) as exc:
         raise ModelFileError(f"{path}: malformed generator state") from exc
     _load_run_state(model, meta.get("run"), arrays, str(path))
     return model
+
+
+# Counters that are fractions (schedules' progress, epsilon); the others count steps.
+_FRACTIONS = ("_progress_remaining", "exploration_rate")
+
+
+def _counter(name: str, value: Any, source: str) -> int | float:
+    """A counter read from a file: a non-negative int, or a fraction in [0, 1]."""
+    if name in _FRACTIONS:
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool) and 0 <= value <= 1
+        if ok:
+            return float(value)
+        raise ModelFileError(f"{source}: counter {name}={value!r:.40} is not in [0, 1]")
+    if isinstance(value, int) and not isinstance(value, bool) and 0 <= value < 2**62:
+        return value
+    raise ModelFileError(f"{source}: counter {name}={value!r:.40} is not a non-negative integer")
 
 
 def _check_spaces(model: Any, venv: Any) -> None:
