@@ -2,18 +2,23 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 import torch
 
 from palaestra.algos.model_io import (
+    ArraySpec,
+    Expect,
     ModelFileError,
     decode_classes,
     encode_classes,
     optimizer_from_arrays,
     optimizer_to_arrays,
     read_archive,
+    read_arrays,
+    read_manifest,
     write_archive,
 )
 from palaestra.algos.schedules import schedule_from_json, schedule_to_json
@@ -55,7 +60,10 @@ def save_model(model: Any, path: Any) -> None:
 def load_model(
     cls: Any, path: Any, env: Any, device: Any, custom: dict[str, Any], kwargs: dict[str, Any]
 ) -> Any:
-    meta, arrays = read_archive(path, "model")
+    # The arrays are read only once the model is built from the metadata, so that a file
+    # declaring parameters this model does not have is refused before they are allocated.
+    manifest = read_manifest(path, "model")
+    meta = manifest.meta
     algo = meta.get("algo")
     if algo != cls.__name__:
         raise ModelFileError(f"{path} holds a {algo} model; load it with {algo}.load()")
@@ -89,6 +97,7 @@ def load_model(
         _check_spaces(model, venv)
         model.env, model.n_envs = venv, venv.num_envs
     model._setup_model()
+    arrays = read_arrays(manifest, expect=_fits(model, exact_match=True, source=str(path)))
     _load_policy(model, arrays, exact_match=True, source=str(path))
     optimizer_from_arrays(model.optimizer, meta["optimizer"], arrays, "optimizer")
     for name, value in counters.items():
@@ -109,6 +118,42 @@ def _check_spaces(model: Any, venv: Any) -> None:
         )
     if venv.action_space != model.action_space:
         raise ValueError(f"Action spaces do not match: {venv.action_space} != {model.action_space}")
+
+
+def _fits(model: Any, exact_match: bool, source: str) -> Expect:
+    """An ``expect`` hook for ``read_arrays``: the file's ``policy/`` and ``optimizer/`` arrays
+    must have this model's shapes (and, with ``exact_match``, its parameter names), checked
+    before any of them is read. Other arrays are left to their own readers' checks."""
+    params = {f"policy/{k}": tuple(v.shape) for k, v in model.policy.state_dict().items()}
+    shapes = [tuple(p.shape) for g in model.optimizer.param_groups for p in g["params"]]
+
+    def expect(meta: dict[str, Any], declared: dict[str, ArraySpec]) -> None:
+        for name, spec in declared.items():
+            if name.startswith("policy/"):
+                want = params.get(name)
+                if want is None and exact_match:
+                    raise ModelFileError(
+                        f"{source}: parameters do not fit this model (unexpected parameter "
+                        f"{name[len('policy/') :][:80]!r})"
+                    )
+                if want is not None and spec.shape != want:
+                    raise ModelFileError(
+                        f"{source}: parameter {name[len('policy/') :]!r} has shape "
+                        f"{spec.shape}, this model expects {want}"
+                    )
+            elif name.startswith("optimizer/"):
+                index = name[len("optimizer/") :].partition("/")[0]
+                known = index.isascii() and index.isdigit() and int(index) < len(shapes)
+                want = shapes[int(index)] if known else None
+                # Per-parameter optimizer state is shaped like its parameter (Adam's moments)
+                # or is one number (its step count: shape () or, from the numpy trainer, (1,)).
+                if want is None or (spec.shape != want and math.prod(spec.shape) > 1):
+                    raise ModelFileError(
+                        f"{source}: optimizer state {name[:80]!r} {spec.shape} does not fit "
+                        "this model's parameters"
+                    )
+
+    return expect
 
 
 def _load_policy(model: Any, arrays: dict[str, np.ndarray], exact_match: bool, source: str) -> None:
@@ -141,7 +186,7 @@ def set_parameters(model: Any, source: Any, exact_match: bool) -> None:
         if "policy.optimizer" in source:
             model.optimizer.load_state_dict(source["policy.optimizer"])
         return
-    meta, arrays = read_archive(source, "model")
+    meta, arrays = read_archive(source, "model", expect=_fits(model, exact_match, str(source)))
     _load_policy(model, arrays, exact_match, str(source))
     if "optimizer" in meta:
         optimizer_from_arrays(model.optimizer, meta["optimizer"], arrays, "optimizer")
