@@ -18,6 +18,7 @@ duplicate member names are refused. No module here imports torch.
 
 from __future__ import annotations
 
+import itertools
 import math
 import zipfile
 from collections.abc import Collection
@@ -34,6 +35,7 @@ __all__ = [
     "read_member",
     "read_npy",
     "short",
+    "summary",
 ]
 
 MAX_BYTES = 16 << 30  # default cap on the uncompressed array bytes of one file
@@ -53,6 +55,41 @@ def short(value: object, limit: int = 120) -> str:
     """``str(value)`` cut to ``limit`` characters, for messages about untrusted text."""
     text = str(value)
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def summary(value: object, depth: int = 2, items: int = 4) -> str:
+    """A short description of an untrusted, possibly huge or self-sharing structure (a parsed
+    pickle can nest one list 2**60 times through its memo): at most ``items`` entries per
+    container and ``depth`` levels, so it costs O(items**depth) however large ``value`` is.
+
+    >>> summary({"w": [1, 2, 3, 4, 5, 6], "k": (2**200,)})
+    "{'w': [1, 2, 3, 4, ... 6 in all], 'k': (<int of 201 bits>,)}"
+    """
+    if isinstance(value, (list, tuple, dict)):
+        if depth <= 0:
+            return f"<{type(value).__name__} of {len(value)}>"
+        if isinstance(value, dict):
+            pairs = itertools.islice(value.items(), items)
+            parts = [f"{summary(k, 0)}: {summary(v, depth - 1, items)}" for k, v in pairs]
+        else:
+            parts = [summary(v, depth - 1, items) for v in itertools.islice(value, items)]
+        if len(value) > items:
+            parts.append(f"... {len(value)} in all")
+        text = ", ".join(parts)
+        if isinstance(value, dict):
+            return "{" + text + "}"
+        if isinstance(value, list):
+            return "[" + text + "]"
+        return "(" + text + ("," if len(value) == 1 else "") + ")"
+    if isinstance(value, (bool, float)) or value is None:
+        return repr(value)
+    if isinstance(value, int):  # repr of a huge int is slow, and refused past 4300 digits
+        return repr(value) if value.bit_length() <= 64 else f"<int of {value.bit_length()} bits>"
+    if isinstance(value, (str, bytes)):
+        return repr(value[:40]) + ("..." if len(value) > 40 else "")
+    if isinstance(value, np.ndarray):
+        return f"<array {value.dtype} {value.shape}>"
+    return f"<{type(value).__name__}>"
 
 
 def check_members(zf: zipfile.ZipFile, name: str) -> dict[str, zipfile.ZipInfo]:
