@@ -1,4 +1,4 @@
-"""Files written whole or not at all: a temporary file in the same folder, moved into place.
+"""Files that survive a crash: written whole or not at all, or appended a line at a time.
 
 A crash, ``kill -9`` or power cut while palaestra saves must leave the previous file (a model,
 a checkpoint, ``status.json``) intact, never a truncated one. So every file is first written to
@@ -9,6 +9,11 @@ with ``os.replace`` (atomic on POSIX and Windows when both are in one folder), a
 Temporary names are ``.<name>.<random>.tmp``: hidden, and ending in ``.tmp``, so no palaestra
 loader or glob (``model.zip``, ``*monitor.csv`` ...) ever reads one. A process killed with
 ``kill -9`` cannot remove its temporary file; such leftovers are harmless and may be deleted.
+
+Logs that grow a row at a time (``episodes.csv``, ``progress.csv``, ``monitor.csv``) cannot be
+replaced on every row. They are created with their header atomically (``open_append``), each
+row is one ``write`` of a whole line, so a crash leaves at worst a torn last line without its
+``\n``: readers drop it (``complete_text``) and a resumed writer cuts it before appending.
 
 >>> import tempfile, pathlib
 >>> folder = pathlib.Path(tempfile.mkdtemp())
@@ -25,9 +30,16 @@ import os
 import secrets
 from collections.abc import Iterator
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, TextIO
 
-__all__ = ["atomic_path", "atomic_write", "fsync_directory"]
+__all__ = [
+    "atomic_path",
+    "atomic_write",
+    "complete_text",
+    "cut_torn_line",
+    "fsync_directory",
+    "open_append",
+]
 
 TEMP_SUFFIX = ".tmp"
 
@@ -109,3 +121,44 @@ def _fsync_file(path: Path) -> None:
         os.fsync(fd)
     finally:
         os.close(fd)
+
+
+# -- append-only line logs --------------------------------------------------------------------
+def open_append(
+    path: str | os.PathLike[str], header: str, encoding: str = "utf-8", newline: str | None = ""
+) -> TextIO:
+    """Open a line log for appending. A missing or empty file is first created holding
+    ``header``, atomically; an existing one loses a torn last line (left by a crash mid-write),
+    so the next row starts on a line of its own."""
+    target = Path(path)
+    if target.exists():
+        cut_torn_line(target)
+    if not target.exists() or target.stat().st_size == 0:
+        with atomic_write(target, "w", encoding=encoding, newline=newline) as file:
+            file.write(header)
+    return open(target, "a", encoding=encoding, newline=newline)
+
+
+def cut_torn_line(path: str | os.PathLike[str]) -> None:
+    """Truncate ``path`` after its last ``\n``, dropping a partial last line if any."""
+    with open(path, "rb+") as file:
+        end = pos = file.seek(0, os.SEEK_END)
+        keep = 0
+        while pos > 0:
+            step = min(1 << 16, pos)
+            file.seek(pos - step)
+            newline = file.read(step).rfind(b"\n")
+            if newline >= 0:
+                keep = pos - step + newline + 1
+                break
+            pos -= step
+        if keep < end:
+            file.truncate(keep)
+
+
+def complete_text(path: str | os.PathLike[str], encoding: str = "utf-8") -> str:
+    """The text of a line log up to its last ``\n``: a torn last line is left out. Line ends
+    are kept as written (``\r\n`` from the csv module), for ``csv`` to read."""
+    with open(path, encoding=encoding, newline="") as file:
+        text = file.read()
+    return text[: text.rfind("\n") + 1]
