@@ -22,9 +22,8 @@ import numpy as np
 
 from palaestra import spaces
 from palaestra.algos.model_io import PathLike, resolve_path
-from palaestra.compat.torch_file import read_torch_state_dict
+from palaestra.compat.torch_file import MAX_STATE_DICT_BYTES, read_torch_state_dict
 from palaestra.utils.bounded_zip import (
-    MAX_BYTES,
     ModelFileError,
     check_members,
     read_member,
@@ -51,7 +50,7 @@ class SB3File:
     state_dict: dict[str, np.ndarray]
 
 
-def read_sb3_file(path: PathLike, *, max_bytes: int = MAX_BYTES) -> SB3File:
+def read_sb3_file(path: PathLike, *, max_bytes: int = MAX_STATE_DICT_BYTES) -> SB3File:
     """Open ``path`` (``"model"`` finds ``model.zip``, as SB3's ``load`` does) and read it;
     ``policy.pth`` may hold at most ``max_bytes`` (its zip and its tensors, each)."""
     source = resolve_path(path, for_write=False)

@@ -33,7 +33,6 @@ from typing import IO, Any
 import numpy as np
 
 from palaestra.utils.bounded_zip import (
-    MAX_BYTES,
     MAX_DIMS,
     ModelFileError,
     check_members,
@@ -42,7 +41,9 @@ from palaestra.utils.bounded_zip import (
     summary,
 )
 
-__all__ = ["TorchFileError", "UnsafeFileError", "read_torch_state_dict"]
+__all__ = ["MAX_STATE_DICT_BYTES", "TorchFileError", "UnsafeFileError", "read_torch_state_dict"]
+
+MAX_STATE_DICT_BYTES = 1 << 30  # default cap on a file's storages (an MlpPolicy's: a few MB)
 
 _MAX_PICKLE = 16 << 20  # a state_dict's data.pkl is ~150 bytes a tensor
 _MAX_OPS = 2_000_000  # opcodes, so objects: bounds the parsed structure's memory
@@ -93,7 +94,9 @@ _MARK = object()
 
 
 def read_torch_state_dict(
-    source: str | os.PathLike[str] | bytes | IO[bytes], *, max_bytes: int = MAX_BYTES
+    source: str | os.PathLike[str] | bytes | IO[bytes],
+    *,
+    max_bytes: int = MAX_STATE_DICT_BYTES,
 ) -> dict[str, np.ndarray]:
     """``{name: array}`` from a ``torch.save(module.state_dict())`` file, unpickling nothing.
 
