@@ -161,3 +161,53 @@ def forge_size(data: bytes, member: str, file_size: int) -> bytes:
             struct.pack_into("<I", out, central + 24, file_size)
         central = out.find(b"PK\x01\x02", central + 4)
     return bytes(out)
+
+
+def deflated_zeros(header: bytes, n_mib: int) -> tuple[bytes, int, int]:
+    """``(raw deflate stream, size, crc32)`` of ``header`` then ``n_mib`` MiB of zeros, built
+    from one compressed MiB repeated (full flushes make the blocks independent): a 512 MiB
+    member in ~520 KB, made in a fraction of a second."""
+    import zlib
+
+    first = zlib.compressobj(9, zlib.DEFLATED, -15)
+    head = first.compress(header) + first.flush(zlib.Z_FULL_FLUSH)
+    zeros = zlib.compressobj(9, zlib.DEFLATED, -15)
+    block = zeros.compress(bytes(1 << 20)) + zeros.flush(zlib.Z_FULL_FLUSH)
+    crc = zlib.crc32(header)
+    chunk = bytes(1 << 20)
+    for _ in range(n_mib):
+        crc = zlib.crc32(chunk, crc)
+    return head + block * n_mib + zeros.flush(), len(header) + (n_mib << 20), crc
+
+
+def with_deflated_member(data: bytes, member: str, stream: tuple[bytes, int, int]) -> bytes:
+    """``data`` (a zip) with ``member`` replaced by a ready-made deflate ``stream`` (from
+    ``deflated_zeros``): written stored, then its headers say deflated, its size and CRC."""
+    import struct
+
+    raw, size, crc = stream
+    with zipfile.ZipFile(io.BytesIO(data)) as zf:
+        members = {n: zf.read(n) for n in zf.namelist()}
+        methods = {i.filename: i.compress_type for i in zf.infolist()}
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as zf:
+        for name, content in members.items():
+            if name == member:
+                zf.writestr(name, raw, compress_type=zipfile.ZIP_STORED)
+            else:
+                zf.writestr(name, content, compress_type=methods[name])
+    out = bytearray(buf.getvalue())
+    with zipfile.ZipFile(io.BytesIO(bytes(out))) as zf:
+        offset = zf.getinfo(member).header_offset
+    struct.pack_into("<H", out, offset + 8, zipfile.ZIP_DEFLATED)
+    struct.pack_into("<I", out, offset + 14, crc)
+    struct.pack_into("<I", out, offset + 22, size)
+    central = out.find(b"PK\x01\x02")
+    while central >= 0:
+        name_len = struct.unpack_from("<H", out, central + 28)[0]
+        if out[central + 46 : central + 46 + name_len] == member.encode():
+            struct.pack_into("<H", out, central + 10, zipfile.ZIP_DEFLATED)
+            struct.pack_into("<I", out, central + 16, crc)
+            struct.pack_into("<I", out, central + 24, size)
+        central = out.find(b"PK\x01\x02", central + 4)
+    return bytes(out)
