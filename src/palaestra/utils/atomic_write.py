@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import secrets
 from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any, TextIO
@@ -106,7 +105,7 @@ def _create_temp(target: Path, suffix: str) -> Path:
     """
     flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
     for _ in range(100):
-        temp = target.with_name(f".{target.name}.{secrets.token_hex(4)}{suffix}")
+        temp = target.with_name(f".{target.name}.{os.urandom(4).hex()}{suffix}")
         try:
             os.close(os.open(temp, flags, 0o666))
         except FileExistsError:
