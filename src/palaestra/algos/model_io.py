@@ -140,7 +140,8 @@ def _write_zip(
             array = np.ascontiguousarray(array)
             member = f"arrays/{i:05d}.npy"
             # Streamed into the zip (no second copy of a large buffer in memory).
-            with zf.open(member, "w", force_zip64=array.nbytes > (1 << 31) - 4096) as out:
+            # zip64 well before 2 GiB: incompressible data deflates to slightly more bytes.
+            with zf.open(member, "w", force_zip64=array.nbytes > 1 << 30) as out:
                 np.save(out, array, allow_pickle=False)
             entries[name] = {"file": member, "dtype": array.dtype.str, "shape": list(array.shape)}
         manifest = {
