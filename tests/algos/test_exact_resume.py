@@ -152,3 +152,14 @@ def test_malformed_run_state_in_a_model_file(tmp_path: Path) -> None:
     write_archive(tmp_path / "m.zip", "model", meta, arrays)
     with pytest.raises(ModelFileError, match="malformed run state"):
         PPO.load(tmp_path / "m.zip", env=venv)
+
+
+def test_load_with_another_number_of_envs(tmp_path: Path) -> None:
+    venv = make_vec_env("CartPole-v1", n_envs=2, seed=0)
+    model = PPO("MlpPolicy", venv, n_steps=16, batch_size=32, seed=0)
+    model.learn(100, callback=StopAt(10))  # a partial rollout and the observations of 2 envs
+    model.save(tmp_path / "m.zip")
+    other = PPO.load(tmp_path / "m.zip", env=make_vec_env("CartPole-v1", n_envs=3, seed=1))
+    assert other._last_obs is None and other.rollout_buffer.pos == 0
+    other.learn(96, reset_num_timesteps=False)
+    assert other.num_timesteps >= 106

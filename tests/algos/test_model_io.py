@@ -5,16 +5,21 @@ import os
 import pickle
 import zipfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 import torch
+from tests.compat.crafted import forge_size, npy_header, palaestra_zip, zip_of
 
 from palaestra.algos.model_io import (
+    ArraySpec,
     ModelFileError,
     decode_classes,
     encode_classes,
     read_archive,
+    read_arrays,
+    read_manifest,
     write_archive,
 )
 
@@ -128,7 +133,7 @@ def test_oversized_member_rejected(tmp_path: Path) -> None:
             '{"format": "palaestra", "kind": "model", "version": 1, '
             '"meta": {}, "arrays": {"w": {"file": "arrays/0.npy", "dtype": "<f4", "shape": [2]}}}',
         )
-    with pytest.raises(ModelFileError, match="larger than"):
+    with pytest.raises(ModelFileError, match=r"'arrays/0.npy' holds 400128 bytes, its declared"):
         read_archive(bomb, "model")
 
 
@@ -147,3 +152,85 @@ def test_class_codec() -> None:
     with pytest.raises(ModelFileError, match="custom_objects"):
         decode_classes(enc, {})
     assert decode_classes(enc, {"Custom": Custom}) == {"activation_fn": Custom}
+
+
+# -- bounded reading: declared sizes are checked before anything is allocated -------------------
+GIB = 1 << 30
+
+
+def _bomb(tmp_path: Path, shape: list[int], kind: str = "model") -> Path:
+    """A deflated member of zeros as large as ``shape`` declares (1 GiB in ~1 MB)."""
+    nbytes = int(np.prod(shape)) * 4
+    raw = npy_header("<f4", tuple(shape)) + bytes(nbytes)
+    path = tmp_path / "bomb.zip"
+    path.write_bytes(palaestra_zip({"policy/w": ("<f4", shape, raw)}, kind))
+    return path
+
+
+def test_declared_arrays_pass_expect_before_any_is_read(tmp_path: Path) -> None:
+    path = _bomb(tmp_path, [1 << 20])  # 4 MiB of zeros in ~4 KB
+    seen: list[Any] = []
+
+    def expect(meta: dict[str, Any], declared: dict[str, ArraySpec]) -> None:
+        seen.append(declared)
+        raise ModelFileError("not this one")
+
+    with pytest.raises(ModelFileError, match="not this one"):
+        read_archive(path, "model", expect=expect)
+    assert seen == [{"policy/w": ArraySpec(np.dtype("<f4"), (1 << 20,))}]
+    manifest = read_manifest(path, "model")  # the two-step form: nothing read yet
+    assert manifest.declared["policy/w"].nbytes == 4 << 20
+    assert read_arrays(manifest)["policy/w"].shape == (1 << 20,)
+
+
+def test_total_size_is_capped(tmp_path: Path) -> None:
+    path = _bomb(tmp_path, [1 << 20], kind="replay_buffer")
+    with pytest.raises(ModelFileError, match=r"declare 4194304 bytes in all, more than the limit "
+                       r"max_bytes=1000000 \(pass a larger max_bytes"):  # fmt: skip
+        read_archive(path, "replay_buffer", max_bytes=1_000_000)
+    assert read_archive(path, "replay_buffer")[1]["policy/w"].shape == (1 << 20,)
+
+
+def test_a_declared_shape_the_member_cannot_hold(tmp_path: Path) -> None:
+    path = tmp_path / "huge.zip"
+    raw = npy_header("<f4", (GIB,)) + bytes(64)  # declares 4 GiB, holds 64 bytes
+    path.write_bytes(palaestra_zip({"w": ("<f4", [GIB], raw)}))
+    with pytest.raises(ModelFileError, match=r"member 'arrays/00000.npy' holds \d+ bytes, its "
+                       r"declared float32 \(1073741824,\) needs 4294967296"):  # fmt: skip
+        read_archive(path, "model")
+
+
+def test_zip_headers_that_lie_are_refused(tmp_path: Path) -> None:
+    # A member whose header claims more than deflate can expand its stored bytes into.
+    path = tmp_path / "forged.zip"
+    raw = npy_header("<f4", (4,)) + bytes(16)
+    data = palaestra_zip({"w": ("<f4", [GIB], raw)})
+    path.write_bytes(forge_size(data, "arrays/00000.npy", 4 * GIB - 1))
+    with pytest.raises(ModelFileError, match=r"'arrays/00000.npy' declares 4294967295 bytes, "
+                       r"more than its \d+ stored bytes can hold \(a zip bomb"):  # fmt: skip
+        read_archive(path, "model")
+    # A header that understates its member: the bounded read stops, the CRC check fails.
+    path.write_bytes(forge_size(palaestra_zip({"w": ("<f4", [4], raw)}), "arrays/00000.npy", 140))
+    with pytest.raises(ModelFileError, match=r"corrupt .*Bad CRC-32 for file 'arrays/00000.npy'"):
+        read_archive(path, "model")
+
+
+def test_compression_other_than_deflate_and_duplicates_are_refused(tmp_path: Path) -> None:
+    path = tmp_path / "bz.zip"
+    path.write_bytes(zip_of({"palaestra.json": b"{}"}, zipfile.ZIP_BZIP2))
+    with pytest.raises(ModelFileError, match="compression method 12; only stored and deflate"):
+        read_archive(path, "model")
+    with zipfile.ZipFile(path, "w") as zf, pytest.warns(UserWarning, match="Duplicate name"):
+        zf.writestr("palaestra.json", "{}")
+        zf.writestr("palaestra.json", "{}")
+    with pytest.raises(ModelFileError, match=r"member 'palaestra\.json' appears twice"):
+        read_archive(path, "model")
+
+
+def test_written_atomically_over_the_previous_file(tmp_path: Path) -> None:
+    path = _archive(tmp_path)
+    before = path.read_bytes()
+    with pytest.raises(TypeError, match="cannot store"):
+        write_archive(path, "model", {}, {"w": np.array(["text"])})
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.zip"]  # no temporary file left

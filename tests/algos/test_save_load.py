@@ -204,3 +204,50 @@ def test_policy_kwargs_roundtrip_and_custom_classes(tmp_path: Path) -> None:
     np.testing.assert_array_equal(
         model.predict(OBS, deterministic=True)[0], loaded.predict(OBS, deterministic=True)[0]
     )
+
+
+def _with_array(src: Path, dst: Path, name: str, shape: tuple[int, ...]) -> Path:
+    """``src`` with array ``name`` replaced by float32 zeros of ``shape`` (deflated: 16 MiB
+    take ~16 KB), its manifest entry declaring that shape."""
+    import json
+    import zipfile
+
+    from tests.compat.crafted import npy_header
+
+    with zipfile.ZipFile(src) as zf:
+        members = {n: zf.read(n) for n in zf.namelist()}
+    manifest = json.loads(members["palaestra.json"])
+    entry = manifest["arrays"][name]
+    entry["shape"] = list(shape)
+    members[entry["file"]] = npy_header("<f4", shape) + bytes(4 * int(np.prod(shape)))
+    members["palaestra.json"] = json.dumps(manifest).encode()
+    with zipfile.ZipFile(dst, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for n, raw in members.items():
+            zf.writestr(n, raw)
+    return dst
+
+
+@pytest.mark.parametrize(
+    ("name", "message"),
+    [
+        ("policy/pi_net.0.weight", r"parameter 'pi_net.0.weight' has shape \(4096, 1024\), "
+         r"this model expects \(64, 4\)"),
+        ("optimizer/0/exp_avg", r"optimizer state 'optimizer/0/exp_avg' \(4096, 1024\) does "
+         r"not fit this model's parameters"),
+    ],
+)  # fmt: skip
+def test_oversized_parameters_are_refused_before_they_are_read(
+    tmp_path: Path, name: str, message: str
+) -> None:
+    import time
+
+    model = _ppo().learn(64)
+    model.save(tmp_path / "good.zip")
+    bad = _with_array(tmp_path / "good.zip", tmp_path / "bad.zip", name, (4096, 1024))
+    assert bad.stat().st_size < 1 << 20  # declares 16 MiB
+    start = time.perf_counter()
+    with pytest.raises(ModelFileError, match=message):
+        PPO.load(bad)
+    with pytest.raises(ModelFileError, match=message):
+        model.set_parameters(str(bad))
+    assert time.perf_counter() - start < 1.0  # refused from the manifest, nothing inflated

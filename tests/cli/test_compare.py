@@ -132,3 +132,15 @@ def test_read_episodes_fallbacks(tmp_path: Path) -> None:
     )
     assert read_episodes(other).returns.tolist() == [-180.5]
     np.testing.assert_allclose(rolling_mean(np.array([1.0, 3.0, 5.0]), 2), [1.0, 2.0, 4.0])
+
+
+def test_read_episodes_skips_a_row_torn_by_a_crash(tmp_path: Path) -> None:
+    (tmp_path / "episodes.csv").write_bytes(
+        b"steps,return,length,terminated\r\n200,-200.0,200,0\r\n350,-150.0,150,1\r\n500,-1"
+    )
+    episodes = read_episodes(tmp_path)
+    assert episodes.steps.tolist() == [200, 350] and episodes.lengths.tolist() == [200, 150]
+    assert episodes.terminated is not None and episodes.terminated.tolist() == [False, True]
+    (tmp_path / "episodes.csv").unlink()
+    (tmp_path / "0.monitor.csv").write_text('#{"t_start": 0}\nr,l,t\n-200,200,1.0\n-15')
+    assert read_episodes(tmp_path).returns.tolist() == [-200]

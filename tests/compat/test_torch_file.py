@@ -16,7 +16,10 @@ import torch
 from tests.compat.crafted import (
     call_global,
     call_stack_global,
+    float_storage,
+    memo_bomb,
     payload,
+    shared_tuple,
     state_dict_with,
     tensor,
     text,
@@ -147,4 +150,63 @@ def test_files_that_are_not_zip_torch_files() -> None:
     with zipfile.ZipFile(buf, "w") as zf:
         zf.writestr("readme.txt", "hi")
     with pytest.raises(TorchFileError, match=r"is a zip but not a torch file"):
+        read_torch_state_dict(buf.getvalue())
+
+
+# -- bounded reading -----------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("value", "storages", "message"),
+    [
+        # 11 bytes of storage, a (50000, 50000) float view: 10 GB if copied.
+        (tensor("FloatStorage", "0", 1, 0, (50000, 50000), (0, 0)), {"0": bytes(4)},
+         r"tensor of size \(50000, 50000\) has stride 0 \(a broadcast view"),
+        (tensor("FloatStorage", "0", 4, 0, (3, 2), (1, 1)), {"0": bytes(16)},
+         r"stride \(1, 1\) has overlapping dimensions"),
+        (tensor("FloatStorage", "0", 2**30, 0, (2,), (1,)), {"0": bytes(16)},
+         r"storage '0' \(member 'archive/data/0'\) holds 16 bytes, fewer than its 1073741824"),
+        (tensor("FloatStorage", "0", 4, 0, (2,), (-1,)), {"0": bytes(16)}, r"malformed tensor"),
+    ],
+)  # fmt: skip
+def test_views_and_storages_that_would_allocate_are_refused(
+    value: bytes, storages: dict, message: str
+) -> None:
+    with pytest.raises(TorchFileError, match=message):
+        read_torch_state_dict(torch_zip(state_dict_with(value), storages))
+
+
+def test_storage_budget_and_view_copies_are_capped() -> None:
+    raw = torch_zip(float_storage(1 << 18), {"0": bytes(1 << 20)})
+    assert read_torch_state_dict(raw)["w"].shape == (1 << 18,)
+    with pytest.raises(TorchFileError, match=r"past 1048576 bytes, more than the limit "
+                       r"max_bytes=1000000"):  # fmt: skip
+        read_torch_state_dict(raw, max_bytes=1_000_000)
+    # 64 keys viewing one 256 KiB storage: 16 MiB of copies from a ~2 KB pickle.
+    views = b"".join(
+        text(f"w{i}") + tensor("FloatStorage", "0", 1 << 16, 0, (1 << 16,), (1,)) for i in range(64)
+    )
+    stream = b"\x80\x02ccollections\nOrderedDict\n)R(" + views + b"u."
+    with pytest.raises(TorchFileError, match=r"its tensors copy \d+ bytes out of 262144 bytes "
+                       r"of storage, more than the limit of 4x"):  # fmt: skip
+        read_torch_state_dict(torch_zip(stream, {"0": bytes(1 << 18)}))
+
+
+def test_a_memo_bomb_is_refused_at_once_with_a_short_message() -> None:
+    import time
+
+    start = time.perf_counter()
+    with pytest.raises(TorchFileError, match=r"unexpected call collections.OrderedDict") as info:
+        read_torch_state_dict(torch_zip(memo_bomb(80)))  # 2**80 nodes if walked
+    assert time.perf_counter() - start < 0.5
+    assert len(str(info.value)) < 400
+    key_bomb = b"\x80\x02}" + shared_tuple(80) + b"K\x01s."  # {t: 1}
+    with pytest.raises(TorchFileError, match=r"a dict key is a tuple, not a name"):
+        read_torch_state_dict(torch_zip(key_bomb))  # hashing that key never ends
+
+
+def test_a_storage_in_a_bzip2_member_is_refused() -> None:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as zf:
+        zf.writestr("archive/data.pkl", float_storage(4))
+        zf.writestr("archive/data/0", bytes(16), compress_type=zipfile.ZIP_BZIP2)
+    with pytest.raises(TorchFileError, match=r"'archive/data/0' uses zip compression method 12"):
         read_torch_state_dict(buf.getvalue())

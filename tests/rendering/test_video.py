@@ -109,6 +109,9 @@ def test_mp4_writer_call_with_a_fake_backend(tmp_path, monkeypatch):
 
     monkeypatch.setattr(iio, "get_writer", fake_get_writer)
     save_video(_frames(3), tmp_path / "v.mp4", fps=12)
-    assert calls["path"] == tmp_path / "v.mp4" and calls["fps"] == 12
+    # ffmpeg writes a hidden temporary .mp4 beside the target, moved into place when done.
+    temp = calls["path"]
+    assert temp.parent == tmp_path and temp.name.startswith(".v.mp4.") and temp.suffix == ".mp4"
+    assert (tmp_path / "v.mp4").exists() and not temp.exists() and calls["fps"] == 12
     assert calls["macro_block_size"] == 2 and calls["codec"] == "libx264"
     assert calls["frames"] == [(400, 600, 3)] * 3 and calls["closed"]

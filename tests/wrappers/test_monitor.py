@@ -170,3 +170,20 @@ def test_load_results(tmp_path: Path) -> None:
     frame = load_results(str(tmp_path))
     assert isinstance(frame, pandas.DataFrame)
     assert list(frame["t"]) == sorted(frame["t"])
+
+
+def test_a_row_torn_by_a_crash_is_skipped_and_cut(tmp_path: Path) -> None:
+    path = tmp_path / "monitor.csv"
+    env = Monitor(make_toy(pal(), "ToyChain"), str(tmp_path))
+    episodes = _drive(env, steps=40)
+    env.close()
+    with open(path, "a", newline="") as file:
+        file.write("-3.5,1")  # killed in the middle of a row: no line end
+    _, columns = read_monitor_file(str(path))
+    assert columns["l"].tolist() == [e["l"] for e in episodes]  # the torn row is not read
+    env = Monitor(make_toy(pal(), "ToyChain"), str(tmp_path), override_existing=False)
+    more = _drive(env, steps=40)
+    env.close()
+    _, columns = read_monitor_file(str(path))
+    assert columns["l"].tolist() == [e["l"] for e in episodes + more]  # cut, then appended
+    assert "-3.5,1" not in path.read_text()

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.error import dependency_not_installed
+from palaestra.utils.atomic_write import atomic_write
 
 __all__ = [
     "BaseCallback",
@@ -315,12 +316,15 @@ class EvalCallback(BaseCallback):
         self.evaluations_results.append([float(r) for r in rewards])
         self.evaluations_length.append([int(n) for n in lengths])
         if self.log_path is not None:
-            np.savez(
-                self.log_path,
-                timesteps=self.evaluations_timesteps,
-                results=self.evaluations_results,
-                ep_lengths=self.evaluations_length,
-            )
+            # np.savez's own naming (".npz" added), written atomically.
+            path = self.log_path if self.log_path.endswith(".npz") else self.log_path + ".npz"
+            with atomic_write(path, "wb") as file:
+                np.savez(
+                    file,
+                    timesteps=self.evaluations_timesteps,
+                    results=self.evaluations_results,
+                    ep_lengths=self.evaluations_length,
+                )
         mean_reward, std_reward = float(np.mean(rewards)), float(np.std(rewards))
         mean_length, std_length = float(np.mean(lengths)), float(np.std(lengths))
         self.last_mean_reward = mean_reward

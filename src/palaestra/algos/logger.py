@@ -27,6 +27,7 @@ from typing import Any, TextIO
 import numpy as np
 
 from palaestra.error import dependency_not_installed
+from palaestra.utils.atomic_write import atomic_write, complete_text
 
 __all__ = ["CSVOutputFormat", "HumanOutputFormat", "Logger", "TensorBoardOutputFormat", "configure"]
 
@@ -77,23 +78,24 @@ class HumanOutputFormat:
 
 
 class CSVOutputFormat:
-    """``progress.csv``: one row per dump; a new key rewrites the header (as SB3 does)."""
+    """``progress.csv``: one row per dump; a new key rewrites the header (as SB3 does).
+
+    The header and every rewrite replace the file whole (``utils.atomic_write``); rows are
+    appended and flushed, so a crash leaves at worst a torn last row, which readers skip.
+    """
 
     def __init__(self, filename: str) -> None:
-        self.file = open(filename, "w+")
+        self.filename = filename
+        with atomic_write(filename, "w", encoding="utf-8"):
+            pass  # a fresh, empty file, as SB3's "w" mode gives
+        self.file = open(filename, "a", encoding="utf-8")
         self.keys: list[str] = []
 
     def write(self, values: dict[str, Any], step: int) -> None:
         extra = [k for k in values if k not in self.keys]
         if extra:
             self.keys.extend(extra)
-            self.file.seek(0)
-            old = self.file.readlines()
-            self.file.seek(0)
-            self.file.truncate()
-            self.file.write(",".join(self.keys) + "\n")
-            for line in old[1:]:
-                self.file.write(line.rstrip("\n") + "," * len(extra) + "\n")
+            self._rewrite(len(extra))
         cells = []
         for key in self.keys:
             value = values.get(key)
@@ -103,6 +105,16 @@ class CSVOutputFormat:
                 cells.append("" if value is None else str(value))
         self.file.write(",".join(cells) + "\n")
         self.file.flush()
+
+    def _rewrite(self, n_extra: int) -> None:
+        """The new header, and the rows so far padded with empty cells for the new keys."""
+        self.file.close()
+        rows = complete_text(self.filename).splitlines()[1:]
+        with atomic_write(self.filename, "w", encoding="utf-8") as out:
+            out.write(",".join(self.keys) + "\n")
+            for line in rows:
+                out.write(line + "," * n_extra + "\n")
+        self.file = open(self.filename, "a", encoding="utf-8")
 
     def close(self) -> None:
         self.file.close()

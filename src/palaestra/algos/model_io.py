@@ -1,11 +1,14 @@
 """Model and replay-buffer files: a zip of one JSON manifest and ``.npy`` arrays. No pickle.
 
 SB3 pickles its hyperparameters and ``torch.save``s its tensors, so loading a file can run
-arbitrary code. Here the manifest is plain JSON, arrays are read with ``allow_pickle=False``,
+arbitrary code. Here the manifest is plain JSON, arrays are plain ``.npy`` (never pickle),
 classes named in the manifest (``activation_fn`` …) resolve only inside ``torch.nn``,
-``torch.optim`` and ``palaestra.algos`` (anything else must come through ``custom_objects``), and
-every array's dtype, shape and size is checked before it is read. Bad files raise
-``ModelFileError`` saying what is wrong.
+``torch.optim`` and ``palaestra.algos`` (anything else must come through ``custom_objects``).
+Loading is bounded (``utils.bounded_zip``): every array's dtype, shape and size is checked
+against its member, against ``max_bytes`` for the whole file and against what the caller
+expects (``expect``, or ``read_manifest`` then ``read_arrays``) before anything is allocated.
+Bad files raise ``ModelFileError`` naming the member and what is wrong. Files are written
+atomically.
 
 Layout::
 
@@ -16,27 +19,47 @@ Layout::
 
 from __future__ import annotations
 
+import contextlib
 import importlib
-import io
 import json
+import math
+import operator
 import os
 import zipfile
+import zlib
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, NamedTuple
 
 import numpy as np
 import torch
 from torch import nn
 
-from palaestra import error
+from palaestra.utils.atomic_write import atomic_write
+from palaestra.utils.bounded_zip import (
+    MAX_BYTES,
+    MAX_DIMS,
+    NPY_HEADER_MAX,
+    ModelFileError,
+    check_members,
+    read_member,
+    read_npy,
+    short,
+)
 
 __all__ = [
+    "MAX_BYTES",
+    "ArraySpec",
+    "Manifest",
     "ModelFileError",
     "decode_classes",
     "encode_classes",
     "optimizer_from_arrays",
     "optimizer_to_arrays",
     "read_archive",
+    "read_arrays",
+    "read_manifest",
     "resolve_path",
     "write_archive",
 ]
@@ -48,8 +71,32 @@ _DTYPES = {"<f4", "<f8", "<f2", "|u1", "|i1", "<i2", "<u2", "<i4", "<u4", "<i8",
 PathLike = str | os.PathLike[str] | IO[bytes]
 
 
-class ModelFileError(error.Error, ValueError):
-    """A model or replay-buffer file is corrupt, truncated, foreign or unsafe."""
+class ArraySpec(NamedTuple):
+    """What the manifest declares for one array, known before the array is read."""
+
+    dtype: np.dtype
+    shape: tuple[int, ...]
+
+    @property
+    def nbytes(self) -> int:
+        return math.prod(self.shape) * self.dtype.itemsize
+
+
+# ``expect(meta, declared)``: a caller's check of the declared arrays before any is read; it
+# raises ModelFileError (naming the array and what it expected) for one it does not want.
+Expect = Callable[[dict[str, Any], dict[str, ArraySpec]], None]
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """A checked manifest: the metadata and the declared arrays, none of them read yet."""
+
+    meta: dict[str, Any]
+    declared: dict[str, ArraySpec]
+    files: dict[str, str]  # array name -> zip member
+    source: PathLike
+    name: str  # for messages
+    stamp: tuple[int, ...] | None  # (device, inode, size, mtime) of the file read, if a path
 
 
 def resolve_path(path: PathLike, for_write: bool) -> PathLike:
@@ -67,21 +114,36 @@ def resolve_path(path: PathLike, for_write: bool) -> PathLike:
 def write_archive(
     path: PathLike, kind: str, meta: dict[str, Any], arrays: dict[str, np.ndarray]
 ) -> None:
-    """Write ``meta`` (JSON-able) and named numeric arrays as one archive."""
-    entries: dict[str, dict[str, Any]] = {}
+    """Write ``meta`` (JSON-able) and named numeric arrays as one archive.
+
+    A path is written atomically (``utils.atomic_write``): a crash or ``kill -9`` mid-save
+    leaves the previous file whole. A file object is written directly.
+    """
+    for name, array in arrays.items():
+        if np.asarray(array).dtype.str not in _DTYPES:
+            raise TypeError(f"cannot store array {name!r} of dtype {np.asarray(array).dtype}")
     target = resolve_path(path, for_write=True)
-    if isinstance(target, Path):
-        target.parent.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(target, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+    if not isinstance(target, (str, os.PathLike)):
+        _write_zip(target, kind, meta, arrays)
+        return
+    Path(target).parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(target, "wb") as file:
+        _write_zip(file, kind, meta, arrays)
+
+
+def _write_zip(
+    file: IO[bytes], kind: str, meta: dict[str, Any], arrays: dict[str, np.ndarray]
+) -> None:
+    entries: dict[str, dict[str, Any]] = {}
+    with zipfile.ZipFile(file, "w", compression=zipfile.ZIP_DEFLATED) as zf:
         for i, (name, array) in enumerate(arrays.items()):
             array = np.ascontiguousarray(array)
-            if array.dtype.str not in _DTYPES:
-                raise TypeError(f"cannot store array {name!r} of dtype {array.dtype}")
-            buf = io.BytesIO()
-            np.save(buf, array, allow_pickle=False)
-            file = f"arrays/{i:05d}.npy"
-            zf.writestr(file, buf.getvalue())
-            entries[name] = {"file": file, "dtype": array.dtype.str, "shape": list(array.shape)}
+            member = f"arrays/{i:05d}.npy"
+            # Streamed into the zip (no second copy of a large buffer in memory).
+            # zip64 well before 2 GiB: incompressible data deflates to slightly more bytes.
+            with zf.open(member, "w", force_zip64=array.nbytes > 1 << 30) as out:
+                np.save(out, array, allow_pickle=False)
+            entries[name] = {"file": member, "dtype": array.dtype.str, "shape": list(array.shape)}
         manifest = {
             "format": FORMAT,
             "kind": kind,
@@ -92,27 +154,76 @@ def write_archive(
         zf.writestr(MANIFEST, json.dumps(manifest))
 
 
-def read_archive(path: PathLike, kind: str) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """Read and validate an archive written by ``write_archive``; ``ModelFileError`` if not."""
+def read_archive(
+    path: PathLike, kind: str, *, max_bytes: int = MAX_BYTES, expect: Expect | None = None
+) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """Read and validate an archive written by ``write_archive``; ``ModelFileError`` if not.
+
+    Nothing is allocated for an array before its declared size is checked: against the
+    member's size, against ``max_bytes`` for all arrays together (raise it to read a larger
+    replay buffer), and by ``expect(meta, declared)`` when given, which sees every array's
+    declared dtype and shape before any array is read.
+    """
+    source, name = _source(path)
+    with _opened(source, name, kind) as zf:
+        manifest = _manifest(zf, kind, source, name, max_bytes)
+        if expect is not None:
+            expect(manifest.meta, manifest.declared)
+        return manifest.meta, _arrays(zf, manifest)
+
+
+def read_manifest(path: PathLike, kind: str, *, max_bytes: int = MAX_BYTES) -> Manifest:
+    """The checked manifest alone (no array is read): for a caller that builds something from
+    the metadata before it decides which arrays it accepts (``read_arrays``)."""
+    source, name = _source(path)
+    with _opened(source, name, kind) as zf:
+        return _manifest(zf, kind, source, name, max_bytes)
+
+
+def read_arrays(manifest: Manifest, expect: Expect | None = None) -> dict[str, np.ndarray]:
+    """The arrays ``manifest`` declares, after ``expect(meta, declared)`` accepted them; the
+    file must be the one the manifest came from."""
+    if expect is not None:
+        expect(manifest.meta, manifest.declared)
+    with _opened(manifest.source, manifest.name, "") as zf:
+        if manifest.stamp is not None and _stamp(manifest.source) != manifest.stamp:
+            raise ModelFileError(f"{manifest.name} changed while it was being loaded")
+        return _arrays(zf, manifest)
+
+
+def _source(path: PathLike) -> tuple[PathLike, str]:
     source = resolve_path(path, for_write=False)
-    name = str(source) if isinstance(source, Path) else "the given file object"
     if isinstance(source, Path) and not source.exists():
         raise FileNotFoundError(f"no model file at {str(path)!r} (nor {str(path)!r}.zip)")
+    return source, str(source) if isinstance(source, Path) else "the given file object"
+
+
+def _stamp(source: PathLike) -> tuple[int, ...] | None:
+    if not isinstance(source, (str, os.PathLike)):
+        return None
+    st = os.stat(source)
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
+
+
+@contextlib.contextmanager
+def _opened(source: PathLike, name: str, kind: str) -> Iterator[zipfile.ZipFile]:
+    """The zip, with the errors of damaged files turned into ModelFileError."""
+    what = f"a palaestra {kind} file" if kind else "a palaestra file"
     try:
         with zipfile.ZipFile(source) as zf:
-            return _read(zf, kind, name)
+            yield zf
     except zipfile.BadZipFile as exc:
-        raise ModelFileError(f"{name} is corrupt or not a palaestra {kind} file ({exc})") from exc
-    except (EOFError, OSError, zipfile.LargeZipFile) as exc:
-        raise ModelFileError(f"{name} is truncated or unreadable ({exc})") from exc
+        raise ModelFileError(f"{name} is corrupt or not {what} ({short(exc)})") from exc
+    except (EOFError, OSError, zipfile.LargeZipFile, zlib.error) as exc:
+        raise ModelFileError(f"{name} is truncated or unreadable ({short(exc)})") from exc
 
 
-def _read(
-    zf: zipfile.ZipFile, kind: str, name: str
-) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    names = set(zf.namelist())
-    if MANIFEST not in names:
-        if {"data", "policy.pth"} <= names:
+def _manifest(
+    zf: zipfile.ZipFile, kind: str, source: PathLike, name: str, max_bytes: int
+) -> Manifest:
+    members = check_members(zf, name)
+    if MANIFEST not in members:
+        if {"data", "policy.pth"} <= set(members):
             raise ModelFileError(
                 f"{name} is a Stable-Baselines3 model file, which Algo.load does not unpickle "
                 "(that can run code); palaestra.compat.from_sb3(path) reads the weights of an "
@@ -121,58 +232,77 @@ def _read(
         raise ModelFileError(
             f"{name} is a zip archive but not a palaestra {kind} file (no {MANIFEST})"
         )
-    info = zf.getinfo(MANIFEST)
-    if info.file_size > _MAX_MANIFEST:
-        raise ModelFileError(f"{name}: manifest is implausibly large ({info.file_size} bytes)")
+    raw = read_member(zf, members[MANIFEST], _MAX_MANIFEST, name)
     try:
-        manifest = json.loads(zf.read(MANIFEST).decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ModelFileError(f"{name}: manifest is not valid JSON ({exc})") from exc
+        manifest = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise ModelFileError(f"{name}: manifest is not valid JSON ({short(exc)})") from exc
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
         raise ModelFileError(
-            f"{name} is not a palaestra file (format {manifest.get('format')!r})"
+            f"{name} is not a palaestra file (format {short(repr(manifest.get('format')))})"
             if isinstance(manifest, dict)
             else f"{name}: malformed manifest"
         )
     if manifest.get("kind") != kind:
         raise ModelFileError(
-            f"{name} is a palaestra {manifest.get('kind')!r} file, not a {kind} file"
+            f"{name} is a palaestra {short(repr(manifest.get('kind')))} file, not a {kind} file"
         )
     if not isinstance(manifest.get("version"), int) or manifest["version"] > VERSION:
         raise ModelFileError(
-            f"{name} has format version {manifest.get('version')!r}; this "
+            f"{name} has format version {short(repr(manifest.get('version')))}; this "
             f"palaestra reads versions up to {VERSION}, upgrade palaestra"
         )
     meta, entries = manifest.get("meta"), manifest.get("arrays")
     if not isinstance(meta, dict) or not isinstance(entries, dict):
         raise ModelFileError(f"{name}: manifest lacks 'meta' or 'arrays'")
-    arrays = {key: _read_array(zf, key, entry, name, names) for key, entry in entries.items()}
-    return meta, arrays
-
-
-def _read_array(
-    zf: zipfile.ZipFile, key: str, entry: Any, name: str, names: set[str]
-) -> np.ndarray:
-    try:
-        file, dtype, shape = (
-            entry["file"],
-            np.dtype(entry["dtype"]),
-            tuple(int(d) for d in entry["shape"]),
+    declared, files = {}, {}
+    for key, entry in entries.items():
+        files[key], declared[key] = _entry(key, entry, members, name)
+    if len(set(files.values())) != len(files):
+        raise ModelFileError(f"{name}: two arrays name the same member")
+    total = sum(spec.nbytes for spec in declared.values())
+    if total > max_bytes:
+        raise ModelFileError(
+            f"{name}: its arrays declare {total} bytes in all, more than the limit "
+            f"max_bytes={max_bytes} (pass a larger max_bytes to read a file this large)"
         )
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ModelFileError(f"{name}: malformed entry for array {key!r}") from exc
-    if file not in names or dtype.str not in _DTYPES or any(d < 0 for d in shape):
-        raise ModelFileError(f"{name}: array {key!r} is missing or has an unsupported dtype/shape")
-    expected = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
-    if zf.getinfo(file).file_size > expected + 4096:  # .npy header is at most a few hundred bytes
-        raise ModelFileError(f"{name}: array {key!r} is larger than its declared shape")
+    return Manifest(meta, declared, files, source, name, _stamp(source))
+
+
+def _entry(
+    key: str, entry: Any, members: dict[str, zipfile.ZipInfo], name: str
+) -> tuple[str, ArraySpec]:
+    """The member and declared spec of one array, refused when the member cannot hold it."""
+    where = f"{name}: array {short(key, 80)!r}"
     try:
-        array = np.load(io.BytesIO(zf.read(file)), allow_pickle=False)
-    except ValueError as exc:  # object arrays (pickles) land here, as do damaged headers
-        raise ModelFileError(f"{name}: array {key!r} is not a plain numeric array ({exc})") from exc
-    if not isinstance(array, np.ndarray) or array.dtype != dtype or array.shape != shape:
-        raise ModelFileError(f"{name}: array {key!r} does not match its declared dtype/shape")
-    return array
+        file, dtype = str(entry["file"]), np.dtype(str(entry["dtype"]))
+        shape = tuple(operator.index(d) for d in entry["shape"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ModelFileError(f"{where} has a malformed entry") from exc
+    if file not in members:
+        raise ModelFileError(f"{where}: its member {short(file, 80)!r} is missing")
+    if dtype.str not in _DTYPES or len(shape) > MAX_DIMS or any(d < 0 for d in shape):
+        raise ModelFileError(f"{where} has an unsupported dtype/shape ({dtype}, {short(shape)})")
+    spec = ArraySpec(dtype, shape)
+    size = members[file].file_size
+    if not spec.nbytes < size <= spec.nbytes + NPY_HEADER_MAX:  # data plus a .npy header
+        raise ModelFileError(
+            f"{where}: member {short(file, 80)!r} holds {size} bytes, its declared "
+            f"{dtype} {shape} needs {spec.nbytes} plus a .npy header"
+        )
+    return file, spec
+
+
+def _arrays(zf: zipfile.ZipFile, manifest: Manifest) -> dict[str, np.ndarray]:
+    """Each declared array, streamed into a buffer of exactly its declared size."""
+    members = check_members(zf, manifest.name)
+    arrays = {}
+    for key, spec in manifest.declared.items():
+        info = members.get(manifest.files[key])
+        if info is None:
+            raise ModelFileError(f"{manifest.name}: array {short(key, 80)!r} is missing")
+        arrays[key] = read_npy(zf, info, manifest.name, spec.nbytes, {spec.dtype.str}, spec.shape)
+    return arrays
 
 
 # -- classes in policy_kwargs -----------------------------------------------------------------

@@ -11,6 +11,7 @@ with the model, see :func:`bind_env_token`).
 
 from __future__ import annotations
 
+import math
 import uuid
 import weakref
 from typing import Any
@@ -20,12 +21,16 @@ import torch
 
 from palaestra.algos.hyperparams import check_model_file
 from palaestra.algos.model_io import (
+    ArraySpec,
+    Expect,
     ModelFileError,
     decode_classes,
     encode_classes,
     optimizer_from_arrays,
     optimizer_to_arrays,
     read_archive,
+    read_arrays,
+    read_manifest,
     write_archive,
 )
 from palaestra.algos.schedules import schedule_from_json, schedule_to_json
@@ -131,11 +136,11 @@ def _load_run_state(model: Any, meta: Any, arrays: dict[str, np.ndarray], source
             probe = torch.Generator()
             probe.set_state(torch.from_numpy(rng.copy()))  # refuses a malformed state
             model._torch_rng_to_restore = probe.get_state()
-        loop = {k[len("run/loop/") :]: v for k, v in arrays.items() if k.startswith("run/loop/")}
-        model._load_loop_state(meta["loop"], loop)
         token = meta["env_token"]
         if token is None or model.env is None or env_token(model.env) != token:
             return  # another env: learn() starts new episodes
+        loop = {k[len("run/loop/") :]: v for k, v in arrays.items() if k.startswith("run/loop/")}
+        model._load_loop_state(meta["loop"], loop)
         keys = meta["obs_keys"]
         if keys is None:
             obs: Any = arrays["run/last_obs"]
@@ -159,7 +164,10 @@ def _load_run_state(model: Any, meta: Any, arrays: dict[str, np.ndarray], source
 def load_model(
     cls: Any, path: Any, env: Any, device: Any, custom: dict[str, Any], kwargs: dict[str, Any]
 ) -> Any:
-    meta, arrays = read_archive(path, "model")
+    # The arrays are read only once the model is built from the metadata, so that a file
+    # declaring parameters this model does not have is refused before they are allocated.
+    manifest = read_manifest(path, "model")
+    meta = manifest.meta
     algo = meta.get("algo")
     if algo != cls.__name__:
         raise ModelFileError(f"{path} holds a {algo} model; load it with {algo}.load()")
@@ -194,6 +202,7 @@ def load_model(
         _check_spaces(model, venv)
         model.env, model.n_envs = venv, venv.num_envs
     model._setup_model()
+    arrays = read_arrays(manifest, expect=_fits(model, exact_match=True, source=str(path)))
     _load_policy(model, arrays, exact_match=True, source=str(path))
     optimizer_from_arrays(model.optimizer, meta["optimizer"], arrays, "optimizer")
     for name, value in counters.items():
@@ -233,6 +242,78 @@ def _check_spaces(model: Any, venv: Any) -> None:
         raise ValueError(f"Action spaces do not match: {venv.action_space} != {model.action_space}")
 
 
+def _fits(model: Any, exact_match: bool, source: str) -> Expect:
+    """An ``expect`` hook for ``read_arrays``: the file's ``policy/`` and ``optimizer/`` arrays
+    must have this model's shapes (and, with ``exact_match``, its parameter names), checked
+    before any of them is read. Other arrays are left to their own readers' checks."""
+    params = {f"policy/{k}": tuple(v.shape) for k, v in model.policy.state_dict().items()}
+    shapes = [tuple(p.shape) for g in model.optimizer.param_groups for p in g["params"]]
+
+    def expect(meta: dict[str, Any], declared: dict[str, ArraySpec]) -> None:
+        for name, spec in declared.items():
+            if name.startswith("policy/"):
+                want = params.get(name)
+                if want is None and exact_match:
+                    raise ModelFileError(
+                        f"{source}: parameters do not fit this model (unexpected parameter "
+                        f"{name[len('policy/') :][:80]!r})"
+                    )
+                if want is not None and spec.shape != want:
+                    raise ModelFileError(
+                        f"{source}: parameter {name[len('policy/') :]!r} has shape "
+                        f"{spec.shape}, this model expects {want}"
+                    )
+            elif name.startswith("optimizer/"):
+                index = name[len("optimizer/") :].partition("/")[0]
+                known = index.isascii() and index.isdigit() and int(index) < len(shapes)
+                want = shapes[int(index)] if known else None
+                # Per-parameter optimizer state is shaped like its parameter (Adam's moments)
+                # or is one number (its step count: shape () or, from the numpy trainer, (1,)).
+                if want is None or (spec.shape != want and math.prod(spec.shape) > 1):
+                    raise ModelFileError(
+                        f"{source}: optimizer state {name[:80]!r} {spec.shape} does not fit "
+                        "this model's parameters"
+                    )
+            elif name.startswith("run/"):
+                _check_run_array(model, meta, name, spec.shape, source)
+
+    return expect
+
+
+def _check_run_array(
+    model: Any, meta: dict[str, Any], name: str, shape: tuple[int, ...], source: str
+) -> None:
+    """A learn-loop array fits the model: observations and episode starts of the saved
+    ``n_envs`` envs, a rollout no longer than the buffer's, a torch generator state of a few
+    KiB. (``n_envs`` is the file's: the model may be loaded with another number of envs.)"""
+    n = int(meta["n_envs"])
+    space = model.observation_space
+    if name == "run/torch_rng":
+        fits = math.prod(shape) <= 1 << 16
+    elif name == "run/last_episode_starts":
+        fits = shape == (n,)
+    elif name == "run/last_obs":
+        fits = shape == (n, *(space.shape or ()))
+    elif name.startswith("run/last_obs/"):
+        key = name[len("run/last_obs/") :]
+        sub = getattr(space, "spaces", {}).get(key)
+        fits = sub is not None and shape == (n, *(sub.shape or ()))
+    elif name.startswith("run/loop/"):
+        buffer = getattr(model, "rollout_buffer", None)
+        column = None if buffer is None else buffer._columns().get(name[len("run/loop/") :])
+        fits = (
+            column is not None
+            and len(shape) == column.ndim
+            and shape[2:] == column.shape[2:]
+            and shape[0] <= column.shape[0]
+            and shape[1] == n
+        )
+    else:
+        fits = False
+    if not fits:
+        raise ModelFileError(f"{source}: run state array {name[:80]!r} {shape} does not fit")
+
+
 def _load_policy(model: Any, arrays: dict[str, np.ndarray], exact_match: bool, source: str) -> None:
     state = {
         k[len("policy/") :]: torch.from_numpy(v.copy())
@@ -263,7 +344,7 @@ def set_parameters(model: Any, source: Any, exact_match: bool) -> None:
         if "policy.optimizer" in source:
             model.optimizer.load_state_dict(source["policy.optimizer"])
         return
-    meta, arrays = read_archive(source, "model")
+    meta, arrays = read_archive(source, "model", expect=_fits(model, exact_match, str(source)))
     _load_policy(model, arrays, exact_match, str(source))
     if "optimizer" in meta:
         optimizer_from_arrays(model.optimizer, meta["optimizer"], arrays, "optimizer")

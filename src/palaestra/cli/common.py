@@ -8,6 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from palaestra.utils.atomic_write import atomic_write
+
 __all__ = [
     "CONFIG_FILE",
     "EPISODES_FILE",
@@ -84,10 +86,9 @@ def read_json(path: Path, what: str) -> dict[str, Any]:
 
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
-    """Pretty JSON, written whole (a reader never sees half a file)."""
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
-    tmp.replace(path)
+    """Pretty JSON, written atomically: a reader, or a crash, never sees half a file."""
+    with atomic_write(path, "w", encoding="utf-8") as file:
+        file.write(json.dumps(data, indent=2) + "\n")
 
 
 def find_run_config(model_path: Path) -> dict[str, Any] | None:

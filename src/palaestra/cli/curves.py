@@ -11,6 +11,7 @@ import numpy as np
 
 from palaestra.cli.common import EPISODES_FILE, CLIError
 from palaestra.error import dependency_not_installed
+from palaestra.utils.atomic_write import atomic_write, complete_text
 
 __all__ = ["Episodes", "plot_compare", "plot_learning_curve", "read_episodes", "rolling_mean"]
 
@@ -25,9 +26,9 @@ class Episodes(NamedTuple):
 
 
 def _read_csv(path: Path) -> list[dict[str, str]]:
-    with open(path, newline="", encoding="utf-8") as file:
-        lines = [line for line in file if not line.startswith("#")]
-    return list(csv.DictReader(lines))
+    """The rows of a CSV log, without ``#`` comment lines or a row torn by a crash."""
+    text = complete_text(path)
+    return list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
 
 
 def _floats(rows: list[dict[str, str]], key: str) -> np.ndarray:
@@ -106,8 +107,14 @@ def plot_learning_curve(episodes: Episodes, path: Path, title: str) -> None:
     ax.set(xlabel="env steps", ylabel="return", title=title)
     ax.legend(loc="best")
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    _save(fig, path)
     plt.close(fig)
+
+
+def _save(fig: Any, path: Path) -> None:
+    """``fig.savefig``, written atomically (a crash mid-draw keeps the previous plot)."""
+    with atomic_write(path, "wb") as file:
+        fig.savefig(file, dpi=100, format=path.suffix.lstrip(".") or "png")
 
 
 class Band(NamedTuple):
@@ -151,5 +158,5 @@ def plot_compare(bands: list[Band], path: Path, title: str) -> None:
     ax.set(xlabel="env steps", ylabel="return (rolling mean)", title=title)
     ax.legend(loc="best")
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    _save(fig, path)
     plt.close(fig)

@@ -36,9 +36,9 @@ class Played(NamedTuple):
 def load_model(path: Path, device: str = "auto") -> Any:
     """A DQN or PPO model; the algorithm comes from the file's own metadata."""
     from palaestra.algos import DQN, PPO
-    from palaestra.algos.model_io import read_archive
+    from palaestra.algos.model_io import read_manifest
 
-    meta, _ = read_archive(path, "model")
+    meta = read_manifest(path, "model").meta
     classes: dict[str, Any] = {"DQN": DQN, "PPO": PPO}
     algo = meta.get("algo")
     if algo not in classes:

@@ -15,6 +15,7 @@ import numpy as np
 
 from palaestra.algos.callbacks import BaseCallback
 from palaestra.algos.logger import CSVOutputFormat
+from palaestra.utils.atomic_write import cut_torn_line, open_append
 
 __all__ = ["AppendingCSV", "EpisodeLog", "GracefulStop", "LiveProgress", "format_duration"]
 
@@ -28,11 +29,9 @@ class EpisodeLog(BaseCallback):
 
     def __init__(self, path: Path) -> None:
         super().__init__()
-        new = not path.exists() or path.stat().st_size == 0
-        self.file = open(path, "a", newline="", encoding="utf-8")
+        # A new file gets its header atomically; a resumed one loses a row torn by a crash.
+        self.file = open_append(path, ",".join(EPISODE_COLUMNS) + "\r\n")  # csv's line end
         self.writer = csv.writer(self.file)
-        if new:
-            self.writer.writerow(EPISODE_COLUMNS)
 
     def _on_step(self) -> bool:
         dones = self.locals.get("dones")
@@ -183,14 +182,18 @@ class GracefulStop(BaseCallback):
 
 
 class AppendingCSV(CSVOutputFormat):
-    """``progress.csv`` that a resumed run extends instead of overwriting."""
+    """``progress.csv`` that a resumed run extends instead of overwriting (a row torn by a
+    crash is cut first)."""
 
     def __init__(self, filename: str) -> None:
         path = Path(filename)
+        if path.exists():
+            cut_torn_line(path)
         if not path.exists() or path.stat().st_size == 0:
             super().__init__(filename)
             return
-        self.file = open(filename, "r+", encoding="utf-8")
-        header = self.file.readline().strip()
+        self.filename = filename
+        with open(filename, encoding="utf-8") as file:
+            header = file.readline().strip()
         self.keys = header.split(",") if header else []
-        self.file.seek(0, 2)
+        self.file = open(filename, "a", encoding="utf-8")

@@ -27,6 +27,7 @@ from palaestra.algos.networks import preprocessed_dim
 from palaestra.compat.sb3_file import MISSING, SB3File, plain_value, read_sb3_file, sb3_type
 from palaestra.compat.sb3_file import space_from_sb3 as _space_from_sb3
 from palaestra.core import Env
+from palaestra.utils.bounded_zip import short, summary
 
 __all__ = ["from_sb3"]
 
@@ -120,11 +121,12 @@ def _palaestra_env(env: Any) -> Any:
 def _linear_stack(state: dict[str, np.ndarray], prefix: str, name: str) -> list[int]:
     """Indices of the Linear layers of the ``nn.Sequential`` at ``prefix`` (0, 2, 4 ...: each
     followed by an activation, which holds no weights)."""
-    pattern = re.compile(re.escape(prefix) + r"(\d+)\.(weight|bias)$")
+    pattern = re.compile(re.escape(prefix) + r"(\d{1,6})\.(weight|bias)$")
     indices = sorted({int(m.group(1)) for k in state if (m := pattern.match(k))})
     if indices != list(range(0, 2 * len(indices), 2)):
         raise ModelFileError(
-            f"{name}: {prefix}* has layers {indices}; an MlpPolicy has Linear layers at 0, 2, 4 ..."
+            f"{name}: {prefix}* has layers {summary(indices, items=8)}; an MlpPolicy has Linear "
+            "layers at 0, 2, 4 ..."
         )
     return indices
 
@@ -136,13 +138,13 @@ def _take(
     left = set(state) - set(mapping)
     if left:
         raise ModelFileError(
-            f"{name}: policy has parameters {sorted(left)[:4]} that an MlpPolicy does not; "
+            f"{name}: policy has parameters {summary(sorted(left))} that an MlpPolicy does not; "
             "from_sb3 reads MlpPolicy models only (not CnnPolicy, MultiInputPolicy or custom "
             "feature extractors)"
         )
     missing = set(mapping) - set(state)
     if missing:
-        raise ModelFileError(f"{name}: policy lacks parameters {sorted(missing)[:4]}")
+        raise ModelFileError(f"{name}: policy lacks parameters {summary(sorted(missing))}")
     return {ours: state[theirs] for theirs, ours in mapping.items()}
 
 
@@ -220,13 +222,13 @@ def _policy_kwargs(file: SB3File) -> dict[str, Any]:
     extractor = str(found.pop("features_extractor_class", "FlattenExtractor"))
     if "FlattenExtractor" not in extractor:
         raise ModelFileError(
-            f"{file.name}: features_extractor_class {extractor} is not supported "
+            f"{file.name}: features_extractor_class {short(extractor)} is not supported "
             "(from_sb3 reads MlpPolicy models with the default FlattenExtractor)"
         )
     unknown = set(found) - _KWARGS_USED - _KWARGS_FROM_WEIGHTS
     if unknown:
         raise ModelFileError(
-            f"{file.name}: policy_kwargs {sorted(unknown)} are not supported by from_sb3"
+            f"{file.name}: policy_kwargs {summary(sorted(unknown))} are not supported by from_sb3"
         )
     out: dict[str, Any] = {}
     for key in ("activation_fn", "optimizer_class"):
@@ -243,7 +245,7 @@ def _class(text: Any, key: str, name: str) -> type:
     class, resolved only inside torch.nn / torch.optim by ``model_io.decode_classes``."""
     match = _CLASS.match(str(text))
     if not match:
-        raise ModelFileError(f"{name}: policy_kwargs[{key!r}] = {text!r} is not a class")
+        raise ModelFileError(f"{name}: policy_kwargs[{key!r}] = {summary(text)} is not a class")
     cls: type = decode_classes({"__class__": f"{match.group(1)}:{match.group(2)}"}, {})
     return cls
 
@@ -259,17 +261,15 @@ def _spaces(file: SB3File, model: Any) -> tuple[spaces.Space[Any], spaces.Space[
         space = getattr(model, f"{what}_space")
         kind = sb3_type(desc)
         shape = desc.get("_shape") if isinstance(desc, dict) else None
-        if kind != type(space).__name__ or (
-            shape is not None and tuple(shape) != tuple(space.shape or ())
-        ):
+        if kind != type(space).__name__ or (shape is not None and shape != list(space.shape or ())):
             raise ValueError(
                 f"The env's {what} space {space} does not match the SB3 model's "
-                f"({kind} of shape {tuple(shape or ())})"
+                f"({kind} of shape {summary(shape)})"
             )
         if isinstance(space, spaces.Discrete) and str(desc.get("n")) != str(int(space.n)):
             raise ValueError(
                 f"The env's {what} space {space} does not match the SB3 model's "
-                f"(Discrete({desc.get('n')}))"
+                f"(Discrete({summary(desc.get('n'))}))"
             )
         described.append(space)
     if not isinstance(described[0], _MLP_OBSERVATIONS):

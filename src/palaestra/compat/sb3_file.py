@@ -3,7 +3,9 @@
 An SB3 model file holds ``data`` (JSON in which every value JSON cannot express is a base64
 cloudpickle, next to its ``:type:`` and, for objects, their JSON-able attributes) and
 ``policy.pth`` (a ``torch.save`` state_dict). Only plain JSON is used here; the cloudpickled
-strings are never decoded. ``policy.pth`` goes through :func:`read_torch_state_dict`.
+strings are never decoded. ``policy.pth`` goes through :func:`read_torch_state_dict`. Every
+member is read with a bounded read (``utils.bounded_zip``), and messages quote the file's
+values in a bounded summary.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import json
 import re
 import zipfile
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,8 +21,15 @@ from typing import Any
 import numpy as np
 
 from palaestra import spaces
-from palaestra.algos.model_io import ModelFileError, PathLike, resolve_path
-from palaestra.compat.torch_file import read_torch_state_dict
+from palaestra.algos.model_io import PathLike, resolve_path
+from palaestra.compat.torch_file import MAX_STATE_DICT_BYTES, read_torch_state_dict
+from palaestra.utils.bounded_zip import (
+    ModelFileError,
+    check_members,
+    read_member,
+    short,
+    summary,
+)
 
 __all__ = ["MISSING", "SB3File", "plain_value", "read_sb3_file", "sb3_type", "space_from_sb3"]
 
@@ -40,39 +50,42 @@ class SB3File:
     state_dict: dict[str, np.ndarray]
 
 
-def read_sb3_file(path: PathLike) -> SB3File:
-    """Open ``path`` (``"model"`` finds ``model.zip``, as SB3's ``load`` does) and read it."""
+def read_sb3_file(path: PathLike, *, max_bytes: int = MAX_STATE_DICT_BYTES) -> SB3File:
+    """Open ``path`` (``"model"`` finds ``model.zip``, as SB3's ``load`` does) and read it;
+    ``policy.pth`` may hold at most ``max_bytes`` (its zip and its tensors, each)."""
     source = resolve_path(path, for_write=False)
     name = str(source) if isinstance(source, Path) else "the given file object"
     if isinstance(source, Path) and not source.exists():
         raise FileNotFoundError(f"no SB3 model file at {str(path)!r} (nor {str(path)!r}.zip)")
     try:
         with zipfile.ZipFile(source) as zf:
-            names = set(zf.namelist())
-            if not {"data", "policy.pth"} <= names:
-                kind = "a palaestra model file" if "palaestra.json" in names else "a zip archive"
+            members = check_members(zf, name)
+            if not {"data", "policy.pth"} <= set(members):
+                kind = "a palaestra model file" if "palaestra.json" in members else "a zip archive"
                 raise ModelFileError(
                     f"{name} is {kind}, not a Stable-Baselines3 model file (which holds 'data' "
                     "and 'policy.pth')"
                 )
-            if zf.getinfo("data").file_size > _MAX_DATA:
-                raise ModelFileError(f"{name}: 'data' is implausibly large")
-            data = _json(zf.read("data"), name)
+            data = _json(read_member(zf, members["data"], _MAX_DATA, name), name)
             version = ""
-            if "_stable_baselines3_version" in names:
-                version = zf.read("_stable_baselines3_version").decode("utf-8", "replace")
+            if "_stable_baselines3_version" in members:
+                raw = read_member(zf, members["_stable_baselines3_version"], 64, name)
+                version = raw.decode("utf-8", "replace")
             algo = _algorithm(data, name)
-            state_dict = read_torch_state_dict(zf.read("policy.pth"))
+            policy = read_member(zf, members["policy.pth"], max_bytes, name)
+            state_dict = read_torch_state_dict(policy, max_bytes=max_bytes)
     except zipfile.BadZipFile as exc:
         raise ModelFileError(f"{name} is not a zip archive, so not an SB3 model file") from exc
+    except (EOFError, OSError, zlib.error) as exc:
+        raise ModelFileError(f"{name} is truncated or unreadable ({short(exc)})") from exc
     return SB3File(name, algo, version.strip(), data, state_dict)
 
 
 def _json(raw: bytes, name: str) -> dict[str, Any]:
     try:
         data = json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ModelFileError(f"{name}: 'data' is not valid JSON ({exc})") from exc
+    except (ValueError, RecursionError) as exc:  # bad UTF-8 or JSON, ints past 4300 digits
+        raise ModelFileError(f"{name}: 'data' is not valid JSON ({short(exc)})") from exc
     if not isinstance(data, dict):
         raise ModelFileError(f"{name}: 'data' is not a JSON object")
     return data
@@ -86,7 +99,9 @@ def _algorithm(data: dict[str, Any], name: str) -> str:
         raise ModelFileError(f"{name}: 'data' does not say which policy class the model uses")
     parts = module.split(".")
     if parts[0] not in ("stable_baselines3", "sb3_contrib") or len(parts) < 2:
-        raise ModelFileError(f"{name}: policy class from {module!r}, not from Stable-Baselines3")
+        raise ModelFileError(
+            f"{name}: policy class from {short(repr(module))}, not from Stable-Baselines3"
+        )
     if parts[1] != "common":  # stable_baselines3.dqn.policies, sb3_contrib.qrdqn.policies ...
         return parts[1].upper()
     # PPO and A2C share common.policies.ActorCriticPolicy; PPO alone clips and runs epochs.
@@ -138,7 +153,8 @@ def space_from_sb3(desc: Any, what: str, name: str) -> spaces.Space[Any]:
         return spaces.Box(low, high, shape, dtype)
     except (KeyError, TypeError, ValueError) as exc:
         raise ModelFileError(
-            f"{name}: cannot rebuild the {what} space from {_strip(desc)} ({exc}); "
+            f"{name}: cannot rebuild the {what} space from {summary(_strip(desc))} "
+            f"({short(exc)}); "
             "pass env=... to use the env's spaces"
         ) from exc
 

@@ -16,6 +16,7 @@ from typing import BinaryIO
 import numpy as np
 
 from palaestra.error import dependency_not_installed
+from palaestra.utils.atomic_write import atomic_path
 
 __all__ = [
     "capped_cubic_video_schedule",
@@ -106,10 +107,14 @@ def save_video(frames: Iterable[np.ndarray], path: str | os.PathLike[str], fps: 
         raise ValueError(f"fps must be a positive number, got {fps!r}")
     checked = validate_frames(frames)
     path.parent.mkdir(parents=True, exist_ok=True)
-    if suffix == ".gif":
-        _write_gif(checked, path, fps)
-    else:
-        _write_mp4(checked, path, fps)
+    # Written beside the target and moved into place: an interrupted recording never leaves
+    # a truncated video. ffmpeg picks the container from the name, so the temporary file keeps
+    # the suffix.
+    with atomic_path(path, suffix=".tmp" + path.suffix) as temp:
+        if suffix == ".gif":
+            _write_gif(checked, temp, fps)
+        else:
+            _write_mp4(checked, temp, fps)
     return path
 
 

@@ -1,22 +1,34 @@
 """``VecNormalize``: running normalisation of observations and returns, saved without pickle.
 
-The statistics and settings go to one ``.npz`` file of plain arrays plus a JSON string, read back
-with ``allow_pickle=False``: loading a file never runs code (SB3 pickles the whole wrapper).
+The statistics and settings go to one ``.npz`` file of plain arrays plus a JSON string, written
+atomically and read back without pickle: loading a file never runs code (SB3 pickles the whole
+wrapper). Loading checks every member's size, dtype and shape before reading it and every value
+after (finite means, non-negative variances, positive counts, settings of the right types),
+so a damaged or crafted file is a ``ModelFileError`` naming the file and what is wrong.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
+import zipfile
+import zlib
 from typing import Any
 
 import numpy as np
 
 from palaestra.spaces import Box
+from palaestra.utils.atomic_write import atomic_write
+from palaestra.utils.bounded_zip import ModelFileError, check_members, read_npy, short
 from palaestra.vec_env.base import StepReturn, VecEnv, VecEnvWrapper
 from palaestra.wrappers.running_mean_std import RunningMeanStd
 
 _FORMAT = "palaestra.VecNormalize/1"
+_STATS = ("obs_mean", "obs_var", "ret_mean", "ret_var")
+_MAX_SETTINGS = 1 << 16  # bytes of the settings JSON (a few hundred in practice)
+_FLAGS = ("training", "norm_obs", "norm_reward")
+_POSITIVE = ("clip_obs", "clip_reward", "epsilon", "obs_count", "ret_count")
 
 
 class VecNormalize(VecEnvWrapper):
@@ -129,7 +141,7 @@ class VecNormalize(VecEnvWrapper):
             "obs_count": float(self.obs_rms.count),
             "ret_count": float(self.ret_rms.count),
         }
-        with open(save_path, "wb") as f:
+        with atomic_write(save_path, "wb") as f:  # a crash mid-save keeps the old file
             np.savez(
                 f,
                 settings=np.array(json.dumps(settings)),
@@ -141,32 +153,100 @@ class VecNormalize(VecEnvWrapper):
 
     @staticmethod
     def load(load_path: str | os.PathLike[str], venv: VecEnv) -> VecNormalize:
-        """A ``VecNormalize`` around ``venv`` with the statistics saved at ``load_path``."""
+        """A ``VecNormalize`` around ``venv`` with the statistics saved at ``load_path``.
+
+        Raises ``ModelFileError`` (a ``ValueError``) naming the file and the problem for a file
+        that is not one ``save`` wrote, or whose statistics do not fit ``venv``.
+        """
+        name = str(load_path)
         try:
-            with np.load(load_path, allow_pickle=False) as data:
-                settings = json.loads(str(data["settings"]))
-                arrays = {k: data[k] for k in ("obs_mean", "obs_var", "ret_mean", "ret_var")}
-        except (ValueError, KeyError, OSError, json.JSONDecodeError) as e:
-            raise ValueError(f"{load_path} is not a palaestra VecNormalize file: {e}") from e
-        if settings.get("format") != _FORMAT:
-            raise ValueError(f"{load_path} is not a palaestra VecNormalize file")
-        norm = VecNormalize(
-            venv,
-            training=settings["training"],
-            norm_obs=settings["norm_obs"],
-            norm_reward=settings["norm_reward"],
-            clip_obs=settings["clip_obs"],
-            clip_reward=settings["clip_reward"],
-            gamma=settings["gamma"],
-            epsilon=settings["epsilon"],
-        )
-        if norm.norm_obs and arrays["obs_mean"].shape != norm.obs_rms.mean.shape:
-            raise ValueError(
-                f"Saved observation statistics have shape {arrays['obs_mean'].shape}, but the "
-                f"env's observations have shape {norm.obs_rms.mean.shape}"
-            )
+            with zipfile.ZipFile(load_path) as zf:
+                members = check_members(zf, name)
+                settings = _read_settings(zf, members, name)
+                kwargs = {k: v for k, v in settings.items() if k not in ("obs_count", "ret_count")}
+                norm = VecNormalize(venv, **kwargs)
+                shapes = {
+                    "obs_mean": norm.obs_rms.mean.shape,
+                    "obs_var": norm.obs_rms.mean.shape,
+                    "ret_mean": (),
+                    "ret_var": (),
+                }
+                arrays = {key: _read_stat(zf, members, key, shapes[key], name) for key in _STATS}
+        except zipfile.BadZipFile as e:
+            raise ModelFileError(f"{name} is not a palaestra VecNormalize file ({e})") from e
+        except (EOFError, zlib.error) as e:
+            raise ModelFileError(f"{name} is truncated or corrupt ({short(e)})") from e
         norm.obs_rms.mean, norm.obs_rms.var = arrays["obs_mean"], arrays["obs_var"]
-        norm.obs_rms.count = settings["obs_count"]
+        norm.obs_rms.count = float(settings["obs_count"])
         norm.ret_rms.mean, norm.ret_rms.var = arrays["ret_mean"][()], arrays["ret_var"][()]
-        norm.ret_rms.count = settings["ret_count"]
+        norm.ret_rms.count = float(settings["ret_count"])
         return norm
+
+
+def _read_settings(
+    zf: zipfile.ZipFile, members: dict[str, zipfile.ZipInfo], name: str
+) -> dict[str, Any]:
+    """The settings JSON, every key present with a value of the right type and range."""
+    if "settings.npy" not in members:
+        raise ModelFileError(f"{name} is not a palaestra VecNormalize file (no settings)")
+    raw = read_npy(zf, members["settings.npy"], name, _MAX_SETTINGS, shape=())
+    try:
+        settings = json.loads(str(raw[()]))
+    except (ValueError, RecursionError) as e:
+        raise ModelFileError(f"{name}: its settings are not valid JSON ({short(e)})") from e
+    if not isinstance(settings, dict) or settings.get("format") != _FORMAT:
+        raise ModelFileError(f"{name} is not a palaestra VecNormalize file")
+    for key in _FLAGS:
+        if not isinstance(settings.get(key), bool):
+            raise ModelFileError(
+                f"{name}: setting {key!r} is {short(repr(settings.get(key)), 60)}, "
+                "expected true or false"
+            )
+    for key in (*_POSITIVE, "gamma"):
+        value = _number(settings.get(key))
+        if value is None or (value <= 0 if key in _POSITIVE else not 0 <= value <= 1):
+            want = "a finite number > 0" if key in _POSITIVE else "a number in [0, 1]"
+            raise ModelFileError(
+                f"{name}: setting {key!r} is {short(repr(settings.get(key)), 60)}, expected {want}"
+            )
+    return {
+        **{k: settings[k] for k in _FLAGS},
+        **{k: _number(settings[k]) for k in (*_POSITIVE, "gamma")},
+    }
+
+
+def _number(value: Any) -> float | None:
+    """``value`` as a finite float, or None (for bools, strings, NaN, huge ints ...)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
+
+
+def _read_stat(
+    zf: zipfile.ZipFile,
+    members: dict[str, zipfile.ZipInfo],
+    key: str,
+    shape: tuple[int, ...],
+    name: str,
+) -> np.ndarray:
+    """One statistic: float, of the env's shape, finite, and a variance never negative."""
+    if f"{key}.npy" not in members:
+        raise ModelFileError(f"{name}: the {key!r} statistics are missing")
+    # float64 of the expected shape, checked before reading (plus room to read a wrong shape
+    # and say so)
+    limit = 8 * math.prod(shape) + (1 << 16)
+    array = read_npy(zf, members[f"{key}.npy"], name, limit, {"<f8", "<f4"})
+    if array.shape != shape:
+        raise ModelFileError(
+            f"{name}: saved {key!r} statistics have shape {array.shape}, but the env's "
+            f"{'observations have' if key.startswith('obs') else 'returns have'} shape {shape}"
+        )
+    if not np.all(np.isfinite(array)):
+        raise ModelFileError(f"{name}: the {key!r} statistics hold NaN or infinite values")
+    if key.endswith("_var") and np.any(array < 0):
+        raise ModelFileError(f"{name}: the {key!r} statistics hold negative variances")
+    return array.astype(np.float64)

@@ -12,6 +12,7 @@ files either library writes. The file starts with a JSON comment line, then CSV:
 from __future__ import annotations
 
 import csv
+import io
 import json
 import os
 import time
@@ -22,6 +23,7 @@ import numpy as np
 
 from palaestra.core import ActType, Env, ObsType, Wrapper
 from palaestra.error import DependencyNotInstalled
+from palaestra.utils.atomic_write import atomic_write, complete_text, open_append
 from palaestra.utils.record_constructor import RecordConstructorArgs
 
 if TYPE_CHECKING:
@@ -186,14 +188,19 @@ class ResultsWriter:
             )
         filename = os.path.realpath(filename)
         os.makedirs(os.path.dirname(filename), exist_ok=True)
-        mode = "w" if override_existing else "a"
-        # newline="\n": no "\r\n" rows on Windows (SB3 issue #692)
-        self.file_handler = open(filename, f"{mode}t", newline="\n")
-        self.logger = csv.DictWriter(self.file_handler, fieldnames=("r", "l", "t", *extra_keys))
+        fieldnames = ("r", "l", "t", *extra_keys)
+        # The JSON comment and the CSV header, written atomically (as one new file), so a
+        # crash never leaves a file without them; csv's own "\r\n" line ends, as SB3 writes.
+        head = io.StringIO()
+        head.write(f"#{json.dumps(header or {})}\n")
+        csv.DictWriter(head, fieldnames=fieldnames).writeheader()
         if override_existing:
-            self.file_handler.write(f"#{json.dumps(header or {})}\n")
-            self.logger.writeheader()
-        self.file_handler.flush()
+            with atomic_write(filename, "w", newline="\n") as file:
+                file.write(head.getvalue())
+        # newline="\n": no "\r\n" rows on Windows (SB3 issue #692). A row torn by a crash of
+        # an earlier run is cut before this one appends.
+        self.file_handler = open_append(filename, head.getvalue(), encoding="utf-8", newline="\n")
+        self.logger = csv.DictWriter(self.file_handler, fieldnames=fieldnames)
 
     def write_row(self, epinfo: dict[str, Any]) -> None:
         """Append one episode and flush, so a crashed run keeps its log."""
@@ -216,17 +223,17 @@ def read_monitor_file(filename: str) -> tuple[dict[str, Any], dict[str, np.ndarr
     ``columns`` maps each CSV column to a numpy array: ``r`` float64, ``l`` int64, ``t`` float64
     (seconds since the header's ``t_start``), extra columns as strings.
     """
-    with open(filename) as f:
-        first = f.readline()
-        if not first.startswith("#"):
-            raise LoadMonitorResultsError(
-                f"{filename} is not a monitor file: its first line should be '#{{json header}}', "
-                f"got {first[:80]!r}"
-            )
-        header = json.loads(first[1:])
-        reader = csv.DictReader(f)
-        rows = list(reader)
-        names = reader.fieldnames or ["r", "l", "t"]
+    f = io.StringIO(complete_text(filename))  # a row torn by a crash is left out
+    first = f.readline()
+    if not first.startswith("#"):
+        raise LoadMonitorResultsError(
+            f"{filename} is not a monitor file: its first line should be '#{{json header}}', "
+            f"got {first[:80]!r}"
+        )
+    header = json.loads(first[1:])
+    reader = csv.DictReader(f)
+    rows = list(reader)
+    names = reader.fieldnames or ["r", "l", "t"]
     dtypes = {"r": np.float64, "l": np.int64, "t": np.float64}
     columns = {
         name: np.array([row[name] for row in rows], dtype=dtypes.get(name, str)) for name in names
@@ -249,14 +256,12 @@ def load_results(path: str) -> pandas.DataFrame:
         raise LoadMonitorResultsError(f"No monitor files of the form *{EXT} found in {path}")
     frames, headers = [], []
     for name in files:
-        with open(name) as f:
-            first = f.readline()
-            if not first.startswith("#"):
-                raise LoadMonitorResultsError(
-                    f"{name} does not start with a '#{{json}}' header line"
-                )
-            header = json.loads(first[1:])
-            frame = pandas.read_csv(f, index_col=None)
+        f = io.StringIO(complete_text(name))  # a row torn by a crash is left out
+        first = f.readline()
+        if not first.startswith("#"):
+            raise LoadMonitorResultsError(f"{name} does not start with a '#{{json}}' header line")
+        header = json.loads(first[1:])
+        frame = pandas.read_csv(f, index_col=None)
         headers.append(header)
         frame["t"] += header["t_start"]
         frames.append(frame)
