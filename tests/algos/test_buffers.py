@@ -82,3 +82,51 @@ def test_rollout_buffer_minibatches_cover_everything_once() -> None:
         assert mb.observations.shape[1:] == (2,) and mb.actions.dtype == torch.float32
         seen += mb.old_values.tolist()
     assert sorted(seen) == sorted(float(10 * t + e) for t in range(4) for e in range(3))
+
+
+def _dqn_with_buffer(tmp_path):  # type: ignore[no-untyped-def]
+    from palaestra.algos import DQN
+
+    model = DQN("MlpPolicy", "CartPole-v1", buffer_size=500, learning_starts=50, seed=0)
+    model.learn(120)
+    model.save_replay_buffer(tmp_path / "rb.zip")
+    return model
+
+
+def test_replay_buffer_file_larger_than_the_buffer_is_refused_before_reading(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import tracemalloc
+
+    from palaestra.algos import ModelFileError
+    from palaestra.algos.model_io import read_archive, write_archive
+
+    model = _dqn_with_buffer(tmp_path)
+    meta, arrays = read_archive(tmp_path / "rb.zip", "replay_buffer")
+    arrays["rewards"] = np.zeros((4_000_000, 1), dtype=np.float32)  # 16 MB: far past 500 rows
+    write_archive(tmp_path / "big.zip", "replay_buffer", meta, arrays)
+    tracemalloc.start()
+    with pytest.raises(ModelFileError, match="limit"):
+        model.load_replay_buffer(tmp_path / "big.zip")
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 4_000_000  # refused from the declared sizes, not after reading
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda m, a: a.__setitem__("actions", a["actions"] + 7), "actions outside Discrete"),
+        (lambda m, a: a["rewards"].__setitem__(0, np.nan), "NaN or infinite"),
+        (lambda m, a: m.__setitem__("pos", "3"), "position '3'"),
+        (lambda m, a: m.__setitem__("full", 1), "full 1 are malformed"),
+    ],
+)
+def test_replay_buffer_contents_are_checked(tmp_path, change, message) -> None:  # type: ignore[no-untyped-def]
+    from palaestra.algos import ModelFileError
+    from palaestra.algos.model_io import read_archive, write_archive
+
+    model = _dqn_with_buffer(tmp_path)
+    meta, arrays = read_archive(tmp_path / "rb.zip", "replay_buffer")
+    change(meta, arrays)
+    write_archive(tmp_path / "bad.zip", "replay_buffer", meta, arrays)
+    with pytest.raises(ModelFileError, match=message):
+        model.load_replay_buffer(tmp_path / "bad.zip")

@@ -398,10 +398,16 @@ class DQN(BaseAlgorithm):
         meta, arrays = self.replay_buffer.state()
         model_io.write_archive(path, "replay_buffer", meta, arrays)
 
-    def load_replay_buffer(self, path: Any, truncate_last_traj: bool = True) -> None:
-        """Restore a buffer written by ``save_replay_buffer`` (its n_envs must match)."""
+    def load_replay_buffer(
+        self, path: Any, truncate_last_traj: bool = True, max_bytes: int | None = None
+    ) -> None:
+        """Restore a buffer written by ``save_replay_buffer`` (its n_envs must match).
+
+        A file may hold at most what this model's buffer holds (``max_bytes`` overrides that
+        bound): a crafted file cannot make the reader allocate more than the buffer itself."""
         assert self.replay_buffer is not None
-        meta, arrays = model_io.read_archive(path, "replay_buffer")
+        limit = self.replay_buffer.nbytes() + (1 << 20) if max_bytes is None else max_bytes
+        meta, arrays = model_io.read_archive(path, "replay_buffer", max_bytes=limit)
         try:
             self.replay_buffer.load_state(meta, arrays)
         except (KeyError, ValueError, TypeError) as exc:

@@ -189,5 +189,14 @@ class ReplayBuffer:
                     f"replay buffer {key!r} has shape {arrays[key].shape}, expected {target.shape}"
                 )
             target[...] = arrays[key]
-        full = bool(meta["full"]) and n == self.buffer_size
-        self.full, self.pos = full, int(meta["pos"]) % self.buffer_size if full else n
+        pos, full = meta["pos"], meta["full"]
+        if not isinstance(full, bool) or isinstance(pos, bool) or not isinstance(pos, int):
+            raise ValueError(f"replay buffer position {pos!r}/full {full!r} are malformed")
+        if not np.isfinite(arrays["rewards"]).all():
+            raise ValueError("replay buffer rewards hold NaN or infinite values")
+        if isinstance(self.action_space, spaces.Discrete):
+            start, stop = self.action_space.start, self.action_space.start + self.action_space.n
+            if n and not ((arrays["actions"] >= start) & (arrays["actions"] < stop)).all():
+                raise ValueError(f"replay buffer actions outside {self.action_space}")
+        full = full and n == self.buffer_size
+        self.full, self.pos = full, pos % self.buffer_size if full else n
