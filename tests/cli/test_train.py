@@ -19,7 +19,7 @@ from palaestra.algos.callbacks import BaseCallback
 from palaestra.cli import train
 from palaestra.cli.settings import resolve_settings
 
-from .conftest import Result, run_cli
+from .conftest import Result, run_cli, wait_for_file
 
 
 def _rows(path: Path) -> list[dict[str, str]]:
@@ -31,7 +31,7 @@ def test_ppo_run_folder_and_summary(ppo_run: tuple[Path, Result]) -> None:
     out, result = ppo_run
     for name in ("config.json", "status.json", "progress.csv", "episodes.csv", "model.zip"):
         assert (out / name).is_file(), name
-    assert (out / "learning_curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert wait_for_file(out / "learning_curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in (out / "checkpoints").iterdir())[0].startswith("model_")
     config = json.loads((out / "config.json").read_text())
     preset = presets.get_preset("ppo", "CartPole-v1")
@@ -67,7 +67,7 @@ def test_dqn_run_with_set_override(dqn_run: tuple[Path, Result]) -> None:
     config = json.loads((out / "config.json").read_text())
     preset = presets.get_preset("dqn", "MountainCar-v0")["hyperparams"]
     assert config["hyperparams"] == {**preset, "learning_starts": 100}
-    assert (out / "replay_buffer.zip").is_file() and (out / "learning_curve.png").is_file()
+    assert (out / "replay_buffer.zip").is_file() and wait_for_file(out / "learning_curve.png")
     model = DQN.load(out / "model.zip")
     assert model.learning_starts == 100 and model.num_timesteps >= 300
     assert model.policy_kwargs["net_arch"] == preset["policy_kwargs"]["net_arch"]
