@@ -6,11 +6,12 @@
 ``draw_learning_curve`` starts a detached process that reads the finished run's ``episodes.csv``,
 draws the PNG and exits; the command does not wait for it, and the summary lists the file as
 ``learning_curve.png (drawing)``. The drawing process runs in its own session (a Ctrl-C or the
-closing terminal does not reach it), isolated from the environment and the current folder
-(``python -I``) but importing palaestra and matplotlib from this process's ``sys.path`` exactly,
-so it runs no code this process would not. Every plot is written atomically (a temporary file
-beside it, then ``os.replace``): a reader sees the previous PNG, or none, until the new one is
-whole, and a failed or killed drawing only means no new PNG.
+closing terminal does not reach it) at a lower priority, isolated (``python -I``: no
+``PYTHON*`` variables, user site or current folder) but importing palaestra and matplotlib from
+this process's ``sys.path`` exactly, so it runs no code this process would not. Every plot is
+written atomically (a temporary file beside it, then ``os.replace``): a reader sees the previous
+PNG, or none, until the new one is whole; a failed drawing only means no new PNG (a killed one
+may leave its hidden ``.learning_curve.png.PID.tmp``).
 """
 
 from __future__ import annotations
