@@ -234,3 +234,12 @@ def test_written_atomically_over_the_previous_file(tmp_path: Path) -> None:
         write_archive(path, "model", {}, {"w": np.array(["text"])})
     assert path.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.zip"]  # no temporary file left
+
+
+def test_zero_dimensional_arrays_keep_their_shape(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # np.ascontiguousarray turns 0-d arrays into (1,): a 0-d statistic or step count must
+    # come back as saved, or a restored run state no longer fits its object.
+    write_archive(tmp_path / "a.zip", "model", {}, {"s": np.array(2.5), "f": np.ones((3, 2)).T})
+    _, arrays = read_archive(tmp_path / "a.zip", "model")
+    assert arrays["s"].shape == () and float(arrays["s"]) == 2.5
+    assert arrays["f"].shape == (2, 3) and arrays["f"].flags.c_contiguous

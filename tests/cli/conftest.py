@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
@@ -25,6 +26,16 @@ def run_cli(*argv: object) -> Result:
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main([str(a) for a in argv])
     return Result(code, out.getvalue(), err.getvalue())
+
+
+def wait_for_file(path: Path, timeout: float = 60.0) -> Path:
+    """``path`` once it exists: ``train`` draws its learning curve in a background process,
+    which writes it whole (atomically) a moment after the command returns."""
+    deadline = time.monotonic() + timeout
+    while not path.exists():
+        assert time.monotonic() < deadline, f"{path} not written within {timeout} s"
+        time.sleep(0.05)
+    return path
 
 
 @pytest.fixture

@@ -19,7 +19,7 @@ from palaestra.algos.callbacks import BaseCallback
 from palaestra.cli import train
 from palaestra.cli.settings import resolve_settings
 
-from .conftest import Result, run_cli
+from .conftest import Result, run_cli, wait_for_file
 
 
 def _rows(path: Path) -> list[dict[str, str]]:
@@ -31,7 +31,7 @@ def test_ppo_run_folder_and_summary(ppo_run: tuple[Path, Result]) -> None:
     out, result = ppo_run
     for name in ("config.json", "status.json", "progress.csv", "episodes.csv", "model.zip"):
         assert (out / name).is_file(), name
-    assert (out / "learning_curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert wait_for_file(out / "learning_curve.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in (out / "checkpoints").iterdir())[0].startswith("model_")
     config = json.loads((out / "config.json").read_text())
     preset = presets.get_preset("ppo", "CartPole-v1")
@@ -67,7 +67,7 @@ def test_dqn_run_with_set_override(dqn_run: tuple[Path, Result]) -> None:
     config = json.loads((out / "config.json").read_text())
     preset = presets.get_preset("dqn", "MountainCar-v0")["hyperparams"]
     assert config["hyperparams"] == {**preset, "learning_starts": 100}
-    assert (out / "replay_buffer.zip").is_file() and (out / "learning_curve.png").is_file()
+    assert (out / "replay_buffer.zip").is_file() and wait_for_file(out / "learning_curve.png")
     model = DQN.load(out / "model.zip")
     assert model.learning_starts == 100 and model.num_timesteps >= 300
     assert model.policy_kwargs["net_arch"] == preset["policy_kwargs"]["net_arch"]
@@ -149,6 +149,9 @@ PPO_ARGS = ["ppo", "CartPole-v1", "--n-envs", 4, "--timesteps", 512, "--seed", 1
             "--checkpoint-every", 100, "--progress", "none", "--eval-episodes", 0]  # fmt: skip
 
 
+PPO_NORM_ARGS = [*PPO_ARGS, "--set", "normalize=true"]  # VecNormalize's statistics resume too
+
+
 def _params(path: Path, algo: type) -> dict[str, torch.Tensor]:
     return algo.load(path).policy.state_dict()
 
@@ -164,7 +167,7 @@ def _assert_same_params(a: Path, b: Path, algo: type) -> None:
 def uninterrupted(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """The DQN and PPO runs of the resume tests, never stopped."""
     runs = {}
-    for name, args in (("dqn", DQN_ARGS), ("ppo", PPO_ARGS)):
+    for name, args in (("dqn", DQN_ARGS), ("ppo", PPO_ARGS), ("ppo-norm", PPO_NORM_ARGS)):
         out = tmp_path_factory.mktemp("full") / name
         result = run_cli("train", *args, "--out", out)
         assert result.code == 0, result.err
@@ -230,11 +233,15 @@ class _StopRequestAt(BaseCallback):
         return True
 
 
-@pytest.mark.parametrize("algo", ["dqn", "ppo"])
+@pytest.mark.parametrize("algo", ["dqn", "ppo", "ppo-norm"])
 def test_graceful_stops_anywhere_resume_to_the_same_bits(
     algo: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, uninterrupted: dict[str, Path]
 ) -> None:
-    args, cls = (DQN_ARGS, DQN) if algo == "dqn" else (PPO_ARGS, PPO)
+    args, cls = {
+        "dqn": (DQN_ARGS, DQN),
+        "ppo": (PPO_ARGS, PPO),
+        "ppo-norm": (PPO_NORM_ARGS, PPO),
+    }[algo]
     out = tmp_path / "run"
     # Stops inside rollouts, right after a checkpoint, on a rollout's last step.
     stops = [37, 101, 188, 256, 444] if algo == "dqn" else [12, 100, 200, 256, 380]
@@ -251,6 +258,10 @@ def test_graceful_stops_anywhere_resume_to_the_same_bits(
     assert "note:" not in result.err  # exact: no "starts new episodes"
     _assert_same_params(out / "model.zip", uninterrupted[algo] / "model.zip", cls)
     assert len(list((out / "resume").iterdir())) == 2  # the newest KEEP checkpoints
+    if algo == "ppo-norm":
+        saved = np.load(out / "vecnormalize.npz")
+        full = np.load(uninterrupted[algo] / "vecnormalize.npz")
+        assert all(np.array_equal(saved[k], full[k]) for k in full.files)
 
 
 def test_extended_finished_run_trains(tmp_path: Path, uninterrupted: dict[str, Path]) -> None:

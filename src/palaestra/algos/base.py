@@ -39,6 +39,7 @@ from palaestra.algos.callbacks import (
     ProgressBarCallback,
     convert_callback,
 )
+from palaestra.algos.eager_optimizer import build_optimizer
 from palaestra.algos.logger import HumanOutputFormat, Logger, configure
 from palaestra.algos.policies import extractor_class
 from palaestra.algos.schedules import Schedule
@@ -189,15 +190,17 @@ class BaseAlgorithm:
         optimizer_kwargs: dict[str, Any],
     ) -> torch.optim.Optimizer:
         """SB3's optimizer choice; Adam on the CPU runs fused (one kernel for all tensors:
-        the per-tensor loop costs more than the math for small nets) unless told otherwise."""
+        the per-tensor loop costs more than the math for small nets) unless told otherwise.
+        Built without importing torch's compiler (``eager_optimizer``: seconds at start-up)."""
         kwargs = dict(optimizer_kwargs)
+        lr = self.lr_schedule(1.0)
         fusable = optimizer_class is torch.optim.Adam and self.device.type == "cpu"
         if fusable and "fused" not in kwargs and "foreach" not in kwargs:
             try:
-                return optimizer_class(params, lr=self.lr_schedule(1.0), fused=True, **kwargs)
+                return build_optimizer(optimizer_class, params, lr=lr, fused=True, **kwargs)
             except (RuntimeError, TypeError, ValueError):  # older torch: no fused CPU Adam
                 pass
-        return optimizer_class(params, lr=self.lr_schedule(1.0), **kwargs)
+        return build_optimizer(optimizer_class, params, lr=lr, **kwargs)
 
     # -- device, seeding ---------------------------------------------------------------------
     def _resolve_device(self, device: torch.device | str, policy: str) -> torch.device:

@@ -137,7 +137,7 @@ def _write_zip(
     entries: dict[str, dict[str, Any]] = {}
     with zipfile.ZipFile(file, "w", compression=zipfile.ZIP_DEFLATED) as zf:
         for i, (name, array) in enumerate(arrays.items()):
-            array = np.ascontiguousarray(array)
+            array = np.asarray(array, order="C")  # (ascontiguousarray makes 0-d 1-d)
             member = f"arrays/{i:05d}.npy"
             # Streamed into the zip (no second copy of a large buffer in memory).
             # zip64 well before 2 GiB: incompressible data deflates to slightly more bytes.

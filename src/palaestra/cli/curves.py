@@ -1,9 +1,29 @@
-"""Episode returns of a run and the learning-curve plots of ``train`` and ``compare``."""
+"""Episode returns of a run and the learning-curve plots of ``train`` and ``compare``.
+
+``train``'s ``learning_curve.png`` is drawn off the training path. Importing matplotlib costs
+1-2 s (more than a short run), so unless ``matplotlib.pyplot`` is already loaded in this process
+(a notebook, a test session: drawing then costs ~0.2 s and is done in place),
+``draw_learning_curve`` starts a detached process that reads the finished run's ``episodes.csv``,
+draws the PNG and exits; the command does not wait for it, and the summary lists the file as
+``learning_curve.png (drawing)``. The drawing process runs in its own session (a Ctrl-C or the
+closing terminal does not reach it) at a lower priority, isolated (``python -I``: no
+``PYTHON*`` variables, user site or current folder) but importing palaestra and matplotlib from
+this process's ``sys.path`` exactly, so it runs no code this process would not. Every plot is
+written atomically (a temporary file beside it, then ``os.replace``): a reader sees the previous
+PNG, or none, until the new one is whole; a failed drawing only means no new PNG (a killed one
+may leave its hidden ``.learning_curve.png.PID.tmp``).
+"""
 
 from __future__ import annotations
 
 import csv
+import importlib.util
+import json
 import math
+import os
+import subprocess
+import sys
+import threading
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -13,7 +33,17 @@ from palaestra.cli.common import EPISODES_FILE, CLIError
 from palaestra.error import dependency_not_installed
 from palaestra.utils.atomic_write import atomic_write, complete_text
 
-__all__ = ["Episodes", "plot_compare", "plot_learning_curve", "read_episodes", "rolling_mean"]
+__all__ = [
+    "LEARNING_CURVE_FILE",
+    "Episodes",
+    "draw_learning_curve",
+    "plot_compare",
+    "plot_learning_curve",
+    "read_episodes",
+    "rolling_mean",
+]
+
+LEARNING_CURVE_FILE = "learning_curve.png"
 
 
 class Episodes(NamedTuple):
@@ -84,11 +114,15 @@ def default_window(n_episodes: int) -> int:
     return int(min(100, max(1, n_episodes // 20)))
 
 
+def _no_matplotlib() -> Exception:
+    return dependency_not_installed("matplotlib", "render", "learning-curve plots")
+
+
 def _pyplot() -> Any:
     try:
         import matplotlib
     except ImportError:
-        raise dependency_not_installed("matplotlib", "render", "learning-curve plots") from None
+        raise _no_matplotlib() from None
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -107,8 +141,55 @@ def plot_learning_curve(episodes: Episodes, path: Path, title: str) -> None:
     ax.set(xlabel="env steps", ylabel="return", title=title)
     ax.legend(loc="best")
     fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    try:
+        _save(fig, path)
+    finally:
+        plt.close(fig)
+
+
+# The drawing process: this process's sys.path, then draw_main on the remaining arguments.
+_CHILD_CODE = (
+    "import json, sys; sys.path[:] = json.loads(sys.argv[1]); "
+    "from palaestra.cli.curves import draw_main; sys.exit(draw_main(sys.argv[2:]))"
+)
+
+
+def draw_learning_curve(
+    run: Path, title: str, background: bool | None = None
+) -> subprocess.Popen[bytes] | None:
+    """Draw ``run/learning_curve.png`` from the run's episodes: in a detached process when
+    ``background`` (by default, unless pyplot is already imported here: see the module
+    docstring), which is returned (the file appears when whole; exit code 0 when written);
+    else in this process, returning None. ``DependencyNotInstalled`` when matplotlib is
+    missing (checked without importing it)."""
+    if background is None:
+        background = "matplotlib.pyplot" not in sys.modules
+    if not background:
+        plot_learning_curve(read_episodes(run), run / LEARNING_CURVE_FILE, title)
+        return None
+    if importlib.util.find_spec("matplotlib") is None:
+        raise _no_matplotlib()
+    argv = [sys.executable, "-I", "-c", _CHILD_CODE, json.dumps(sys.path), str(run.absolute())]
+    detach: dict[str, Any] = {"start_new_session": True}
+    if sys.platform == "win32":
+        detach = {
+            "creationflags": subprocess.DETACHED_PROCESS | subprocess.CREATE_NEW_PROCESS_GROUP
+        }
+    io = subprocess.DEVNULL
+    proc = subprocess.Popen([*argv, title], stdin=io, stdout=io, stderr=io, **detach)
+    # Reaped by a daemon thread: no zombie while this process lives on (a notebook), and no
+    # wait at exit (daemon threads are left behind, and the handle with them: no warning).
+    threading.Thread(target=proc.wait, name="palaestra-learning-curve", daemon=True).start()
+    return proc
+
+
+def draw_main(argv: list[str]) -> int:
+    """The drawing process: ``RUN TITLE`` -> ``RUN/learning_curve.png``; 0 when written."""
+    if hasattr(os, "nice"):  # leave the CPU to the foreground: 2 cores are often all there is
+        os.nice(10)
+    run, title = Path(argv[0]), argv[1]
+    plot_learning_curve(read_episodes(run), run / LEARNING_CURVE_FILE, title)
+    return 0
 
 
 def _save(fig: Any, path: Path) -> None:
@@ -158,5 +239,7 @@ def plot_compare(bands: list[Band], path: Path, title: str) -> None:
     ax.set(xlabel="env steps", ylabel="return (rolling mean)", title=title)
     ax.legend(loc="best")
     fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    try:
+        _save(fig, path)
+    finally:
+        plt.close(fig)

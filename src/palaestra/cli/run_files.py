@@ -73,6 +73,17 @@ def print_summary(
         print(line)
     else:
         print("no training episode finished yet")
+    # The learning curve is drawn off the training path (see ``curves``), started before the
+    # evaluation so that a drawing in the background overlaps it.
+    from palaestra.cli.curves import LEARNING_CURVE_FILE, draw_learning_curve
+    from palaestra.error import DependencyNotInstalled
+
+    try:
+        drawing = draw_learning_curve(run_dir, f"{config['algo'].upper()} on {env_id}")
+        curve = LEARNING_CURVE_FILE + " (drawing)" * (drawing is not None)
+    except DependencyNotInstalled:
+        eprint(f"note: matplotlib is not installed, so no {LEARNING_CURVE_FILE}")
+        curve = ""
     if eval_episodes > 0:
         _, played, _, games = play_saved(model, run_dir / MODEL_FILE, None, eval_episodes)
         unit = ("game" if games else "episode") + "s" * (eval_episodes != 1)
@@ -81,22 +92,16 @@ def print_summary(
             print(f"  {GAMES_NOTE}")
         for text in summary_lines(played, env_id):
             print(f"  {text}")
-    from palaestra.cli.curves import plot_learning_curve
-    from palaestra.error import DependencyNotInstalled
-
-    try:
-        plot_learning_curve(
-            history, run_dir / "learning_curve.png", f"{config['algo'].upper()} on {env_id}"
-        )
-        written.append("learning_curve.png")
-    except DependencyNotInstalled:
-        eprint("note: matplotlib is not installed, so no learning_curve.png")
+    if curve:
+        written.append(curve)
     if config["algo"] == "dqn":
         written.append(REPLAY_FILE)
     if (run_dir / NORMALIZE_FILE).is_file():
         written.append(NORMALIZE_FILE)
     if (run_dir / "checkpoints").is_dir():
         written.append("checkpoints/")
+    if (run_dir / "resume").is_dir():
+        written.append("resume/")
     if (run_dir / "tb").is_dir():
         written.append("tb/")
     print(f"wrote {run_dir}/: {', '.join(written)}")
