@@ -286,6 +286,25 @@ class BaseAlgorithm:
         self.logger.record("train/learning_rate", lr)
         return lr
 
+    def _stepped(
+        self,
+        callback: BaseCallback,
+        actions: Any,
+        new_obs: Any,
+        rewards: np.ndarray,
+        dones: np.ndarray,
+        infos: list[dict[str, Any]],
+    ) -> bool:
+        """Count an env step, show it to the callbacks (SB3's ``locals`` keys) and note the
+        episodes it finished; whether to keep training."""
+        self.num_timesteps += self.n_envs
+        callback.update_locals(
+            dict(actions=actions, new_obs=new_obs, rewards=rewards, dones=dones, infos=infos)
+        )
+        running = bool(callback.on_step())
+        self._update_info_buffer(infos, dones)
+        return running
+
     def _update_info_buffer(self, infos: list[dict[str, Any]], dones: np.ndarray) -> None:
         """Note finished episodes (``episode``) and, where an env is done, ``is_success``."""
         for info in infos:

@@ -266,19 +266,8 @@ class DQN(BaseAlgorithm):
         n_envs = self.n_envs
         actions = self._sample_actions()
         new_obs, rewards, dones, infos = self.env.step(actions)
-        self.num_timesteps += n_envs
         self._collected_steps += 1
-        callback.update_locals(
-            {
-                "actions": actions,
-                "new_obs": new_obs,
-                "rewards": rewards,
-                "dones": dones,
-                "infos": infos,
-            }
-        )
-        running = bool(callback.on_step())
-        self._update_info_buffer(infos, dones)
+        running = self._stepped(callback, actions, new_obs, rewards, dones, infos)
         next_obs, timeouts = new_obs, self._no_timeouts  # [n_envs] all False
         if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
             next_obs, timeouts = self._real_next_obs(new_obs, dones, infos)

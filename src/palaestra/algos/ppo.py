@@ -244,18 +244,7 @@ class PPO(BaseAlgorithm):
                 actions = actions.astype(self.action_space.dtype)  # Bernoulli samples are floats
             env_actions = np.clip(actions, box.low, box.high) if box is not None else actions
             new_obs, rewards, dones, infos = env.step(env_actions)
-            self.num_timesteps += self.n_envs
-            callback.update_locals(
-                {
-                    "actions": actions,
-                    "new_obs": new_obs,
-                    "rewards": rewards,
-                    "dones": dones,
-                    "infos": infos,
-                }
-            )
-            running = callback.on_step()
-            self._update_info_buffer(infos, dones)
+            running = self._stepped(callback, actions, new_obs, rewards, dones, infos)
             rewards = np.asarray(rewards, dtype=np.float32)
             if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
                 rewards = self._bootstrap_truncated(rewards, dones, infos)
