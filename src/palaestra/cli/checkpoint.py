@@ -38,6 +38,7 @@ __all__ = [
     "latest_checkpoint",
     "load_env_state",
     "publish",
+    "trim_logs",
     "write_checkpoint",
 ]
 
@@ -158,6 +159,42 @@ def load_env_state(folder: Path, venv: Any) -> str | None:
         return f"the saved env state does not fit the env ({exc})"
     bind_env_token(venv, token)
     return None
+
+
+# The logs a run appends to, and the column that says at which step a row was written.
+_LOGS = (("episodes.csv", "steps"), ("progress.csv", "time/total_timesteps"))
+
+
+def trim_logs(run_dir: Path, steps: int) -> None:
+    """Drop the log rows written after step ``steps`` (by a run that went on past its last
+    checkpoint and died): the resumed run writes them again, once."""
+    import csv
+
+    from palaestra.utils.atomic_write import atomic_write, complete_text
+
+    for name, column in _LOGS:
+        path = run_dir / name
+        if not path.is_file():
+            continue
+        lines = complete_text(path).splitlines(keepends=True)
+        if not lines:
+            continue
+        header = next(csv.reader([lines[0]]))
+        if column not in header:
+            continue
+        at = header.index(column)
+        keep = [lines[0]]
+        for line in lines[1:]:
+            row = next(csv.reader([line]), [])
+            try:
+                if int(float(row[at])) > steps:
+                    continue
+            except (IndexError, ValueError):  # a row without the column (SB3's sparse logs)
+                pass
+            keep.append(line)
+        if len(keep) < len(lines):
+            with atomic_write(path, "w", encoding="utf-8", newline="") as file:
+                file.write("".join(keep))
 
 
 def _link(source: Path, target: Path) -> None:

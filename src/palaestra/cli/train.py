@@ -327,6 +327,9 @@ def run(args: argparse.Namespace) -> int:
             )
         if inexact:
             notes.append(f"{inexact}: the resume starts new episodes (not an exact resume)")
+        from palaestra.cli.checkpoint import trim_logs
+
+        trim_logs(run_dir, model.num_timesteps)  # rows of a run that died past its checkpoint
         if total > int(status.get("total_timesteps", total)):
             notes.append(
                 f"extending the run from {status['total_timesteps']:,} to {total:,} steps: the "
