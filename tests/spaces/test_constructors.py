@@ -212,3 +212,36 @@ def test_graph_contains_checks_links() -> None:
     assert GraphInstance(nodes, np.array([0]), None) not in space
     assert GraphInstance(nodes + 2, None, None) not in space
     assert (nodes, None, None) not in space
+
+
+def test_scalar_nvec_is_shape_empty_as_in_gymnasium_and_its_samples_are_members() -> None:
+    space, twin = MultiDiscrete(3, seed=1), gymnasium.spaces.MultiDiscrete(3, seed=1)
+    assert (repr(space), space.shape) == (repr(twin), twin.shape) == ("MultiDiscrete(3)", ())
+    draws = [space.sample() for _ in range(30)]
+    assert all(d.shape == () and d.dtype == np.int64 and d in space for d in draws)
+    assert {int(d) for d in draws} == {0, 1, 2}
+    assert 2 in space and np.int8(1) in space and 3 not in space and "1" not in space
+    assert not twin.contains(twin.sample())  # Gymnasium's own sample is not in its space
+    assert space.sample(mask=np.array([0, 0, 1], np.int8)) == 2
+    with pytest.raises(TypeError, match=r"MultiDiscrete\(3\) has shape \(\): it has no length"):
+        len(space)
+
+
+@pytest.mark.parametrize(
+    ("nvec", "exc", "match"),
+    [
+        ("4", TypeError, "MultiDiscrete nvec must be integers, got '4' (str of <U1)"),
+        (None, TypeError, "MultiDiscrete nvec must be integers, got None (NoneType of object)"),
+        (True, TypeError, "MultiDiscrete nvec must be integers, got True (bool of bool)"),
+        ([2 + 1j], TypeError, "MultiDiscrete nvec must be integers, got [(2+1j)] (list of"),
+        ([[2, 3], [4]], ValueError, "must be a rectangular array of integers, got [[2, 3], [4]]"),
+        ([np.inf], ValueError, "MultiDiscrete nvec must be whole numbers, actual values: [inf]"),
+        ([np.nan], ValueError, "MultiDiscrete nvec must be whole numbers, actual values: [nan]"),
+        (2**70, ValueError, "MultiDiscrete nvec 1180591620717411303424 do not fit dtype int64"),
+        ([2**63], ValueError, "MultiDiscrete nvec [9223372036854775808] do not fit dtype int64"),
+    ],
+)
+def test_nvec_of_a_wrong_type_names_the_value(nvec: Any, exc: type, match: str) -> None:
+    # Gymnasium parses "4", truncates inf, casts complex values and True, or fails in numpy.
+    with pytest.raises(exc, match=re.escape(match)):
+        MultiDiscrete(nvec)
