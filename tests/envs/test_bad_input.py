@@ -131,3 +131,30 @@ def test_unknown_options_are_ignored_like_gymnasium() -> None:
 def test_bad_render_mode() -> None:
     with pytest.raises(error.UnsupportedMode, match="ansi"):
         CartPoleEnv(render_mode="ansi")
+
+
+@pytest.mark.parametrize("cls", CONTINUOUS)
+@pytest.mark.parametrize(
+    ("action", "dtype"),
+    [
+        (np.array([0.5 + 1j]), "complex128"),
+        (np.array([0.5 + 0j]), "complex128"),  # numpy would drop the zero imaginary part
+        ([0.5 + 0j], "complex128"),
+        (np.array(["0.5"]), "<U3"),  # a float32 cast would parse it
+        (["0.5"], "<U3"),
+        (np.array([0.5], dtype=object), "object"),
+        (b"1", "|S1"),
+    ],
+)
+def test_continuous_rejects_complex_and_string_actions(
+    cls: type, action: object, dtype: str
+) -> None:
+    env = cls()
+    env.reset(seed=0)
+    with pytest.raises(error.InvalidAction) as info:
+        env.step(action)
+    space = repr(env.action_space)
+    assert str(info.value) == (
+        f"Invalid action {action!r} ({type(action).__name__}) for action space {space}: "
+        f"expected real numeric values, got dtype {dtype}"
+    )
