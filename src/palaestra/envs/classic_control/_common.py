@@ -53,6 +53,12 @@ def parse_reset_bounds(
     high = parse_number("high", options["high"]) if "high" in options else default_high
     if low > high:
         raise ValueError(f"Lower bound ({low}) must be lower than higher bound ({high}).")
+    if not math.isfinite(high - low):
+        # numpy's uniform (Gymnasium) raises OverflowError here; the draw would be inf.
+        raise ValueError(
+            f"Reset options low={low!r} and high={high!r} span more than a float can hold "
+            "(high - low overflows)."
+        )
     return low, high
 
 
