@@ -35,10 +35,10 @@ def _integer_array(values: npt.ArrayLike, dtype: np.dtype, name: str) -> np.ndar
             f"({type(values).__name__} of {raw.dtype})"
         )
     if raw.dtype.kind == "f" and not (np.isfinite(raw) & (raw == np.floor(raw))).all():
-        raise ValueError(f"MultiDiscrete {name} must be whole numbers, actual values: {raw}")
+        raise ValueError(f"MultiDiscrete {name} must be whole numbers, actual values: {values!r}")
     info = np.iinfo(dtype)
     if raw.size and (raw.min() < info.min or raw.max() > info.max):
-        raise ValueError(f"MultiDiscrete {name} {raw} do not fit dtype {dtype}")
+        raise ValueError(f"MultiDiscrete {name} {values!r} do not fit dtype {dtype}")
     return np.array(raw, dtype=dtype, copy=True)
 
 
@@ -84,7 +84,7 @@ class MultiDiscrete(Space[npt.NDArray[np.integer]]):
                 f"got {self.start.shape} and {self.nvec.shape}"
             )
         if not (self.nvec > 0).all():
-            raise ValueError("nvec (counts) have to be positive")
+            raise ValueError(f"nvec (counts) have to be positive, actual values: {nvec!r}")
         # Python ints cannot overflow; Gymnasium accepts spaces whose samples wrap around.
         largest = self.start.astype(object) + self.nvec.astype(object) - 1
         dtype_max = int(np.iinfo(self.dtype).max)
@@ -187,7 +187,10 @@ class MultiDiscrete(Space[npt.NDArray[np.integer]]):
     def contains(self, x: Any) -> bool:
         """Whether ``x`` has the right shape, a castable dtype and every entry in range."""
         if isinstance(x, (Sequence, int, np.integer)) and not isinstance(x, str):
-            x = np.array(x)  # lists, tuples and (for shape ()) integers are checked like arrays
+            try:  # lists, tuples and (for shape ()) integers are checked like arrays
+                x = np.array(x)
+            except ValueError:  # ragged nesting: not an array, so not a member
+                return False
         # Compare with the largest element rather than computing `x - start`, which can
         # overflow small dtypes; `start + nvec - 1` always fits a valid space's dtype.
         return bool(
