@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -131,3 +133,68 @@ def test_unknown_options_are_ignored_like_gymnasium() -> None:
 def test_bad_render_mode() -> None:
     with pytest.raises(error.UnsupportedMode, match="ansi"):
         CartPoleEnv(render_mode="ansi")
+
+
+@pytest.mark.parametrize("cls", CONTINUOUS)
+@pytest.mark.parametrize(
+    ("action", "dtype"),
+    [
+        (np.array([0.5 + 1j]), "complex128"),
+        (np.array([0.5 + 0j]), "complex128"),  # numpy would drop the zero imaginary part
+        ([0.5 + 0j], "complex128"),
+        (np.array(["0.5"]), "<U3"),  # a float32 cast would parse it
+        (["0.5"], "<U3"),
+        (np.array([0.5], dtype=object), "object"),
+        (b"1", "|S1"),
+    ],
+)
+def test_continuous_rejects_complex_and_string_actions(
+    cls: type, action: object, dtype: str
+) -> None:
+    env = cls()
+    env.reset(seed=0)
+    with pytest.raises(error.InvalidAction) as info:
+        env.step(action)
+    space = repr(env.action_space)
+    assert str(info.value) == (
+        f"Invalid action {action!r} ({type(action).__name__}) for action space {space}: "
+        f"expected real numeric values, got dtype {dtype}"
+    )
+
+
+RESET_OPTIONS = [
+    ("Pendulum-v1", {"x_init": -5}, "Reset option x_init=-5 must be >= 0: the state is drawn "
+     "from [-x_init, x_init]."),
+    ("Pendulum-v1", {"y_init": -0.5}, "Reset option y_init=-0.5 must be >= 0"),
+    ("Pendulum-v1", {"x_init": 1e308}, "Reset option x_init=1e+308 is too large: "
+     "[-x_init, x_init] overflows a float."),
+    ("Pendulum-v1", {"x_init": 0, "y_init": "2"}, None),  # a zero-width box; a numeric string
+    ("CartPole-v1", {"low": -1e308, "high": 1e308}, "Reset options low=-1e+308 and high=1e+308 "
+     "span more than a float can hold (high - low overflows)."),
+    ("Acrobot-v1", {"low": -1e308, "high": 1e308}, "low=-1e+308 and high=1e+308 span more"),
+    ("MountainCar-v0", {"low": -1e308, "high": 1e308}, "low=-1e+308 and high=1e+308 span more"),
+    ("MountainCarContinuous-v0", {"low": -1e308, "high": 1e308}, "high - low overflows"),
+    ("CartPole-v1", {"low": 0.1, "high": 0.1}, None),
+    ("CartPole-v1", {"low": -0.2, "high": 0.2}, None),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("env_id", "options", "message"), RESET_OPTIONS)
+def test_reset_options_are_refused_where_gymnasium_refuses_them(
+    env_id: str, options: dict, message: str | None
+) -> None:
+    import gymnasium
+
+    theirs = gymnasium.make(env_id).unwrapped
+    if message is None:
+        theirs.reset(seed=0, options=options)
+        palaestra.make(env_id).reset(seed=0, options=options)
+        palaestra.make_vec(env_id, 2).reset(seed=0, options=options)
+        return
+    with pytest.raises((ValueError, OverflowError)), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # numpy's "overflow in subtract"
+        theirs.reset(seed=0, options=options)  # numpy: "high - low < 0", "Range exceeds ..."
+    for env in (palaestra.make(env_id), palaestra.make_vec(env_id, 2)):
+        with pytest.raises(ValueError) as info:
+            env.reset(seed=0, options=options)
+        assert message in str(info.value)

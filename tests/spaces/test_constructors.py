@@ -212,3 +212,94 @@ def test_graph_contains_checks_links() -> None:
     assert GraphInstance(nodes, np.array([0]), None) not in space
     assert GraphInstance(nodes + 2, None, None) not in space
     assert (nodes, None, None) not in space
+
+
+def test_scalar_nvec_is_shape_empty_as_in_gymnasium_and_its_samples_are_members() -> None:
+    space, twin = MultiDiscrete(3, seed=1), gymnasium.spaces.MultiDiscrete(3, seed=1)
+    assert (repr(space), space.shape) == (repr(twin), twin.shape) == ("MultiDiscrete(3)", ())
+    draws = [space.sample() for _ in range(30)]
+    assert all(d.shape == () and d.dtype == np.int64 and d in space for d in draws)
+    assert {int(d) for d in draws} == {0, 1, 2}
+    assert 2 in space and np.int8(1) in space and 3 not in space and "1" not in space
+    assert not twin.contains(twin.sample())  # Gymnasium's own sample is not in its space
+    assert space.sample(mask=np.array([0, 0, 1], np.int8)) == 2
+    with pytest.raises(TypeError, match=r"MultiDiscrete\(3\) has shape \(\): it has no length"):
+        len(space)
+
+
+@pytest.mark.parametrize(
+    ("nvec", "exc", "match"),
+    [
+        ("4", TypeError, "MultiDiscrete nvec must be integers, got '4' (str of <U1)"),
+        (None, TypeError, "MultiDiscrete nvec must be integers, got None (NoneType of object)"),
+        (True, TypeError, "MultiDiscrete nvec must be integers, got True (bool of bool)"),
+        ([2 + 1j], TypeError, "MultiDiscrete nvec must be integers, got [(2+1j)] (list of"),
+        ([[2, 3], [4]], ValueError, "must be a rectangular array of integers, got [[2, 3], [4]]"),
+        ([np.inf], ValueError, "MultiDiscrete nvec must be whole numbers, actual values: [inf]"),
+        ([np.nan], ValueError, "MultiDiscrete nvec must be whole numbers, actual values: [nan]"),
+        (2**70, ValueError, "MultiDiscrete nvec 1180591620717411303424 do not fit dtype int64"),
+        ([2**63], ValueError, "MultiDiscrete nvec [9223372036854775808] do not fit dtype int64"),
+    ],
+)
+def test_nvec_of_a_wrong_type_names_the_value(nvec: Any, exc: type, match: str) -> None:
+    # Gymnasium parses "4", truncates inf, casts complex values and True, or fails in numpy.
+    with pytest.raises(exc, match=re.escape(match)):
+        MultiDiscrete(nvec)
+
+
+# Found by tests/fuzz/test_spaces.py: wrong-type crashes and messages that named nothing.
+@pytest.mark.parametrize(
+    ("call", "exc", "match"),
+    [
+        (lambda: Discrete(2**64), ValueError, "start + n - 1 = 18446744073709551615 does not fit"),
+        (lambda: Discrete(2**63 + 5, start=-10), ValueError, "n=9223372036854775813 does not fit"),
+        (lambda: Discrete(2, start=-(2**64)), ValueError, "does not fit dtype int64"),
+        (lambda: MultiDiscrete(0), ValueError, "have to be positive, actual values: 0"),
+        (lambda: palaestra.spaces.MultiBinary("0;"), ValueError, "actual type: <class 'str'>"),
+        (lambda: palaestra.spaces.MultiBinary(["0;"]), ValueError, "actual: ['0;']"),
+        (lambda: palaestra.spaces.MultiBinary([2.5]), ValueError, "actual: [2.5]"),
+        (lambda: palaestra.spaces.MultiBinary([[1], 2]), ValueError, "actual: [[1], 2]"),
+        (lambda: palaestra.spaces.MultiBinary(np.array("")), ValueError, "actual type"),
+        (lambda: palaestra.spaces.MultiBinary(2**64), ValueError, "n=18446744073709551616 has"),
+        (lambda: Dict("00"), TypeError, "actual type: <class 'str'>"),
+        (lambda: Dict(b"\x00"), TypeError, "actual type: <class 'bytes'>"),
+        (lambda: Dict(["00"]), TypeError, "sequence of (key, space) pairs, actual value: ['00']"),
+        (lambda: Dict([("a",)]), TypeError, "actual value: [('a',)]"),
+        (lambda: Text(2**64), ValueError, "max_length must fit int64, actual value: 1844674407"),
+        (
+            lambda: palaestra.spaces.Box(np.array([3.0]), -254.0, dtype=np.int8),
+            ValueError,
+            "Box high is out of bounds of the dtype range, high=-254.0, int8 holds [-128, 127]",
+        ),
+        (
+            lambda: palaestra.spaces.Box(np.array([300.0]), 400, dtype=np.uint8),
+            ValueError,
+            "Box low is out of bounds of the dtype range, low=[300.], uint8 holds [0, 255]",
+        ),
+        (
+            lambda: palaestra.spaces.Box(0, 1, shape=(2**64,)),
+            ValueError,
+            "Box shape=(18446744073709551616,) has more elements than an array can hold",
+        ),
+    ],
+)
+def test_bad_arguments_found_by_the_fuzz(call: Any, exc: type, match: str) -> None:
+    with pytest.raises(exc, match=re.escape(match)):
+        call()
+
+
+def test_contains_answers_false_for_what_cannot_be_an_element() -> None:
+    S = palaestra.spaces
+    assert [1, [2]] not in S.MultiBinary(2)  # ragged: numpy raised ValueError
+    assert (None, []) not in MultiDiscrete([2, 2])
+    assert np.array(False) not in Tuple([])  # 0-d array: "iteration over a 0-d array"
+    assert None not in S.Sequence(Text(3), stack=True)  # CustomSpaceError from iterate
+    graph = S.Graph(S.Box(-1, 1, (2,)), Discrete(3))
+    assert S.GraphInstance(np.array(1), None, None) not in graph  # Gymnasium: TypeError
+    assert S.GraphInstance("ab", 3, 4) not in graph
+
+
+def test_box_with_high_minus_zero_samples() -> None:
+    # numpy's uniform refused high=-0.0 over low=0.0 ("high - low < 0"); Gymnasium's too.
+    box = palaestra.spaces.Box(0.0, -0.0, shape=(2,), seed=0)
+    assert box.sample().tolist() == [0.0, 0.0] and box.sample() in box

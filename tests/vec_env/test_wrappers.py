@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import gymnasium
 import numpy as np
 import pytest
@@ -94,6 +96,44 @@ def test_vec_frame_stack_channels_first_images():
     venv = DummyVecEnv([lambda: gym.make("CartPole-v1")] * 2)
     with pytest.raises(ValueError, match="channels_order"):
         VecFrameStack(venv, 2, channels_order="middle")
+
+
+@pytest.mark.parametrize(
+    ("n_stack", "exc", "match"),
+    [
+        ("4", TypeError, "n_stack must be a positive integer, got '4' (str)"),
+        (2.7, TypeError, "n_stack must be a positive integer, got 2.7 (float)"),
+        (True, TypeError, "n_stack must be a positive integer, got True (bool)"),
+        (None, TypeError, "n_stack must be a positive integer, got None (NoneType)"),
+        (0, ValueError, "n_stack must be a positive integer, got 0"),
+        (-2, ValueError, "n_stack must be a positive integer, got -2"),
+    ],
+)
+def test_vec_frame_stack_refuses_a_bad_n_stack(n_stack, exc, match):
+    # SB3 accepts "4" and 2.7 and fails later in numpy, or stacks 2.7 frames as 2.
+    venv = DummyVecEnv([lambda: gym.make("CartPole-v1")] * 2)
+    with pytest.raises(exc, match=f"^{re.escape(match)}$"):
+        VecFrameStack(venv, n_stack)
+
+
+def test_vec_frame_stack_larger_than_memory_is_refused_before_allocating(monkeypatch):
+    # 2**62 frames used to crash the interpreter inside np.repeat (a segfault, no exception).
+    import palaestra.vec_env.image as image
+
+    venv = DummyVecEnv([lambda: gym.make("CartPole-v1")] * 2)
+    expected = (
+        r"^n_stack=4611686018427387904 would need 295,147,905,179,352,825,856 bytes for the "
+        r"stacked observations \(64 per frame\), more than this machine's [\d,]+ bytes of memory$"
+    )
+    with pytest.raises(ValueError, match=expected):
+        VecFrameStack(venv, 2**62)
+    monkeypatch.setattr(image, "physical_memory", lambda: 64 * 1000)
+    with pytest.raises(ValueError, match="n_stack=1001 would need 64,064 bytes"):
+        VecFrameStack(venv, 1001)
+    assert VecFrameStack(venv, 1000).observation_space.shape == (4000,)
+    monkeypatch.setattr(image, "physical_memory", lambda: None)  # the OS does not say
+    with pytest.raises(ValueError, match="more than this machine's address space"):
+        VecFrameStack(venv, 2**62)
 
 
 class _ImageEnv(gym.Env):

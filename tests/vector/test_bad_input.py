@@ -51,6 +51,76 @@ def test_closed_envs_refuse_everything(mode):
             call()
 
 
+class _Unchecked(gym.Env):
+    """Steps whatever it is given, as most users' envs do: the vector env must check."""
+
+    def __init__(self, discrete: bool = False):
+        self.observation_space = gym.spaces.Box(-1, 1, (1,), np.float32)
+        box = gym.spaces.Box(-1, 1, (1,), np.float32)
+        self.action_space = gym.spaces.Discrete(2) if discrete else box
+
+    def reset(self, *, seed=None, options=None):
+        return np.zeros(1, np.float32), {}
+
+    def step(self, action):
+        return np.zeros(1, np.float32), 0.0, False, False, {}
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("face", ["SyncVectorEnv", "AsyncVectorEnv", "DummyVecEnv", "native"])
+@pytest.mark.parametrize(
+    ("actions", "dtype"),
+    [
+        (np.array([[0.5 + 0j], [0.1 + 0j]]), "complex128"),
+        (np.array([["0.5"], ["1"]]), "<U3"),
+        (np.array([[0.5], [None]], dtype=object), "object"),
+    ],
+)
+def test_complex_string_and_object_action_batches_are_refused(face, actions, dtype):
+    from palaestra.vec_env import DummyVecEnv
+    from palaestra.vector import AsyncVectorEnv, SyncVectorEnv
+
+    if face == "native":
+        envs = gym.make_vec("MountainCarContinuous-v0", 2)
+        space = "Box(-1.0, 1.0, (1,), float32)"
+        expected = (
+            f"Invalid actions {actions!r}: not numeric, expected real values for action space "
+            f"{space}, got dtype {dtype}"
+        )
+    else:
+        cls = {"SyncVectorEnv": SyncVectorEnv, "DummyVecEnv": DummyVecEnv}.get(face)
+        envs = cls([_Unchecked] * 2) if cls else AsyncVectorEnv([_Unchecked] * 2, context="fork")
+        expected = (
+            f"Invalid actions {actions!r} for action space Box(-1.0, 1.0, (2, 1), float32): "
+            f"expected real values, got dtype {dtype}"
+        )
+    envs.reset()
+    with pytest.raises(InvalidAction) as info:
+        envs.step(actions)
+    assert str(info.value) == expected
+    envs.step(np.zeros((2, 1), np.float32))  # nothing was sent: the envs are still usable
+    envs.close()
+
+
+def test_object_and_ragged_batches_for_discrete_envs_are_refused():
+    from palaestra.vector import SyncVectorEnv
+
+    envs = SyncVectorEnv([lambda: _Unchecked(discrete=True)] * 2)
+    envs.reset()
+    expected = (
+        r"^Invalid actions \[None, 1\] for action space MultiDiscrete\(\[2 2\]\): expected "
+        r"integer values, got dtype object$"
+    )
+    with pytest.raises(InvalidAction, match=expected):
+        envs.step([None, 1])
+    expected = (
+        r"^Invalid actions \[\[0\], 1\] for action space MultiDiscrete\(\[2 2\]\) \(2 envs\): "
+        r"not a rectangular array of shape \(2,\)$"
+    )
+    with pytest.raises(InvalidAction, match=expected):
+        envs.step([[0], 1])
+
+
 def test_native_step_before_reset():
     envs = _make("vector_entry_point")
     with pytest.raises(ResetNeeded, match="never reset"):

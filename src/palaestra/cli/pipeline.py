@@ -160,8 +160,13 @@ def check_pipeline(settings: dict[str, Any], env_id: str) -> None:
     """``CLIError`` unless ``atari`` and ``frame_stack`` are usable for ``env_id``."""
     atari = settings.get("atari")
     stack = settings.get("frame_stack")
-    if stack is not None and (isinstance(stack, bool) or not isinstance(stack, int) or stack < 1):
-        raise CLIError(f"frame_stack must be a positive integer or null, got {stack!r}", "e.g. 4")
+    if stack is not None:
+        from palaestra.vec_env.image import check_n_stack  # VecFrameStack's own check
+
+        try:
+            check_n_stack(stack, name="frame_stack")
+        except (TypeError, ValueError) as exc:
+            raise CLIError(str(exc), "e.g. 4, or null for no stack") from None
     if not isinstance(atari, (bool, dict, type(None))):
         raise CLIError(f"atari must be true/false or AtariWrapper kwargs, got {atari!r}", "fix it")
     env_wrapper(settings)  # imports it: a bad name fails before training starts

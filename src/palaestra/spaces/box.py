@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Literal, SupportsFloat
 
@@ -83,6 +84,10 @@ class Box(Space[npt.NDArray[Any]]):
                     f"Box {name}.shape doesn't match provided shape, "
                     f"{name}.shape={bound.shape}, shape={self._shape}"
                 )
+        if self.dtype.kind == "f":
+            # -0.0 + 0.0 is +0.0: numpy's uniform refuses high=-0.0 over low=0.0 ("high - low
+            # < 0") although the bounds are equal (Gymnasium's sample raises there).
+            self.high += 0.0
         if np.any(self.low > self.high):
             raise ValueError(
                 "Box all low values must be less than or equal to high (some values break this), "
@@ -107,6 +112,9 @@ class Box(Space[npt.NDArray[Any]]):
                 )
             if any(dim < 0 for dim in shape):
                 raise ValueError(f"Box shape dimensions must be non-negative, shape={shape}")
+            if math.prod(int(dim) for dim in shape) > np.iinfo(np.intp).max:
+                # numpy's own message ("Maximum allowed dimension exceeded") names nothing.
+                raise ValueError(f"Box shape={shape} has more elements than an array can hold")
             return tuple(int(dim) for dim in shape)
         if isinstance(low, np.ndarray) and isinstance(high, np.ndarray):
             if low.shape != high.shape:
@@ -166,6 +174,7 @@ class Box(Space[npt.NDArray[Any]]):
             (value < dtype_limit).any() if is_low else (value > dtype_limit).any()
         ):
             self._raise_out_of_range(value, name, dtype_limit)
+        self._refuse_wrap_around(value, name)
         if value.dtype.kind == "f" and self.dtype.kind == "f":
             if np.finfo(self.dtype).precision < np.finfo(value.dtype).precision:
                 logger.warn(
@@ -191,7 +200,20 @@ class Box(Space[npt.NDArray[Any]]):
                 value = dtype_limit
         elif value < dtype_limit if is_low else value > dtype_limit:
             self._raise_out_of_range(value, name, dtype_limit)
+        self._refuse_wrap_around(np.asarray(value), name)
         return np.full(self._shape, value, dtype=self.dtype), np.full(self._shape, not infinite)
+
+    def _refuse_wrap_around(self, value: np.ndarray, name: str) -> None:
+        """An integer box's bound must lie in its dtype, at both ends: Gymnasium checks only
+        ``low >= min`` and ``high <= max``, so ``high=-254`` becomes 2 in int8."""
+        if self.dtype.kind not in "iu" or value.dtype == self.dtype:
+            return
+        info = np.iinfo(self.dtype)
+        if ((value < info.min) | (value > info.max)).any():
+            raise ValueError(
+                f"Box {name} is out of bounds of the dtype range, {name}={value}, "
+                f"{self.dtype} holds [{info.min}, {info.max}]"
+            )
 
     @staticmethod
     def _raise_out_of_range(value: Any, name: str, dtype_limit: float) -> None:

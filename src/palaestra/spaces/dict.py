@@ -51,7 +51,13 @@ class Dict(Space[dict[str, Any]], typing.Mapping[str, Space[Any]]):
                     spaces_dict = dict(sorted(spaces_dict.items()))
                 except TypeError:
                     pass  # keys that cannot be compared keep their insertion order
-        elif isinstance(spaces, collections.abc.Sequence):
+        elif isinstance(spaces, collections.abc.Sequence) and not isinstance(spaces, (str, bytes)):
+            # dict() would also unpack two-character strings ("ab" -> key "a", space "b").
+            if not all(isinstance(pair, (tuple, list)) and len(pair) == 2 for pair in spaces):
+                raise TypeError(
+                    "Unexpected Dict space input, expecting a sequence of (key, space) pairs, "
+                    f"actual value: {spaces!r}"
+                )
             spaces_dict = dict(spaces)
         elif spaces is None:
             spaces_dict = {}
@@ -69,7 +75,7 @@ class Dict(Space[dict[str, Any]], typing.Mapping[str, Space[Any]]):
         for key, space in spaces_dict.items():
             if not isinstance(space, Space):
                 raise TypeError(
-                    f"Dict space element is not an instance of Space: key='{key}', space={space}"
+                    f"Dict space element is not an instance of Space: key='{key}', space={space!r}"
                 )
         self.spaces = spaces_dict
         super().__init__(None, None, seed)  # type: ignore[arg-type]

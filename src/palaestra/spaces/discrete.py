@@ -48,15 +48,19 @@ class Discrete(Space[np.integer]):
         self.dtype = np.dtype(dtype)
         if not np.issubdtype(self.dtype, np.integer):
             raise TypeError(f"Invalid Discrete dtype ({self.dtype}), must be an integer dtype")
-        self.n = self.dtype.type(n)  # type: ignore[assignment]
-        self.start = self.dtype.type(start)  # type: ignore[assignment]
-        largest, dtype_max = int(start) + int(n) - 1, int(np.iinfo(self.dtype).max)
+        info = np.iinfo(self.dtype)
+        largest, dtype_max = int(start) + int(n) - 1, int(info.max)
         if largest > dtype_max:
             # Gymnasium accepts this, then samples wrap around to values outside the space.
             raise ValueError(
                 f"Discrete largest element start + n - 1 = {largest} does not fit dtype "
                 f"{self.dtype} (max {dtype_max}); use a wider dtype or a smaller start/n"
             )
+        for name, value in (("n", n), ("start", start)):
+            if not info.min <= int(value) <= dtype_max:  # numpy would raise OverflowError
+                raise ValueError(f"Discrete {name}={value!r} does not fit dtype {self.dtype}")
+        self.n = self.dtype.type(n)  # type: ignore[assignment]
+        self.start = self.dtype.type(start)  # type: ignore[assignment]
         self._cache_bounds()
         super().__init__((), self.dtype, seed)
 

@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from palaestra import logger
+from palaestra.error import CustomSpaceError
 from palaestra.spaces.space import InvalidMask, Space
 
 # `palaestra.spaces.batching` imports this module (for GraphInstance), so the batching functions
@@ -156,7 +157,10 @@ class Graph(Space[GraphInstance]):
         # Any GraphInstance-shaped namedtuple (e.g. gymnasium's) is accepted, for interop.
         if not _is_graph_instance(x) or x.nodes is None:
             return False
-        nodes = list(iterate(self.batch_node_space, x.nodes))
+        try:  # iterate refuses what is not a batch of the space's elements: not a member
+            nodes = list(iterate(self.batch_node_space, x.nodes))
+        except (TypeError, CustomSpaceError):
+            return False
         if not all(node in self.node_space for node in nodes):
             return False
         if x.edges is None or x.edge_links is None:
@@ -164,7 +168,10 @@ class Graph(Space[GraphInstance]):
         if self.edge_space is None or not isinstance(x.edge_links, np.ndarray):
             return False
         assert self.batch_edge_space is not None  # set whenever edge_space is
-        edges = list(iterate(self.batch_edge_space, x.edges))
+        try:
+            edges = list(iterate(self.batch_edge_space, x.edges))
+        except (TypeError, CustomSpaceError):
+            return False
         return bool(
             all(edge in self.edge_space for edge in edges)
             and np.issubdtype(x.edge_links.dtype, np.integer)

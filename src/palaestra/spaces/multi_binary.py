@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from typing import Any, Literal
 
@@ -30,10 +31,17 @@ class MultiBinary(Space[npt.NDArray[np.int8]]):
         seed: int | np.random.Generator | None = None,
     ) -> None:
         """Build the space of binary arrays with shape ``n``."""
+        if isinstance(n, np.ndarray) and n.ndim == 0 and n.dtype.kind in "iu":
+            n = n.item()  # a 0-d integer array is an int
         if isinstance(n, (int, np.integer)):
             self.n = int(n)
             shape: tuple[int, ...] = (self.n,)
-        elif isinstance(n, (Sequence, np.ndarray)):
+        elif (isinstance(n, Sequence) and not isinstance(n, (str, bytes))) or (
+            isinstance(n, np.ndarray) and n.ndim == 1
+        ):
+            if not all(isinstance(i, (int, np.integer)) for i in n):
+                # Gymnasium casts with int(): "3" parses, 2.5 becomes 2, "0;" fails inside int.
+                raise ValueError(f"Expected n to be an int or a sequence of ints, actual: {n!r}")
             self.n = shape = tuple(int(i) for i in n)
         else:
             raise ValueError(
@@ -41,6 +49,8 @@ class MultiBinary(Space[npt.NDArray[np.int8]]):
             )
         if not all(dim > 0 for dim in shape):
             raise ValueError(f"n (counts) have to be positive, got {n}")
+        if math.prod(shape) > np.iinfo(np.intp).max:  # no array that large can exist
+            raise ValueError(f"MultiBinary n={n!r} has more elements than an array can hold")
         super().__init__(shape, np.int8, seed)
 
     @property
@@ -100,7 +110,10 @@ class MultiBinary(Space[npt.NDArray[np.int8]]):
     def contains(self, x: Any) -> bool:
         """Whether ``x`` has the space's shape and only 0/1 entries (any numeric dtype)."""
         if isinstance(x, Sequence):
-            x = np.array(x)
+            try:
+                x = np.array(x)
+            except ValueError:  # ragged nesting: not an array, so not a member
+                return False
         return bool(
             isinstance(x, np.ndarray) and x.shape == self.shape and ((x == 0) | (x == 1)).all()
         )

@@ -15,11 +15,30 @@ from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space
 
 
 def _integer_array(values: npt.ArrayLike, dtype: np.dtype, name: str) -> np.ndarray:
-    """``values`` as a new array of ``dtype``, refusing fractions that a cast would truncate."""
-    raw = np.asarray(values)
-    if raw.dtype.kind == "f" and not (raw == np.floor(raw)).all():
-        # Gymnasium silently turns MultiDiscrete([2.5]) into MultiDiscrete([2]).
-        raise ValueError(f"MultiDiscrete {name} must be whole numbers, actual values: {raw}")
+    """``values`` as a new array of ``dtype``: whole numbers that fit it, or a clear error.
+
+    A scalar gives shape ``()``, as in Gymnasium. Gymnasium silently truncates fractions
+    (``MultiDiscrete([2.5])`` is ``MultiDiscrete([2])``), casts complex values, parses strings
+    and wraps integers that do not fit; each is refused here.
+    """
+    try:
+        raw = np.asarray(values)
+    except ValueError:  # ragged nesting
+        raise ValueError(
+            f"MultiDiscrete {name} must be a rectangular array of integers, got {values!r}"
+        ) from None
+    if raw.dtype.kind == "O" and raw.size and all(type(v) is int for v in raw.flat):
+        raise ValueError(f"MultiDiscrete {name} {values!r} do not fit dtype {dtype}")
+    if raw.dtype.kind not in "iuf":
+        raise TypeError(
+            f"MultiDiscrete {name} must be integers, got {values!r} "
+            f"({type(values).__name__} of {raw.dtype})"
+        )
+    if raw.dtype.kind == "f" and not (np.isfinite(raw) & (raw == np.floor(raw))).all():
+        raise ValueError(f"MultiDiscrete {name} must be whole numbers, actual values: {values!r}")
+    info = np.iinfo(dtype)
+    if raw.size and (raw.min() < info.min or raw.max() > info.max):
+        raise ValueError(f"MultiDiscrete {name} {values!r} do not fit dtype {dtype}")
     return np.array(raw, dtype=dtype, copy=True)
 
 
@@ -65,11 +84,11 @@ class MultiDiscrete(Space[npt.NDArray[np.integer]]):
                 f"got {self.start.shape} and {self.nvec.shape}"
             )
         if not (self.nvec > 0).all():
-            raise ValueError("nvec (counts) have to be positive")
+            raise ValueError(f"nvec (counts) have to be positive, actual values: {nvec!r}")
         # Python ints cannot overflow; Gymnasium accepts spaces whose samples wrap around.
         largest = self.start.astype(object) + self.nvec.astype(object) - 1
         dtype_max = int(np.iinfo(self.dtype).max)
-        if (largest > dtype_max).any():
+        if np.any(largest > dtype_max):
             raise ValueError(
                 f"MultiDiscrete largest elements start + nvec - 1 = {largest} "
                 f"do not fit dtype {self.dtype} (max {dtype_max}); use a wider dtype"
@@ -100,14 +119,23 @@ class MultiDiscrete(Space[npt.NDArray[np.integer]]):
                 "Only one of `mask` or `probability` can be provided, "
                 f"actual values: mask={mask}, probability={probability}"
             )
+        # Shape (): one entry, masked like a Discrete (its mask is one array, not a tuple).
+        nvec, start = (
+            (self.nvec.item(), self.start.item())
+            if self.nvec.ndim == 0
+            else (
+                self.nvec,
+                self.start,
+            )
+        )
         if mask is not None:
-            return np.array(self._apply_mask(mask, self.nvec, self.start, "mask"), dtype=self.dtype)
+            return np.array(self._apply_mask(mask, nvec, start, "mask"), dtype=self.dtype)
         if probability is not None:
             return np.array(
-                self._apply_mask(probability, self.nvec, self.start, "probability"),
-                dtype=self.dtype,
+                self._apply_mask(probability, nvec, start, "probability"), dtype=self.dtype
             )
-        return (self.np_random.random(self.nvec.shape) * self.nvec).astype(self.dtype) + self.start
+        draw = (self.np_random.random(self.nvec.shape) * self.nvec).astype(self.dtype)
+        return np.asarray(draw + self.start)  # an array for shape () too (numpy gives a scalar)
 
     def _apply_mask(self, sub_mask: Any, sub_nvec: Any, sub_start: Any, mask_type: str) -> Any:
         """Sample one (nested) entry; recursion follows the axes of ``nvec``."""
@@ -158,8 +186,11 @@ class MultiDiscrete(Space[npt.NDArray[np.integer]]):
 
     def contains(self, x: Any) -> bool:
         """Whether ``x`` has the right shape, a castable dtype and every entry in range."""
-        if isinstance(x, Sequence):
-            x = np.array(x)  # lists and tuples are checked like arrays
+        if isinstance(x, (Sequence, int, np.integer)) and not isinstance(x, str):
+            try:  # lists, tuples and (for shape ()) integers are checked like arrays
+                x = np.array(x)
+            except ValueError:  # ragged nesting: not an array, so not a member
+                return False
         # Compare with the largest element rather than computing `x - start`, which can
         # overflow small dtypes; `start + nvec - 1` always fits a valid space's dtype.
         return bool(
@@ -195,6 +226,8 @@ class MultiDiscrete(Space[npt.NDArray[np.integer]]):
         return subspace
 
     def __len__(self) -> int:
+        if self.nvec.ndim == 0:
+            raise TypeError(f"{self} has shape (): it has no length")
         if self.nvec.ndim >= 2:
             logger.warn("Getting the length of a multi-dimensional MultiDiscrete space.")
         return len(self.nvec)

@@ -7,6 +7,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from palaestra.error import CustomSpaceError
 from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space
 
 # `palaestra.spaces.batching` imports this module to register its handlers, so the functions it
@@ -143,10 +144,11 @@ class Sequence(Space[Any]):
 
             # Gymnasium raises TypeError for non-iterables; "not a member" is the useful answer.
             try:
-                items = iterate(self.stacked_feature_space, x)
-            except TypeError:
+                return all(
+                    item in self.feature_space for item in iterate(self.stacked_feature_space, x)
+                )
+            except (TypeError, CustomSpaceError):  # iterate's "could not iterate through ..."
                 return False
-            return all(item in self.feature_space for item in items)
         return isinstance(x, tuple) and all(self.feature_space.contains(item) for item in x)
 
     def __repr__(self) -> str:

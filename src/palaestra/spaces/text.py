@@ -51,6 +51,8 @@ class Text(Space[str]):
                 "The min_length must be less than or equal to the max_length, "
                 f"min_length: {min_length}, max_length: {max_length}"
             )
+        if max_length >= np.iinfo(np.int64).max:  # sample draws lengths as int64
+            raise ValueError(f"Text max_length must fit int64, actual value: {max_length}")
         self.min_length = int(min_length)
         self.max_length = int(max_length)
 

@@ -86,8 +86,8 @@ class Tuple(Space[tuple[Any, ...]], typing.Sequence[Any]):
 
     def contains(self, x: Any) -> bool:
         """Whether ``x`` (a tuple, list or array) has one member of each subspace, in order."""
-        if isinstance(x, (list, np.ndarray)):
-            x = tuple(x)
+        if isinstance(x, list) or (isinstance(x, np.ndarray) and x.ndim > 0):
+            x = tuple(x)  # (a 0-d array holds no parts: it stays, and is not a member)
         return (
             isinstance(x, tuple)
             and len(x) == len(self.spaces)

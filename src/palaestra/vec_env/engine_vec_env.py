@@ -174,8 +174,11 @@ class SubprocVecEnv(EngineVecEnv):
     """One worker process per env (SB3's signature), observations in shared memory.
 
     ``start_method`` is "forkserver" (default where available, as in SB3), "spawn" or "fork".
-    A worker exception re-raises here with its traceback; a dead worker raises
-    ``WorkerDiedError`` at once and closes the others.
+    Not "fork" by default: the training process runs torch's threads, and a forked child copies
+    the locks they hold. "forkserver" and "spawn" run the script again in each worker, so a
+    script builds its vector envs under ``if __name__ == "__main__":`` (without it, the parent
+    raises ``MissingMainGuardError`` saying so). A worker exception re-raises here with its
+    class and traceback; a dead worker raises ``WorkerDiedError`` at once and closes the others.
     """
 
     def __init__(

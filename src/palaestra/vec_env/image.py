@@ -2,12 +2,46 @@
 
 from __future__ import annotations
 
+import os
+import sys
 from typing import Any
 
 import numpy as np
 
 from palaestra.spaces import Box
 from palaestra.vec_env.base import StepReturn, VecEnv, VecEnvWrapper
+
+
+def physical_memory() -> int | None:
+    """This machine's RAM in bytes, or None where the OS does not say (Windows)."""
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+def check_n_stack(n_stack: Any, frame_bytes: int = 1, name: str = "n_stack") -> int:
+    """``n_stack`` as an int, if it is a positive integer whose stack fits in memory.
+
+    ``frame_bytes`` is what one more stacked frame costs (every env's observation, and the
+    stacked space's bounds); 1 when unknown (a config checked before its env is built). Checked
+    before allocating: numpy does not refuse ``np.repeat(low, 2**62)``, it crashes the process.
+    """
+    if isinstance(n_stack, bool) or not isinstance(n_stack, (int, np.integer)):
+        raise TypeError(
+            f"{name} must be a positive integer, got {n_stack!r} ({type(n_stack).__name__})"
+        )
+    if n_stack < 1:
+        raise ValueError(f"{name} must be a positive integer, got {n_stack}")
+    need = int(n_stack) * frame_bytes
+    limit = physical_memory()
+    if need > (sys.maxsize if limit is None else limit):
+        raise ValueError(
+            f"{name}={n_stack} would need {need:,} bytes for the stacked observations "
+            f"({frame_bytes:,} per frame), more than this machine's "
+            + ("address space" if limit is None else f"{limit:,} bytes of memory")
+        )
+    return int(n_stack)
 
 
 def _is_image(space: Any) -> bool:
@@ -38,7 +72,9 @@ class VecFrameStack(VecEnvWrapper):
             raise ValueError(
                 f"channels_order must be 'first', 'last' or None, got {channels_order}"
             )
-        self.n_stack = n_stack
+        # The stack itself ([N, *shape] per frame) and the stacked space's low and high.
+        frame_bytes = (venv.num_envs + 2) * int(np.prod(space.shape)) * space.dtype.itemsize
+        self.n_stack = n_stack = check_n_stack(n_stack, max(frame_bytes, 1))
         self.axis = 0 if channels_order == "first" else -1
         low = np.repeat(space.low, n_stack, axis=self.axis)
         high = np.repeat(space.high, n_stack, axis=self.axis)

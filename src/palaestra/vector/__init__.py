@@ -9,7 +9,7 @@ returns for the classic-control ids). All three are views on one engine layer
 from palaestra.vector import utils
 from palaestra.vector.async_vector_env import AsyncVectorEnv
 from palaestra.vector.native import BatchedVectorEnv
-from palaestra.vector.process_engine import WorkerDiedError
+from palaestra.vector.process_engine import MissingMainGuardError, WorkerDiedError
 from palaestra.vector.sync_vector_env import SyncVectorEnv
 from palaestra.vector.vector_env import (
     AutoresetMode,
@@ -24,6 +24,7 @@ __all__ = [
     "AsyncVectorEnv",
     "AutoresetMode",
     "BatchedVectorEnv",
+    "MissingMainGuardError",
     "SyncVectorEnv",
     "VectorActionWrapper",
     "VectorEnv",

@@ -19,8 +19,10 @@ class AsyncVectorEnv(EngineVectorEnv):
     """Runs each env in its own process (Gymnasium's signature and ``*_async``/``*_wait`` API).
 
     ``context`` is the multiprocessing start method ("fork", "spawn", "forkserver"; None: the
-    platform default). ``shared_memory=False`` pickles observations instead (for custom
-    spaces). A worker that raises re-raises here with its traceback; one that dies raises
+    platform default, as in Gymnasium). "spawn" and "forkserver" run the script again in each
+    worker: build the env under ``if __name__ == "__main__":`` (``MissingMainGuardError`` says
+    so otherwise). ``shared_memory=False`` pickles observations instead (for custom spaces). A
+    worker that raises re-raises here with its class and traceback; one that dies raises
     ``WorkerDiedError`` at once.
     """
 

@@ -29,6 +29,7 @@ from palaestra.spaces.utils import is_space_dtype_shape_equiv
 Infos = Sequence[dict[str, Any]] | None
 Rows = Sequence[int] | None  # sub-env indices; None: all
 StepResult = tuple[np.ndarray, np.ndarray, np.ndarray, Infos]
+_REAL_KINDS = "biuf"  # bool, int, uint, float: the dtype kinds of numeric actions
 
 
 class Engine(Protocol):
@@ -100,24 +101,37 @@ def check_actions_batch(space: Space[Any], actions: Any, num_envs: int) -> None:
     """A clear error for a batch of array actions of the wrong shape or kind.
 
     Per-element validity (range, NaN) is the sub-env's business; this catches the batch-level
-    mistakes that would otherwise surface as a confusing error deep inside ``iterate``.
+    mistakes that would otherwise surface as a confusing error deep inside ``iterate`` or reach
+    a user's env unnoticed (complex values, strings, ``None``: Gymnasium passes them on).
     """
     shape = getattr(space, "shape", None)
     if shape is None or not isinstance(actions, (np.ndarray, list, tuple)):
         return
-    arr = np.asarray(actions) if not isinstance(actions, np.ndarray) else actions
-    if arr.dtype == object:
+    dtype = getattr(space, "dtype", None)
+    numeric = dtype is not None and dtype.kind in _REAL_KINDS
+    try:
+        arr = np.asarray(actions) if not isinstance(actions, np.ndarray) else actions
+    except ValueError:  # ragged nesting
+        if not numeric:
+            return
+        raise error.InvalidAction(
+            f"Invalid actions {actions!r} for action space {space} ({num_envs} envs): not a "
+            f"rectangular array of shape {shape}"
+        ) from None
+    if arr.dtype == object and not numeric:
         return
     if arr.shape != shape:
         raise error.InvalidAction(
             f"Expected a batch of actions of shape {shape} for action space {space} "
             f"({num_envs} envs), got shape {arr.shape}"
         )
-    dtype = getattr(space, "dtype", None)
-    if dtype is not None and dtype.kind in "iu" and arr.dtype.kind not in "iub":
-        raise error.InvalidAction(
-            f"Expected integer actions for action space {space}, got dtype {arr.dtype}"
-        )
+    if dtype is not None and numeric:
+        integer = dtype.kind in "iu"
+        if arr.dtype.kind not in ("iub" if integer else _REAL_KINDS):
+            raise error.InvalidAction(
+                f"Invalid actions {actions!r} for action space {space}: expected "
+                f"{'integer' if integer else 'real'} values, got dtype {arr.dtype}"
+            )
 
 
 def batch_spaces(

@@ -4,6 +4,12 @@ Every wait on a worker also watches its process sentinel, so a worker that dies 
 SIGKILL, the OOM killer) is reported at once with its exit code instead of hanging the parent.
 An exception raised by an env is re-raised in the parent with its original type and the
 worker's traceback text attached (``__notes__`` and ``__cause__``).
+
+The "spawn" and "forkserver" start methods run the parent's script again in each worker (as
+``__mp_main__``) to find the functions it defines. A script that builds a vector env at its top
+level, outside ``if __name__ == "__main__":``, would then build one in every worker: the worker
+leaves quietly instead (:data:`NO_MAIN_GUARD_EXIT`) and the parent raises
+:class:`MissingMainGuardError`, one line that says what to add.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ import multiprocessing as mp
 import os
 import pickle
 import signal
+import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
@@ -36,6 +43,7 @@ from palaestra.vector.worker import STEP, Payload, decode, run_worker
 
 _ARRAY_SPACES = (Box, Discrete, MultiDiscrete, MultiBinary)
 _POLL_SLICE = 0.5  # seconds between liveness checks while a worker is busy
+NO_MAIN_GUARD_EXIT = 93  # a worker's exit code: it reached a vector env while importing main
 
 
 @contextlib.contextmanager
@@ -51,6 +59,29 @@ def clear_mpi_env_vars() -> Iterator[None]:
 
 class WorkerDiedError(RuntimeError):
     """A worker process exited without answering; the vector env has been closed."""
+
+
+class MissingMainGuardError(WorkerDiedError):
+    """The workers ran the user's script again and reached the vector env at its top level."""
+
+
+def importing_main() -> bool:
+    """Whether this process is a spawn/forkserver worker still running the parent's main module.
+
+    ``_inheriting`` is the flag multiprocessing itself checks before refusing to start a process
+    from there (``spawn._check_not_importing_main``); it is cleared once the worker is set up,
+    so a vector env made inside an env's own constructor is not affected.
+    """
+    return bool(getattr(mp.current_process(), "_inheriting", False))
+
+
+def _main_guard_message(who: str, start_method: str) -> str:
+    script = getattr(sys.modules["__main__"], "__file__", None) or "your script"
+    return (
+        f"{who}: each worker process runs {script} again (start method {start_method!r}) and "
+        f"reached this {who} at its top level; put the code that creates and uses it under "
+        '`if __name__ == "__main__":`'
+    )
 
 
 class RemoteTraceback(Exception):
@@ -83,6 +114,13 @@ class ProcessEngine:
         observation_mode: Any = "same",
         who: str = "AsyncVectorEnv",
     ) -> None:
+        if importing_main():
+            # This process is a worker re-running its parent's script, which builds vector
+            # envs at its top level (no main guard). Going on would make workers of workers
+            # (multiprocessing refuses, with a page of traceback from each): leave at once,
+            # silently, with a code that the parent turns into one line. Nothing has been
+            # started or opened here yet.
+            os._exit(NO_MAIN_GUARD_EXIT)
         if len(env_fns) == 0:
             raise ValueError(f"{who} needs at least one environment function")
         self.who = who
@@ -91,10 +129,14 @@ class ProcessEngine:
         self.processes: list[Any] = []
         self.conns: list[Any] = []
         ctx = mp.get_context(context)
-        if ctx.get_start_method() == "forkserver":
+        self.start_method = ctx.get_start_method()
+        if self.start_method == "forkserver":
             # Workers fork from the server: with palaestra imported there once, each worker
             # starts in milliseconds instead of importing it again (no effect once it runs).
-            ctx.set_forkserver_preload(["__main__", "palaestra.vector.worker"])
+            # Not "__main__": that preload is dead code before CPython 3.13.8 (gh-126631), and
+            # where it works the server itself runs the user's script, so a missing main guard
+            # would kill the server with a traceback instead of the one-line error below.
+            ctx.set_forkserver_preload(["palaestra.vector.worker"])
         # The spaces are needed before the workers start (to size shared memory): build one env
         # here and drop it, as Gymnasium does.
         dummy = env_fns[0]()
@@ -162,6 +204,13 @@ class ProcessEngine:
                 child.close()
             self._gather(range(n), "start")
             self._check_spaces()
+        except WorkerDiedError:
+            self.close(terminate=True)
+            if any(proc.exitcode == NO_MAIN_GUARD_EXIT for proc in self.processes):
+                # Raised here, without the pipe error as context: the user sees one short
+                # traceback from their own line, ending in the line that says what to add.
+                raise MissingMainGuardError(_main_guard_message(who, self.start_method)) from None
+            raise
         except BaseException:
             self.close(terminate=True)
             raise

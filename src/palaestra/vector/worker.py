@@ -31,30 +31,57 @@ class Payload:
     def __getstate__(self) -> bytes:
         try:
             import cloudpickle  # optional: plain pickle handles module-level functions
-
-            return bytes(cloudpickle.dumps(self.fn))
         except ImportError:
-            return pickle.dumps(self.fn)
+            try:
+                return pickle.dumps(self.fn)
+            except Exception as e:
+                raise TypeError(
+                    f"cannot send the env function {self.fn!r} to a worker process ({e}): "
+                    "pass a module-level function, or `pip install cloudpickle` to send "
+                    "lambdas and local functions"
+                ) from None
+        return bytes(cloudpickle.dumps(self.fn))
 
     def __setstate__(self, state: bytes) -> None:
         self.fn = pickle.loads(state)
 
 
-def pack_exception(exc: BaseException) -> tuple[BaseException, str]:
-    """The exception (or a stand-in if it cannot be pickled) and its traceback text."""
+def dumps(obj: Any) -> bytes:
+    """``obj`` pickled; with cloudpickle (by value) where plain pickle cannot name a class.
+
+    That happens to the classes of the parent's own script under "spawn" and "forkserver": the
+    env function reached the worker by value (see :class:`Payload`), so its classes are rebuilt
+    copies that the worker's re-imported ``__main__`` does not hold under their names. Sent
+    back by value, cloudpickle's class tracking turns each into the parent's original class, so
+    ``except BoomError`` in the parent's script matches, as under "fork".
+    """
+    try:
+        return pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception as e:
+        try:
+            import cloudpickle
+        except ImportError:
+            raise e from None
+        return bytes(cloudpickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL))
+
+
+def encode_error(exc: BaseException) -> bytes:
+    """A failed answer: the exception and its traceback text, or, if the exception cannot be
+    rebuilt from its pickle, a ``RuntimeError`` stand-in with its type name and message."""
     text = traceback.format_exc()
     try:
-        pickle.loads(pickle.dumps(exc))
-        return exc, text
+        message = dumps((False, (exc, text)))
+        pickle.loads(message)  # an __init__ that does not take its own args fails here, not there
+        return message
     except Exception:
-        return RuntimeError(f"{type(exc).__name__}: {exc}"), text
+        return dumps((False, (RuntimeError(f"{type(exc).__name__}: {exc}"), text)))
 
 
 def encode(ok: bool, payload: Any) -> bytes:
     """An answer as bytes: empty for ``(True, {})``, else a pickled ``(ok, payload)``."""
     if ok and type(payload) is dict and not payload:
         return EMPTY_OK
-    return pickle.dumps((ok, payload), protocol=pickle.HIGHEST_PROTOCOL)
+    return dumps((ok, payload))
 
 
 def decode(message: bytes) -> tuple[bool, Any]:
@@ -127,7 +154,7 @@ def run_worker(
         shared = None if buffers is None else _Shared(buffers, spaces, num_envs)
         conn.send_bytes(encode(True, None))
     except Exception as e:
-        conn.send_bytes(encode(False, pack_exception(e)))
+        conn.send_bytes(encode_error(e))
         return
     try:
         while True:
@@ -145,7 +172,7 @@ def run_worker(
             try:
                 answer = encode(True, _serve(env, command, data, index, shared))
             except Exception as e:
-                answer = encode(False, pack_exception(e))
+                answer = encode_error(e)
             conn.send_bytes(answer)
     finally:
         if env is not None:

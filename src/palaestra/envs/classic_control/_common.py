@@ -15,6 +15,8 @@ from palaestra.spaces import Box, Discrete
 
 RENDER_MODES = ["human", "rgb_array"]
 _INT64 = np.dtype(np.int64)
+_FLOAT32 = np.dtype(np.float32)
+_REAL_KINDS = "biuf"  # bool, ints, floats: what a float Box action may be made of (no complex, str)
 
 
 def state_array(values: Any, dtype: Any = np.float64) -> np.ndarray:
@@ -51,6 +53,12 @@ def parse_reset_bounds(
     high = parse_number("high", options["high"]) if "high" in options else default_high
     if low > high:
         raise ValueError(f"Lower bound ({low}) must be lower than higher bound ({high}).")
+    if not math.isfinite(high - low):
+        # numpy's uniform (Gymnasium) raises OverflowError here; the draw would be inf.
+        raise ValueError(
+            f"Reset options low={low!r} and high={high!r} span more than a float can hold "
+            "(high - low overflows)."
+        )
     return low, high
 
 
@@ -85,10 +93,18 @@ def check_box_action(action: Any, space: Any) -> float:
     and so do we. The value is rounded to float32, the space's dtype (Gymnasium would compute
     with a float64 action's full precision).
     """
-    try:
-        arr = np.asarray(action, dtype=np.float32)
-    except (TypeError, ValueError) as e:
-        raise invalid_action(action, space, "not a numeric array") from e
+    if type(action) is np.ndarray and action.dtype is _FLOAT32:  # what sample() gives: no cast
+        arr = action
+    else:
+        try:
+            raw = np.asarray(action)
+        except (TypeError, ValueError) as e:
+            raise invalid_action(action, space, "not a numeric array") from e
+        if raw.dtype.kind not in _REAL_KINDS:
+            # A float32 cast would parse strings and drop imaginary parts without a word.
+            why = f"expected real numeric values, got dtype {raw.dtype}"
+            raise invalid_action(action, space, why)
+        arr = raw.astype(np.float32, copy=False)
     if arr.shape != space.shape:
         raise invalid_action(action, space, f"expected shape {space.shape}, got {arr.shape}")
     value = float(arr[0])
@@ -132,10 +148,20 @@ def check_discrete_batch(actions: Any, space: Discrete, num_envs: int) -> np.nda
 
 def check_box_batch(actions: Any, space: Box, num_envs: int) -> np.ndarray:
     """Validate N ``(1,)`` float actions: float32 values as float64 ``[N]``, else InvalidAction."""
-    try:
-        arr = np.asarray(actions, dtype=np.float32)
-    except (TypeError, ValueError) as e:
-        raise error.InvalidAction(f"Invalid actions {actions!r}: not numeric") from e
+    if type(actions) is np.ndarray and actions.dtype is _FLOAT32:  # the usual case: no cast
+        arr = actions
+    else:
+        try:
+            raw = np.asarray(actions)
+        except (TypeError, ValueError) as e:
+            raise error.InvalidAction(f"Invalid actions {actions!r}: not numeric") from e
+        if raw.dtype.kind not in _REAL_KINDS:
+            # A float32 cast would parse strings and drop imaginary parts without a word.
+            raise error.InvalidAction(
+                f"Invalid actions {actions!r}: not numeric, expected real values for action "
+                f"space {space}, got dtype {raw.dtype}"
+            )
+        arr = raw.astype(np.float32, copy=False)
     if arr.shape != (num_envs, *space.shape):
         raise error.InvalidAction(
             f"Invalid actions: expected shape {(num_envs, *space.shape)} for {num_envs} envs "

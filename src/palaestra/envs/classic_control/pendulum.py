@@ -67,6 +67,14 @@ def parse_options(options: dict[str, Any] | None) -> tuple[float, float]:
         return DEFAULT_X, DEFAULT_Y
     x = parse_number("x_init", options["x_init"]) if "x_init" in options else DEFAULT_X
     y = parse_number("y_init", options["y_init"]) if "y_init" in options else DEFAULT_Y
+    for name, value in (("x_init", x), ("y_init", y)):
+        # Gymnasium draws U(-v, v) with numpy, which refuses v < 0 (high - low < 0) and a
+        # 2 * v that overflows; we would draw from a flipped or infinite box instead.
+        shown = f"Reset option {name}={options.get(name)!r}"
+        if value < 0:
+            raise ValueError(f"{shown} must be >= 0: the state is drawn from [-{name}, {name}].")
+        if not math.isfinite(2 * value):
+            raise ValueError(f"{shown} is too large: [-{name}, {name}] overflows a float.")
     return x, y
 
 
