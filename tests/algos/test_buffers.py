@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-import torch
 
 from palaestra import spaces
 from palaestra.algos.replay_buffer import ReplayBuffer
@@ -39,12 +38,12 @@ def test_ring_wraps_and_sample_shapes() -> None:
     assert buf.buffer_size == 4
     _fill(buf, 6)
     assert buf.full and buf.pos == 2 and buf.size() == 4
-    batch = buf.sample(16, np.random.default_rng(0))
-    assert batch.observations.shape == (16, 2) and batch.actions.shape == (16,)
-    assert batch.rewards.dtype == torch.float32 and batch.terminated.shape == (16,)
+    obs, actions, next_obs, rewards, terminated = buf.sample_arrays(16, np.random.default_rng(0))
+    assert obs.shape == (16, 2) and actions.shape == (16,)
+    assert rewards.dtype == np.float32 and terminated.shape == (16,)
     # rows 0-1 were overwritten by steps 4-5: no step 0 or 1 transitions remain
-    assert set(batch.rewards.tolist()) <= {2.0, 3.0, 4.0, 5.0}
-    torch.testing.assert_close(batch.next_observations, batch.observations + 1)
+    assert set(rewards.tolist()) <= {2.0, 3.0, 4.0, 5.0}
+    np.testing.assert_array_equal(next_obs, obs + 1)
 
 
 def test_dict_observations_and_state_roundtrip() -> None:
@@ -53,8 +52,8 @@ def test_dict_observations_and_state_roundtrip() -> None:
     for t in range(3):
         obs = {"img": np.full((1, 3, 4, 4), t, np.uint8), "v": np.array([t])}
         buf.add(obs, obs, np.array([1]), np.array([1.0]), np.array([False]), np.array([False]))
-    batch = buf.sample(4, np.random.default_rng(1))
-    assert batch.observations["img"].dtype == torch.uint8
+    obs = buf.sample_arrays(4, np.random.default_rng(1))[0]
+    assert obs["img"].dtype == np.uint8 and obs["img"].shape == (4, 3, 4, 4)
     meta, arrays = buf.state()
     other = ReplayBuffer(10, space, spaces.Discrete(2))
     other.load_state(meta, arrays)
@@ -78,9 +77,9 @@ def test_rollout_buffer_minibatches_cover_everything_once() -> None:
     assert buf.full
     buf.compute_returns_and_advantage(np.zeros(3), np.ones(3))
     seen = []
-    for mb in buf.minibatches(5, np.random.default_rng(0)):
-        assert mb.observations.shape[1:] == (2,) and mb.actions.dtype == torch.float32
-        seen += mb.old_values.tolist()
+    for mb in buf.minibatch_arrays(5, np.random.default_rng(0)):
+        assert mb["observations"].shape[1:] == (2,) and mb["actions"].dtype == np.float32
+        seen += mb["old_values"].tolist()
     assert sorted(seen) == sorted(float(10 * t + e) for t in range(4) for e in range(3))
 
 

@@ -50,7 +50,7 @@ def test_every_saved_value_has_a_rule(cls: Any) -> None:
     network = QNetwork if cls is DQN else ActorCritic
     taken = set(inspect.signature(network.__init__).parameters)
     taken -= {"self", "observation_space", "action_space"}
-    taken |= {"optimizer_class", "optimizer_kwargs", "share_features_extractor"}
+    taken |= {"optimizer_class", "optimizer_kwargs", "share_features_extractor", "backend"}
     assert taken == set(hp.POLICY_KWARGS[name])
 
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import torch
 
-from palaestra.algos.dqn_math import dqn_loss, polyak_update
-from palaestra.algos.ppo_math import explained_variance, gae, ppo_loss
+from palaestra.algos.learners.losses import dqn_loss, explained_variance, gae, polyak, ppo_loss
+from palaestra.algos.learners.xp import numpy_ops, torch_ops
 from palaestra.algos.schedules import (
     ConstantSchedule,
     LinearSchedule,
@@ -94,54 +94,50 @@ def test_gae_matches_sb3_rollout_buffer() -> None:
     np.testing.assert_allclose(ret, sb3.returns, rtol=1e-5, atol=1e-6)
 
 
-def test_ppo_loss_by_hand() -> None:
+@pytest.mark.parametrize("xp", [numpy_ops, torch_ops], ids=["numpy", "torch"])
+def test_ppo_loss_by_hand(xp) -> None:  # type: ignore[no-untyped-def]
     old = torch.log(torch.tensor([0.5, 0.5]))
     new = torch.log(torch.tensor([0.75, 0.25]))  # ratios 1.5 and 0.5
     adv = torch.tensor([1.0, 1.0])
     values, returns = torch.tensor([1.0, 2.0]), torch.tensor([2.0, 2.0])
-    out = ppo_loss(
-        new,
-        old,
-        adv,
-        values,
-        values,
-        returns,
-        torch.tensor([0.3, 0.1]),
-        clip_range=0.2,
-        ent_coef=0.01,
-        vf_coef=0.5,
-        normalize_advantage=False,
+    args = [new, old, adv, values, values, returns, torch.tensor([0.3, 0.1])]
+    if xp is numpy_ops:
+        args = [a.numpy() for a in args]
+    _, out, _ = ppo_loss(
+        xp, *args, clip_range=0.2, ent_coef=0.01, vf_coef=0.5, normalize_advantage=False
     )
     # min(1.5, 1.2) = 1.2 and min(0.5, 0.8) = 0.5 -> policy loss -(1.2 + 0.5) / 2
-    assert float(out.policy_loss) == pytest.approx(-0.85)
-    assert float(out.value_loss) == pytest.approx(0.5)
-    assert float(out.entropy_loss) == pytest.approx(-0.2)
-    assert float(out.loss) == pytest.approx(-0.85 + 0.01 * -0.2 + 0.5 * 0.5)
-    assert float(out.clip_fraction) == 1.0
+    assert float(out["policy_loss"]) == pytest.approx(-0.85)
+    assert float(out["value_loss"]) == pytest.approx(0.5)
+    assert float(out["entropy_loss"]) == pytest.approx(-0.2)
+    assert float(out["loss"]) == pytest.approx(-0.85 + 0.01 * -0.2 + 0.5 * 0.5)
+    assert float(out["clip_fraction"]) == 1.0
     kl = np.mean([(1.5 - 1) - math.log(1.5), (0.5 - 1) - math.log(0.5)])
-    assert float(out.approx_kl) == pytest.approx(kl)
+    assert float(out["approx_kl"]) == pytest.approx(kl)
 
 
 def test_ppo_loss_value_clipping_and_normalisation() -> None:
     v_old, v_new, ret = torch.tensor([0.0]), torch.tensor([1.0]), torch.tensor([1.0])
     lp = torch.zeros(1)
-    clipped = ppo_loss(lp, lp, torch.ones(1), v_new, v_old, ret, None, 0.2, clip_range_vf=0.1)
-    assert float(clipped.value_loss) == pytest.approx(0.81)  # (1 - 0.1)^2
-    assert float(clipped.entropy_loss) == 0.0  # -mean(-log_prob) with log_prob 0
+    _, clipped, _ = ppo_loss(
+        torch_ops, lp, lp, torch.ones(1), v_new, v_old, ret, None, 0.2, clip_range_vf=0.1
+    )
+    assert float(clipped["value_loss"]) == pytest.approx(0.81)  # (1 - 0.1)^2
+    assert float(clipped["entropy_loss"]) == 0.0  # -mean(-log_prob) with log_prob 0
     adv = torch.tensor([1.0, 3.0])
     lp2 = torch.tensor([0.1, 0.0])
-    normed = ppo_loss(
-        lp2, torch.zeros(2), adv, torch.zeros(2), torch.zeros(2), torch.zeros(2), None, 0.2
-    )
+    z = torch.zeros(2)
+    _, normed, _ = ppo_loss(torch_ops, lp2, z, adv, z, z, z, None, 0.2)
     a = (adv - adv.mean()) / (adv.std() + 1e-8)  # [-0.707, 0.707]
     expect = -torch.min(a * lp2.exp(), a * torch.clamp(lp2.exp(), 0.8, 1.2)).mean()
-    assert float(normed.policy_loss) == pytest.approx(float(expect))
+    assert float(normed["policy_loss"]) == pytest.approx(float(expect))
 
 
 def test_dqn_loss_huber_and_time_limit() -> None:
     q = torch.tensor([[1.0, 5.0], [0.0, 0.0]], requires_grad=True)
     next_q = torch.tensor([[2.0, 4.0], [10.0, 0.0]])
-    loss = dqn_loss(
+    loss, _, _ = dqn_loss(
+        torch_ops,
         q,
         torch.tensor([1, 0]),
         torch.tensor([1.0, 1.0]),
@@ -157,9 +153,9 @@ def test_dqn_loss_huber_and_time_limit() -> None:
 
 def test_polyak_update() -> None:
     online, target = [torch.tensor([1.0, 2.0])], [torch.tensor([0.0, 0.0])]
-    polyak_update(online, target, 0.25)
+    polyak(online, target, 0.25)
     assert target[0].tolist() == [0.25, 0.5]
-    polyak_update(online, target, 1.0)
+    polyak(online, target, 1.0)
     assert target[0].tolist() == [1.0, 2.0]
 
 

@@ -6,6 +6,7 @@ import torch
 
 from palaestra import spaces
 from palaestra.algos.distributions import ActionHead
+from palaestra.algos.learners.xp import numpy_ops, torch_ops
 from palaestra.algos.networks import CombinedExtractor, NatureCNN, preprocess_obs
 from palaestra.algos.policies import ActorCritic, QNetwork, extractor_class
 
@@ -45,34 +46,41 @@ def test_parameter_counts_match_sb3() -> None:
     ],
 )
 def test_action_heads_agree_with_torch_distributions(space: spaces.Space) -> None:
+    """Samples lie in the space, and the log-probs/entropies written over ``xp`` equal
+    ``torch.distributions``' on both namespaces."""
     torch.manual_seed(0)
     head = ActionHead(space, 5, log_std_init=-0.3)
-    latent = torch.randn(6, 5)
-    actions, log_prob = head.act(latent, deterministic=False)
-    actions = actions.detach()
+    params = head.net(torch.randn(6, 5)).detach()
+    log_std = head.log_std.detach() if hasattr(head, "log_std") else None
+    np_log_std = None if log_std is None else log_std.numpy()
+    actions, log_prob = head.sample(params.numpy(), np_log_std, np.random.default_rng(0), False)
     if not isinstance(space, spaces.Box):  # Gaussian samples are unbounded; the env clips
-        assert all(space.contains(a) for a in actions.numpy().astype(space.dtype))
-    lp, ent = head.evaluate(latent, actions)
-    torch.testing.assert_close(lp, log_prob)
-    params = head.net(latent)
+        assert all(space.contains(a) for a in actions.astype(space.dtype))
+    idx = head.index(actions)
+    lp_t, ent_t, _ = head.evaluate(torch_ops, params, log_std, torch.as_tensor(idx))
+    lp_n, ent_n, _ = head.evaluate(numpy_ops, params.numpy(), np_log_std, idx)
+    np.testing.assert_allclose(lp_n, log_prob, rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(lp_t.numpy(), log_prob, rtol=1e-5, atol=1e-5)
     D = torch.distributions
+    t_actions = torch.as_tensor(actions, dtype=torch.float32)
     if isinstance(space, spaces.Box):
-        dist = D.Normal(params, head.log_std.exp())
-        ref_lp, ref_ent = dist.log_prob(actions).sum(1), dist.entropy().sum(1)
+        dist = D.Normal(params, log_std.exp())
+        ref_lp, ref_ent = dist.log_prob(t_actions).sum(1), dist.entropy().sum(1)
     elif isinstance(space, spaces.MultiBinary):
         dist = D.Bernoulli(logits=params)
-        ref_lp, ref_ent = dist.log_prob(actions).sum(1), dist.entropy().sum(1)
+        ref_lp, ref_ent = dist.log_prob(t_actions).sum(1), dist.entropy().sum(1)
     else:
         sizes = [int(space.n)] if isinstance(space, spaces.Discrete) else space.nvec.tolist()
-        idx = (actions - torch.as_tensor(np.asarray(space.start))).reshape(6, -1)
+        ind = torch.as_tensor(idx).reshape(6, -1)
         parts = [D.Categorical(logits=chunk) for chunk in torch.split(params, sizes, 1)]
-        ref_lp = sum(d.log_prob(idx[:, i]) for i, d in enumerate(parts))
+        ref_lp = sum(d.log_prob(ind[:, i]) for i, d in enumerate(parts))
         ref_ent = sum(d.entropy() for d in parts)
-    torch.testing.assert_close(lp, ref_lp)
-    torch.testing.assert_close(ent, ref_ent)
-    mode, _ = head.act(latent, deterministic=True)
-    again, _ = head.act(latent, deterministic=True)
-    torch.testing.assert_close(mode, again)
+    torch.testing.assert_close(lp_t, ref_lp)
+    torch.testing.assert_close(ent_t.expand(6), ref_ent)
+    np.testing.assert_allclose(np.broadcast_to(ent_n, (6,)), ref_ent.numpy(), rtol=1e-5)
+    mode, _ = head.sample(params.numpy(), np_log_std, np.random.default_rng(1), True)
+    again, _ = head.sample(params.numpy(), np_log_std, np.random.default_rng(2), True)
+    np.testing.assert_array_equal(mode, again)
 
 
 def test_ortho_init_gains() -> None:
@@ -105,8 +113,8 @@ def test_multi_input_and_discrete_obs() -> None:
         "img": torch.zeros(5, 1, 36, 36, dtype=torch.uint8),
         "pos": torch.tensor([0, 1, 2, 0, 1]),
     }
-    actions, values, log_prob = ac(obs)
-    assert actions.shape == values.shape == log_prob.shape == (5,)
+    logits, values = ac.pi_and_vf(obs)
+    assert logits.shape == (5, 2) and values.shape == (5, 1)
     assert ac.features_extractor.features_dim == 256 + 3
     one_hot = preprocess_obs(torch.tensor([2, 0]), spaces.Discrete(3))
     assert one_hot.tolist() == [[0, 0, 1], [1, 0, 0]]
@@ -123,45 +131,19 @@ def test_unknown_policy_and_bad_arch() -> None:
         QNetwork(BOX4, spaces.Discrete(2), NatureCNN)
 
 
-@pytest.mark.parametrize(
-    "space",
-    [
-        spaces.Discrete(3, start=1),
-        spaces.MultiDiscrete([3, 2]),
-        spaces.MultiBinary(3),
-        spaces.Box(-1, 1, (2,)),
-    ],
-)
-def test_numpy_acting_matches_torch(space: spaces.Space) -> None:
-    torch.manual_seed(0)
-    ac = ActorCritic(BOX4, space, ortho_init=False)
-    pair = ac.numpy_acting()
-    assert pair is not None
-    pi, vf = pair
-    obs = np.random.default_rng(0).normal(size=(7, 4)).astype(np.float32)
-    actions, log_prob = ac.action_head.act_numpy(pi(obs), np.random.default_rng(1), False)
-    values_t, log_prob_t, _ = ac.evaluate_actions(torch.as_tensor(obs), torch.as_tensor(actions))
-    np.testing.assert_allclose(log_prob, log_prob_t.detach().numpy(), rtol=1e-5, atol=1e-5)
-    np.testing.assert_allclose(vf(obs)[:, 0], values_t.detach().numpy(), rtol=1e-5, atol=1e-6)
-    mode_np, _ = ac.action_head.act_numpy(pi(obs), np.random.default_rng(1), True)
-    mode_t = ac.act(torch.as_tensor(obs), deterministic=True)
-    np.testing.assert_allclose(mode_np, mode_t.detach().numpy(), rtol=1e-5, atol=1e-6)
-    # the numpy views follow in-place parameter updates
-    with torch.no_grad():
-        ac.value_head.bias.add_(1.0)
-    np.testing.assert_allclose(vf(obs)[:, 0], values_t.detach().numpy() + 1, rtol=1e-5, atol=1e-5)
-
-
-def test_numpy_acting_declines_what_it_cannot_do() -> None:
-    assert QNetwork(BOX4, spaces.Discrete(2)).numpy_acting() is not None
-    assert QNetwork(spaces.Discrete(5), spaces.Discrete(2)).numpy_acting() is None  # one-hot
+def test_mlp_modules_declines_what_numpy_cannot_read() -> None:
+    assert QNetwork(BOX4, spaces.Discrete(2)).mlp_modules()[0] is not None
+    modules, why = QNetwork(spaces.Discrete(5), spaces.Discrete(2)).mlp_modules()
+    assert modules is None and "one-hot" in why
     img = spaces.Box(0, 255, (36, 36, 1), np.uint8)
-    assert QNetwork(img, spaces.Discrete(2), NatureCNN).numpy_acting() is None
-    assert ActorCritic(BOX4, spaces.Discrete(2), activation_fn=torch.nn.ELU).numpy_acting() is None
+    modules, why = QNetwork(img, spaces.Discrete(2), NatureCNN).mlp_modules()
+    assert modules is None and "NatureCNN" in why
+    modules, why = QNetwork(img, spaces.Discrete(2)).mlp_modules()
+    assert modules is None and "scaled" in why
 
 
 def test_numpy_categorical_draws_follow_the_softmax() -> None:
-    from palaestra.algos.numpy_acting import sample_categorical
+    from palaestra.algos.learners.heads import categorical_sample as sample_categorical
 
     logits = np.array([[0.0, 1.0, -1.0, 2.0]] * 200_000, dtype=np.float32)
     idx, log_prob = sample_categorical(logits, np.random.default_rng(0), False)
@@ -175,7 +157,7 @@ def test_numpy_categorical_draws_follow_the_softmax() -> None:
 
 
 def test_numpy_categorical_draw_at_the_top_of_the_unit_interval_stays_in_range() -> None:
-    from palaestra.algos.numpy_acting import sample_categorical
+    from palaestra.algos.learners.heads import categorical_sample as sample_categorical
 
     class TopRng:
         def random(self, n: int) -> np.ndarray:

@@ -22,7 +22,12 @@ surprising, palaestra differs on purpose:
 - DQN draws one epsilon coin per env (SB3: one for all envs);
 - a function callback returning ``None`` keeps training (SB3 stops);
 - ``progress_bar=True`` needs tqdm only; channel-last images need no ``VecTransposeImage``;
-- small MLP policies act in numpy and train with one torch thread and fused Adam;
+- two learners train the same networks, heads and losses (``palaestra.algos.learners``):
+  small MLPs on the CPU with Adam train in numpy with hand-written gradients (several times
+  faster than torch's overhead allows), everything else (CNNs, other optimizers, ``cuda``)
+  with torch autograd; ``policy_kwargs={"backend": "numpy"|"torch"}`` forces one (numpy
+  raises ``ValueError`` naming what it cannot run), ``verbose=1`` prints which runs and why.
+  Acting samples from the model's numpy generator on either learner;
 - DQN's ``optimize_memory_usage=True`` keeps each frame of stacked observations once (SB3
   keeps it four times) and returns exact terminal observations, so it combines with
   ``handle_timeout_termination`` (SB3 refuses the pair).

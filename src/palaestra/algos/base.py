@@ -40,6 +40,7 @@ from palaestra.algos.callbacks import (
     convert_callback,
 )
 from palaestra.algos.eager_optimizer import build_optimizer
+from palaestra.algos.learners import Group, Learner, Net, build_learner
 from palaestra.algos.logger import HumanOutputFormat, Logger, configure
 from palaestra.algos.policies import extractor_class
 from palaestra.algos.schedules import Schedule
@@ -68,9 +69,41 @@ class BaseAlgorithm:
 
     supported_action_spaces: tuple[type, ...] = ()
     _extra_counters: tuple[str, ...] = ()
-    policy: torch.nn.Module
-    optimizer: torch.optim.Optimizer
     lr_schedule: Schedule
+    learner: Learner
+    _policy: torch.nn.Module
+    _optimizer: torch.optim.Optimizer
+
+    # The torch objects users and files see; reading them hands the parameters to torch
+    # (``Learner.to_torch``): see ``learners.learner`` on ownership.
+    @property
+    def policy(self) -> Any:
+        """The policy's torch module, up to date (SB3's ``model.policy``)."""
+        self.learner.to_torch()
+        return self._policy
+
+    @property
+    def optimizer(self) -> torch.optim.Optimizer:
+        """The torch optimizer, with the learner's current state."""
+        self.learner.to_torch()
+        return self._optimizer
+
+    def _set_learner(
+        self,
+        policy: torch.nn.Module,
+        optimizer: torch.optim.Optimizer,
+        backend: Any,
+        nets: dict[str, Net],
+        groups: dict[str, Group],
+        joint: dict[tuple[str, ...], Any] | None = None,
+    ) -> None:
+        """Pick the learner for these nets (``policy_kwargs["backend"]``) and say which."""
+        if not isinstance(backend, str):
+            raise ValueError(f"policy_kwargs backend must be a string, got {backend!r}")
+        self._policy, self._optimizer = policy, optimizer
+        self.learner = build_learner(backend, nets, groups, self.device, joint or {})
+        if self.verbose >= 1:
+            print(f"Training with the {self.learner.describe()}")
 
     def _init_common(
         self,
@@ -266,12 +299,15 @@ class BaseAlgorithm:
     @contextlib.contextmanager
     def _learning_session(self) -> Iterator[None]:
         """Marks the body of ``learn``: a model saved from a callback inside it keeps no
-        observations to continue from (the env moves on after the save)."""
+        observations to continue from (the env moves on after the save). At its end the torch
+        modules are brought up to date, so a reference to ``model.policy`` kept from before
+        sees the trained parameters."""
         self._learning = True
         try:
             yield
         finally:
             self._learning = False
+            self.learner.to_torch()
 
     def _update_progress(self) -> None:
         """SB3's ``1 - num_timesteps / total``, one formula for fresh, resumed and extended
@@ -279,10 +315,9 @@ class BaseAlgorithm:
         progress = 1.0 - float(self.num_timesteps) / float(self._total_timesteps)
         self._progress_remaining = max(progress, 0.0)  # the last rollout may overshoot
 
-    def _update_learning_rate(self) -> float:
+    def _update_learning_rate(self, group: str) -> float:
         lr = self.lr_schedule(self._progress_remaining)
-        for group in self.optimizer.param_groups:
-            group["lr"] = lr
+        self.learner.set_learning_rate(group, lr)
         self.logger.record("train/learning_rate", lr)
         return lr
 
@@ -369,11 +404,6 @@ class BaseAlgorithm:
         return {"total_timesteps": self._total_timesteps, **values}
 
     # -- predict -------------------------------------------------------------------------------
-    def _obs_to_tensor(self, obs: Any) -> Any:
-        if isinstance(obs, dict):
-            return {k: torch.as_tensor(np.asarray(v), device=self.device) for k, v in obs.items()}
-        return torch.as_tensor(np.asarray(obs), device=self.device)
-
     def predict(
         self,
         observation: Any,

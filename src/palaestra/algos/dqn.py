@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import warnings
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 import torch
@@ -11,9 +11,9 @@ import torch
 from palaestra import spaces
 from palaestra.algos import model_io
 from palaestra.algos.base import BaseAlgorithm
-from palaestra.algos.dqn_math import dqn_loss, polyak_update
 from palaestra.algos.frame_replay_buffer import FrameReplayBuffer, frame_layout
-from palaestra.algos.numpy_dqn import NumpyDQNTrainer
+from palaestra.algos.learners import Group, Net
+from palaestra.algos.learners.objectives import DQNObjective
 from palaestra.algos.policies import QNetwork, extractor_class
 from palaestra.algos.replay_buffer import ReplayBuffer
 from palaestra.algos.schedules import LinearSchedule, Schedule, as_schedule
@@ -141,28 +141,33 @@ class DQN(BaseAlgorithm):
         kwargs = dict(self.policy_kwargs)
         optimizer_class = kwargs.pop("optimizer_class", torch.optim.Adam)
         optimizer_kwargs = kwargs.pop("optimizer_kwargs", None) or {}
+        backend = kwargs.pop("backend", "auto")
         kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
         kwargs.pop("share_features_extractor", None)
         q_net = QNetwork(self.observation_space, self.action_space, **kwargs)
         q_net_target = QNetwork(self.observation_space, self.action_space, **kwargs)
         q_net_target.load_state_dict(q_net.state_dict())
         q_net_target.requires_grad_(False)
-        self.policy = torch.nn.ModuleDict({"q_net": q_net, "q_net_target": q_net_target}).to(
-            self.device
-        )
-        self.q_net, self.q_net_target = q_net, q_net_target  # .to() moved them in place
-        self._q_params = list(q_net.parameters())
-        self.optimizer = self._make_optimizer(self._q_params, optimizer_class, optimizer_kwargs)
-        # Plain CPU MLPs with Adam train in numpy (same math, a fraction of torch's overhead).
-        self._numpy_trainer = (
-            NumpyDQNTrainer.build(q_net, q_net_target, self.optimizer)
-            if q_net.numpy_acting()
-            else None
-        )
-        # After the trainer, which moves the parameters into one flat buffer: the acting
-        # views must point into that buffer.
-        self._q_numpy = q_net.numpy_acting()  # cheap batch-1 acting on CPU MLPs
+        policy = torch.nn.ModuleDict({"q_net": q_net, "q_net_target": q_net_target}).to(self.device)
+        params = list(q_net.parameters())
+        optimizer = self._make_optimizer(params, optimizer_class, optimizer_kwargs)
+        modules, why = q_net.mlp_modules()
+        target_modules, _ = q_net_target.mlp_modules()
+        nets = {
+            "q": Net(q_net, modules, group="q", why=why),
+            "q_target": Net(q_net_target, target_modules, target_of="q", why=why),
+        }
+        self._set_learner(policy, optimizer, backend, nets, {"q": Group(optimizer, params)})
         self._make_replay_buffer()
+
+    # SB3's attributes; reading them hands the parameters to torch, as ``policy`` does.
+    @property
+    def q_net(self) -> QNetwork:
+        return self.policy["q_net"]
+
+    @property
+    def q_net_target(self) -> QNetwork:
+        return self.policy["q_net_target"]
 
     def _make_replay_buffer(self) -> None:
         self._no_timeouts = np.zeros(self.n_envs, dtype=bool)
@@ -193,11 +198,7 @@ class DQN(BaseAlgorithm):
 
     # -- acting ------------------------------------------------------------------------------
     def _greedy(self, obs: Any) -> np.ndarray:
-        if self._q_numpy is not None and isinstance(obs, np.ndarray):
-            return self._q_numpy(obs).argmax(axis=1) + int(self.action_space.start)
-        with torch.no_grad():
-            q = self.q_net(self._obs_to_tensor(obs))
-        return q.argmax(dim=1).cpu().numpy() + int(self.action_space.start)
+        return self.learner.forward("q", obs).argmax(axis=1) + int(self.action_space.start)
 
     def _random_actions(self, n: int) -> np.ndarray:
         return self._rng.integers(0, int(self.action_space.n), size=n) + int(
@@ -277,7 +278,7 @@ class DQN(BaseAlgorithm):
         self._n_calls += 1
         target_every = max(self.target_update_interval // n_envs, 1)  # in env.step calls, as SB3
         if self._n_calls % target_every == 0:
-            polyak_update(self._q_params, self.q_net_target.parameters(), self.tau)
+            self.learner.polyak("q_target", self.tau)
         self.exploration_rate = self.exploration_schedule(self._progress_remaining)
         self.logger.record("rollout/exploration_rate", self.exploration_rate)
         for _ in range(int(dones.sum())):
@@ -317,39 +318,27 @@ class DQN(BaseAlgorithm):
     def train(self, gradient_steps: int, batch_size: int = 100) -> None:
         """``gradient_steps`` Huber-loss updates on uniform replay minibatches."""
         assert self.replay_buffer is not None
-        self._update_learning_rate()
+        self._update_learning_rate("q")
         start = int(self.action_space.start)
-        if self._numpy_trainer is not None:
-            mean_loss = self._numpy_trainer.train(
-                cast(ReplayBuffer, self.replay_buffer),  # both buffers have sample_arrays
-                gradient_steps,
-                batch_size,
-                self._rng,
-                self.gamma,
-                self.max_grad_norm,
-                start,
-            )
-            self._n_updates += gradient_steps
-            self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
-            self.logger.record("train/loss", mean_loss)
-            return
+        objective = DQNObjective(self.gamma)
         losses = []
-        for _ in range(gradient_steps):
-            batch = self.replay_buffer.sample(batch_size, self._rng)
-            with torch.no_grad():
-                next_q = self.q_net_target(batch.next_observations)
-            q = self.q_net(batch.observations)
-            loss = dqn_loss(
-                q, batch.actions - start, batch.rewards, batch.terminated, next_q, self.gamma
-            )
-            self.optimizer.zero_grad()
-            loss.backward()
-            torch.nn.utils.clip_grad_norm_(self._q_params, self.max_grad_norm)
-            self.optimizer.step()
-            losses.append(loss.detach())
+        with self.learner.session():
+            for _ in range(gradient_steps):
+                obs, actions, next_obs, rewards, terminated = self.replay_buffer.sample_arrays(
+                    batch_size, self._rng
+                )
+                batch = {
+                    "observations": obs,
+                    "next_observations": next_obs,
+                    "actions": actions.reshape(batch_size).astype(np.int64) - start,
+                    "rewards": rewards,
+                    "terminated": terminated,
+                }
+                metrics, _ = self.learner.update("q", objective, batch, self.max_grad_norm)
+                losses.append(metrics["loss"])
         self._n_updates += gradient_steps
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
-        self.logger.record("train/loss", float(torch.stack(losses).mean()))
+        self.logger.record("train/loss", float(np.mean(losses)))
 
     def _dump_logs(self) -> None:
         self.logger.record("time/episodes", self._episode_num, exclude="tensorboard")

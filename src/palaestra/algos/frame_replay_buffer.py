@@ -28,7 +28,6 @@ import numpy as np
 import torch
 
 from palaestra import spaces
-from palaestra.algos.replay_buffer import ReplayBatch
 from palaestra.algos.spaces_util import allocate, is_image_space, is_image_space_channels_first
 
 __all__ = ["FrameReplayBuffer", "frame_layout"]
@@ -285,18 +284,6 @@ class FrameReplayBuffer:
         rows = rng.integers(0, self.size(), size=batch_size)  # the plain buffer's draws
         cols = rng.integers(0, self.n_envs, size=batch_size)
         return rows, cols
-
-    def sample(self, batch_size: int, rng: np.random.Generator) -> ReplayBatch:
-        """Uniform rows and envs, with replacement (same draws as ``ReplayBuffer.sample``)."""
-        obs, actions, next_obs, rewards, terminated = self.sample_arrays(batch_size, rng)
-        dev = self.device
-        return ReplayBatch(
-            torch.as_tensor(obs, device=dev),
-            torch.as_tensor(actions, device=dev),
-            torch.as_tensor(next_obs, device=dev),
-            torch.as_tensor(rewards, device=dev),
-            torch.as_tensor(terminated, device=dev),
-        )
 
     def sample_arrays(self, batch_size: int, rng: np.random.Generator) -> tuple[np.ndarray, ...]:
         """``(obs, actions, next_obs, rewards, terminated)`` as numpy arrays."""

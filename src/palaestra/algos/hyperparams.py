@@ -87,6 +87,10 @@ def _boolean(value: Any) -> str | None:
     return None if isinstance(value, bool) else "true or false"
 
 
+def _backend(value: Any) -> str | None:
+    return None if value in ("auto", "numpy", "torch") else "'auto', 'numpy' or 'torch'"
+
+
 def _optional(check: Check) -> Check:
     def optional(value: Any) -> str | None:
         problem = None if value is None else check(value)
@@ -241,6 +245,7 @@ _POLICY_COMMON: dict[str, Check] = {
     "optimizer_class": _class_ref,
     "optimizer_kwargs": _optional(_mapping(_OPTIMIZER_KWARGS)),
     "share_features_extractor": _boolean,
+    "backend": _backend,  # which learner trains the policy (learners.build_learner)
 }
 # The keyword arguments of QNetwork / ActorCritic, plus the optimizer's (a test keeps them equal).
 POLICY_KWARGS: dict[str, dict[str, Check]] = {

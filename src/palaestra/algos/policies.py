@@ -19,7 +19,6 @@ from palaestra.algos.networks import (
     mlp,
     preprocess_obs,
 )
-from palaestra.algos.numpy_acting import numpy_mlp
 from palaestra.algos.spaces_util import is_image_space
 
 __all__ = ["POLICY_EXTRACTORS", "ActorCritic", "QNetwork", "extractor_class"]
@@ -69,16 +68,26 @@ class QNetwork(nn.Module):
         x = preprocess_obs(obs, self.observation_space, self.normalize_images)
         return self.head(self.mlp(self.features_extractor(x)))
 
-    def numpy_acting(self) -> Any:
-        """A numpy forward to the Q-values, or None (see ``numpy_acting``)."""
-        space = self.observation_space
-        if (
-            not isinstance(self.features_extractor, FlattenExtractor)
-            or not isinstance(space, spaces.Box)
-            or (is_image_space(space) and self.normalize_images)
-        ):
-            return None
-        return numpy_mlp([self.features_extractor, self.mlp, self.head])
+    def mlp_modules(self) -> tuple[list[nn.Module] | None, str]:
+        """The modules the numpy learner reads as an MLP (None, and why, where the input is not
+        the raw observation as a float vector)."""
+        why = _numpy_input_problem(
+            self.observation_space, self.features_extractor, self.normalize_images
+        )
+        return (None, why) if why else ([self.features_extractor, self.mlp, self.head], "")
+
+
+def _numpy_input_problem(
+    space: spaces.Space[Any], extractor: nn.Module, normalize_images: bool
+) -> str:
+    """Why a net's input is not the raw observation flattened to float32 ("" if it is)."""
+    if not isinstance(extractor, FlattenExtractor):
+        return f"the features extractor is {type(extractor).__name__}"
+    if not isinstance(space, spaces.Box):
+        return f"{type(space).__name__} observations are preprocessed (one-hot) in torch"
+    if is_image_space(space) and normalize_images:
+        return "image observations are scaled in torch"
+    return ""
 
 
 def _split_arch(net_arch: Any, features_extractor_class: type) -> tuple[list[int], list[int]]:
@@ -147,20 +156,34 @@ class ActorCritic(nn.Module):
                 if part is not None:
                     _ortho_init(part, gain)
 
-    def numpy_acting(self) -> tuple[Any, Any] | None:
-        """``(pi_fn, vf_fn)``: numpy forwards to the action-head outputs and the values, or
-        None when the networks are not plain CPU MLPs on vector observations."""
-        space = self.observation_space
-        if (
-            not isinstance(self.features_extractor, FlattenExtractor)
-            or not isinstance(space, spaces.Box)
-            or (is_image_space(space) and self.normalize_images)
-        ):
-            return None
+    def mlp_modules(self) -> tuple[list[nn.Module] | None, list[nn.Module] | None, str]:
+        """``(pi modules, vf modules, why)``: what the numpy learner reads as the actor and
+        critic MLPs, or None and why not."""
+        why = _numpy_input_problem(
+            self.observation_space, self.features_extractor, self.normalize_images
+        )
+        if why:
+            return None, None, why
         vf_extractor = self.vf_features_extractor or self.features_extractor
-        pi = numpy_mlp([self.features_extractor, self.pi_net, self.action_head.net])
-        vf = numpy_mlp([vf_extractor, self.vf_net, self.value_head])
-        return None if pi is None or vf is None else (pi, vf)
+        return (
+            [self.features_extractor, self.pi_net, self.action_head.net],
+            [vf_extractor, self.vf_net, self.value_head],
+            "",
+        )
+
+    def pi_out(self, obs: Any) -> torch.Tensor:
+        """The action head's outputs (logits, or the Gaussian's mean) for a raw obs batch."""
+        x = preprocess_obs(obs, self.observation_space, self.normalize_images)
+        return self.action_head.net(self.pi_net(self.features_extractor(x)))
+
+    def vf_out(self, obs: Any) -> torch.Tensor:
+        """``V(obs)`` as ``[B, 1]``."""
+        return self.value_head(self._latents(obs)[1])
+
+    def pi_and_vf(self, obs: Any) -> tuple[torch.Tensor, torch.Tensor]:
+        """Both outputs with one pass of a shared features extractor."""
+        latent_pi, latent_vf = self._latents(obs)
+        return self.action_head.net(latent_pi), self.value_head(latent_vf)
 
     def _latents(self, obs: Any) -> tuple[torch.Tensor, torch.Tensor]:
         x = preprocess_obs(obs, self.observation_space, self.normalize_images)
@@ -170,27 +193,6 @@ class ActorCritic(nn.Module):
         )
         return self.pi_net(features), self.vf_net(vf_features)
 
-    def forward(
-        self, obs: Any, deterministic: bool = False
-    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """Raw obs batch -> ``(actions, values [B], log_probs [B])``."""
-        latent_pi, latent_vf = self._latents(obs)
-        actions, log_prob = self.action_head.act(latent_pi, deterministic)
-        return actions, self.value_head(latent_vf).squeeze(1), log_prob
-
-    def act(self, obs: Any, deterministic: bool) -> torch.Tensor:
-        """Actions only (``predict``): skips the value branch."""
-        x = preprocess_obs(obs, self.observation_space, self.normalize_images)
-        return self.action_head.act(self.pi_net(self.features_extractor(x)), deterministic)[0]
-
     def predict_values(self, obs: Any) -> torch.Tensor:
         """``V(obs)`` ``[B]``."""
         return self.value_head(self._latents(obs)[1]).squeeze(1)
-
-    def evaluate_actions(
-        self, obs: Any, actions: torch.Tensor
-    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """``(values [B], log_prob [B], entropy [B])`` for a training minibatch."""
-        latent_pi, latent_vf = self._latents(obs)
-        log_prob, entropy = self.action_head.evaluate(latent_pi, actions)
-        return self.value_head(latent_vf).squeeze(1), log_prob, entropy

@@ -10,10 +10,10 @@ import torch
 
 from palaestra import spaces
 from palaestra.algos.base import BaseAlgorithm
-from palaestra.algos.numpy_nn import one_blas_thread
-from palaestra.algos.numpy_ppo import NumpyPPOTrainer
+from palaestra.algos.learners import Group, Net
+from palaestra.algos.learners.losses import explained_variance
+from palaestra.algos.learners.objectives import PPOObjective
 from palaestra.algos.policies import ActorCritic, extractor_class
-from palaestra.algos.ppo_math import PPOLoss, explained_variance, ppo_loss
 from palaestra.algos.rollout_buffer import RolloutBuffer
 from palaestra.algos.schedules import Schedule, as_schedule
 
@@ -133,17 +133,32 @@ class PPO(BaseAlgorithm):
         optimizer_kwargs = dict(kwargs.pop("optimizer_kwargs", None) or {})
         if optimizer_class is torch.optim.Adam:
             optimizer_kwargs.setdefault("eps", 1e-5)  # SB3's ActorCriticPolicy default
+        backend = kwargs.pop("backend", "auto")
         kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
-        self.policy = ActorCritic(self.observation_space, self.action_space, **kwargs).to(
-            self.device
+        policy = ActorCritic(self.observation_space, self.action_space, **kwargs).to(self.device)
+        params = list(policy.parameters())
+        optimizer = self._make_optimizer(params, optimizer_class, optimizer_kwargs)
+        pi_modules, vf_modules, why = policy.mlp_modules()
+        head = policy.action_head
+        extras = {"log_std": head.log_std} if head.kind == "gaussian" else {}
+        if pi_modules is not None and vf_modules is not None:
+            # The flat buffer's order (actor, critic, log-std) sets the order in which the
+            # gradient norm is summed: kept from the numpy trainer it replaces.
+            ordered = [p for m in pi_modules + vf_modules for p in m.parameters()]
+            params = list(dict.fromkeys(ordered + list(extras.values()) + params))
+        nets = {
+            "pi": Net(policy.pi_out, pi_modules, group="policy", why=why),
+            "vf": Net(policy.vf_out, vf_modules, group="policy", why=why),
+        }
+        self._set_learner(
+            policy,
+            optimizer,
+            backend,
+            nets,
+            {"policy": Group(optimizer, params, extras)},
+            joint={("pi", "vf"): policy.pi_and_vf},
         )
-        self._params = list(self.policy.parameters())
-        self.optimizer = self._make_optimizer(self._params, optimizer_class, optimizer_kwargs)
-        # Plain CPU MLPs with Adam train in numpy (same loss, a fraction of torch's overhead).
-        self._numpy_trainer = NumpyPPOTrainer.build(self.policy, self.optimizer)
-        # After the trainer, which moves the parameters into one flat buffer: the acting
-        # views must point into that buffer.
-        self._numpy = self.policy.numpy_acting()  # cheap acting on CPU MLPs; None otherwise
+        self._head = head
         self._make_rollout_buffer()
 
     def _make_rollout_buffer(self) -> None:
@@ -154,36 +169,30 @@ class PPO(BaseAlgorithm):
             self.n_envs,
             self.gamma,
             self.gae_lambda,
-            self.device,
         )
 
     def _on_n_envs_changed(self) -> None:
         self._check_rollout_size()
         self._make_rollout_buffer()
 
-    def _act(self, obs: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(actions, values, log_probs)`` for a batch of raw observations (no grad)."""
-        if self._numpy is not None and isinstance(obs, np.ndarray):
-            pi, vf = self._numpy
-            actions, log_probs = self.policy.action_head.act_numpy(pi(obs), self._rng, False)
-            return actions, vf(obs)[:, 0], log_probs
-        with torch.no_grad():
-            actions_t, values_t, log_probs_t = self.policy(self._obs_to_tensor(obs))
-        return actions_t.cpu().numpy(), values_t.cpu().numpy(), log_probs_t.cpu().numpy()
+    def _sample(self, obs: Any, deterministic: bool) -> tuple[np.ndarray, np.ndarray]:
+        """``(actions, log_probs)`` for a batch of raw observations."""
+        log_std = self.learner.extra("log_std") if self._head.kind == "gaussian" else None
+        return self._head.sample(self.learner.forward("pi", obs), log_std, self._rng, deterministic)
 
     def _values(self, obs: Any) -> np.ndarray:
-        if self._numpy is not None and isinstance(obs, np.ndarray):
-            with one_blas_thread():  # a whole rollout at once: threads cost more than they save
-                return self._numpy[1](obs)[:, 0]
-        with torch.no_grad():
-            return self.policy.predict_values(self._obs_to_tensor(obs)).cpu().numpy()
+        """``V(obs)`` ``[B]``, in chunks (a whole rollout of images may not fit at once)."""
+        if isinstance(obs, dict):
+            n = len(next(iter(obs.values())))
+            chunks = [{k: v[i : i + 8192] for k, v in obs.items()} for i in range(0, n, 8192)]
+        else:
+            chunks = [obs[i : i + 8192] for i in range(0, len(obs), 8192)]
+        with self.learner.session():  # a whole rollout: threads cost more than they save
+            out = [self.learner.forward("vf", chunk)[:, 0] for chunk in chunks]
+        return out[0] if len(out) == 1 else np.concatenate(out)
 
     def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
-        if self._numpy is not None and isinstance(observation, np.ndarray):
-            params = self._numpy[0](observation)
-            return self.policy.action_head.act_numpy(params, self._rng, deterministic)[0]
-        with torch.no_grad():
-            return self.policy.act(self._obs_to_tensor(observation), deterministic).cpu().numpy()
+        return self._sample(observation, deterministic)[0]
 
     # -- learning ----------------------------------------------------------------------------
     def learn(
@@ -228,18 +237,11 @@ class PPO(BaseAlgorithm):
         env, buf = self.env, self.rollout_buffer
         box = self.action_space if isinstance(self.action_space, spaces.Box) else None
         callback.on_rollout_start()
-        # With numpy acting the values of the whole rollout come from one batched forward at
-        # its end (the parameters do not change during a rollout): per step, only the policy.
-        numpy_pi = None
-        if self._numpy is not None and isinstance(self._last_obs, np.ndarray):
-            numpy_pi = self._numpy[0]
-        head, values = self.policy.action_head, None
+        # The values of the whole rollout come from one batched forward at its end (the
+        # parameters do not change during a rollout): per step, only the policy.
         bits = isinstance(self.action_space, spaces.MultiBinary)
         while not buf.full:
-            if numpy_pi is not None:
-                actions, log_probs = head.act_numpy(numpy_pi(self._last_obs), self._rng, False)
-            else:
-                actions, values, log_probs = self._act(self._last_obs)
+            actions, log_probs = self._sample(self._last_obs, False)
             if bits:
                 actions = actions.astype(self.action_space.dtype)  # Bernoulli samples are floats
             env_actions = np.clip(actions, box.low, box.high) if box is not None else actions
@@ -253,16 +255,13 @@ class PPO(BaseAlgorithm):
                 actions,
                 rewards,
                 self._last_episode_starts,  # type: ignore[arg-type]
-                values,
+                None,
                 log_probs,
             )
             self._last_obs, self._last_episode_starts = new_obs, dones
             if not running:
                 return False
-        if numpy_pi is not None:
-            buf.values[...] = self._values(buf.observations.reshape(-1, *buf.obs_shape)).reshape(
-                buf.values.shape
-            )
+        buf.values[...] = self._values(buf.flat_observations()).reshape(buf.values.shape)
         # The last step's dones (also after a resume that found the buffer already full).
         assert self._last_episode_starts is not None
         buf.compute_returns_and_advantage(self._values(self._last_obs), self._last_episode_starts)
@@ -293,52 +292,36 @@ class PPO(BaseAlgorithm):
 
     def train(self) -> None:
         """``n_epochs`` passes of minibatch updates over the current rollout."""
-        self._update_learning_rate()
+        self._update_learning_rate("policy")
         clip_range = self.clip_range(self._progress_remaining)
         clip_range_vf = (
             None if self.clip_range_vf is None else self.clip_range_vf(self._progress_remaining)
         )
         kl_limit = None if self.target_kl is None else 1.5 * self.target_kl
-        logs: dict[str, list[float]] = {key: [] for key in PPOLoss._fields}
-        args = (clip_range, clip_range_vf, self.ent_coef, self.vf_coef, self.normalize_advantage)
-        stopped = False
+        accept = None if kl_limit is None else (lambda m: m["approx_kl"] <= kl_limit)
+        objective = PPOObjective(
+            self._head,
+            clip_range,
+            clip_range_vf,
+            self.ent_coef,
+            self.vf_coef,
+            self.normalize_advantage,
+        )
+        logs: dict[str, list[float]] = {}
+        applied = True
         for epoch in range(self.n_epochs):
-            if self._numpy_trainer is not None:
-                with one_blas_thread():  # once per epoch: it costs a few µs per entry
-                    for arrays in self.rollout_buffer.minibatch_arrays(self.batch_size, self._rng):
-                        metrics, stopped = self._numpy_trainer.step(
-                            *arrays, *args, self.max_grad_norm, kl_limit
-                        )
-                        for key, value in metrics.items():
-                            logs[key].append(value)
-                        if stopped:
-                            break
-            else:
-                for mb in self.rollout_buffer.minibatches(self.batch_size, self._rng):
-                    values, log_prob, entropy = self.policy.evaluate_actions(
-                        mb.observations, mb.actions
+            with self.learner.session():
+                for batch in self.rollout_buffer.minibatch_arrays(self.batch_size, self._rng):
+                    batch["actions"] = self._head.index(batch["actions"])
+                    metrics, applied = self.learner.update(
+                        "policy", objective, batch, self.max_grad_norm, accept
                     )
-                    out = ppo_loss(
-                        log_prob,
-                        mb.old_log_prob,
-                        mb.advantages,
-                        values,
-                        mb.old_values,
-                        mb.returns,
-                        entropy,
-                        *args,
-                    )
-                    for key, value in out._asdict().items():
-                        logs[key].append(float(value.detach()))
-                    if kl_limit is not None and float(out.approx_kl) > kl_limit:
-                        stopped = True
+                    for key, value in metrics.items():
+                        logs.setdefault(key, []).append(value)
+                    if not applied:
                         break
-                    self.optimizer.zero_grad()
-                    out.loss.backward()
-                    torch.nn.utils.clip_grad_norm_(self._params, self.max_grad_norm)
-                    self.optimizer.step()
             self._n_updates += 1
-            if stopped:
+            if not applied:
                 if self.verbose >= 1:
                     print(
                         f"Early stopping at step {epoch} due to reaching max kl: "
@@ -356,9 +339,8 @@ class PPO(BaseAlgorithm):
         log.record(
             "train/explained_variance", explained_variance(buf.values.ravel(), buf.returns.ravel())
         )
-        log_std = getattr(self.policy.action_head, "log_std", None)
-        if log_std is not None:
-            log.record("train/std", float(log_std.detach().exp().mean()))
+        if self._head.kind == "gaussian":
+            log.record("train/std", float(np.exp(self.learner.extra("log_std")).mean()))
         log.record("train/n_updates", self._n_updates, exclude="tensorboard")
         log.record("train/clip_range", clip_range)
         if clip_range_vf is not None:

@@ -8,7 +8,7 @@ stored as *not* terminated, so its target still bootstraps from the next observa
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 import torch
@@ -16,20 +16,9 @@ import torch
 from palaestra import spaces
 from palaestra.algos.spaces_util import allocate
 
-__all__ = ["ReplayBatch", "ReplayBuffer"]
+__all__ = ["ReplayBuffer"]
 
 Obs = np.ndarray | dict[str, np.ndarray]
-TensorObs = torch.Tensor | dict[str, torch.Tensor]
-
-
-class ReplayBatch(NamedTuple):
-    """A sampled minibatch, already on the training device."""
-
-    observations: TensorObs  # [B, *obs_shape]
-    actions: torch.Tensor  # [B, *action_shape]
-    next_observations: TensorObs  # [B, *obs_shape]
-    rewards: torch.Tensor  # [B] float32
-    terminated: torch.Tensor  # [B] float32: 1 where the episode really ended
 
 
 def _write(store: Any, row: int, value: Any) -> None:
@@ -40,10 +29,10 @@ def _write(store: Any, row: int, value: Any) -> None:
         store[row] = value
 
 
-def _take(store: Any, rows: np.ndarray, cols: np.ndarray, device: torch.device) -> Any:
+def _take_arrays(store: Any, rows: np.ndarray, cols: np.ndarray) -> Any:
     if isinstance(store, dict):
-        return {key: _take(sub, rows, cols, device) for key, sub in store.items()}
-    return torch.as_tensor(store[rows, cols], device=device)
+        return {key: sub[rows, cols] for key, sub in store.items()}
+    return store[rows, cols]
 
 
 def _flat(prefix: str, store: Any, n: int) -> dict[str, np.ndarray]:
@@ -110,29 +99,15 @@ class ReplayBuffer:
         if self.pos == self.buffer_size:
             self.full, self.pos = True, 0
 
-    def sample(self, batch_size: int, rng: np.random.Generator) -> ReplayBatch:
-        """Uniform rows and envs, with replacement, as SB3 samples."""
-        rows = rng.integers(0, self.size(), size=batch_size)
-        cols = rng.integers(0, self.n_envs, size=batch_size)
-        dev = self.device
-        return ReplayBatch(
-            _take(self.observations, rows, cols, dev),
-            torch.as_tensor(self.actions[rows, cols], device=dev),
-            _take(self.next_observations, rows, cols, dev),
-            torch.as_tensor(self.rewards[rows, cols], device=dev),
-            torch.as_tensor(self.terminated[rows, cols], device=dev),
-        )
-
-    def sample_arrays(self, batch_size: int, rng: np.random.Generator) -> tuple[np.ndarray, ...]:
-        """Like ``sample`` for array observations, as numpy arrays (same draws from ``rng``):
+    def sample_arrays(self, batch_size: int, rng: np.random.Generator) -> tuple[Any, ...]:
+        """Uniform rows and envs, with replacement, as SB3 samples:
         ``(obs, actions, next_obs, rewards, terminated)``."""
         rows = rng.integers(0, self.size(), size=batch_size)
         cols = rng.integers(0, self.n_envs, size=batch_size)
-        assert isinstance(self.observations, np.ndarray)
         return (
-            self.observations[rows, cols],
+            _take_arrays(self.observations, rows, cols),
             self.actions[rows, cols],
-            self.next_observations[rows, cols],
+            _take_arrays(self.next_observations, rows, cols),
             self.rewards[rows, cols],
             self.terminated[rows, cols],
         )

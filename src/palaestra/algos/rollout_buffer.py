@@ -3,44 +3,23 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
-import torch
 
 from palaestra import spaces
-from palaestra.algos.ppo_math import gae
+from palaestra.algos.learners.losses import gae
 from palaestra.algos.spaces_util import allocate
 
-__all__ = ["RolloutBatch", "RolloutBuffer"]
-
-TensorObs = torch.Tensor | dict[str, torch.Tensor]
-ArrayBatch = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+__all__ = ["RolloutBuffer"]
 
 
-class RolloutBatch(NamedTuple):
-    """One PPO minibatch on the training device."""
-
-    observations: TensorObs  # [B, *obs_shape]
-    actions: torch.Tensor  # [B, *action_shape]
-    old_values: torch.Tensor  # [B]
-    old_log_prob: torch.Tensor  # [B]
-    advantages: torch.Tensor  # [B]
-    returns: torch.Tensor  # [B]
-
-
-def _flatten(store: Any, device: torch.device) -> Any:
-    """``[T, N, ...]`` numpy -> ``[T * N, ...]`` tensor; step-major order is fine because
+def _flat(store: Any) -> Any:
+    """``[T, N, ...]`` -> ``[T * N, ...]`` (views); step-major order is fine because
     minibatches are drawn through a random permutation (SB3 swaps to env-major first)."""
     if isinstance(store, dict):
-        return {key: _flatten(sub, device) for key, sub in store.items()}
-    return torch.as_tensor(store.reshape(-1, *store.shape[2:]), device=device)
-
-
-def _index(batch: Any, idx: torch.Tensor) -> Any:
-    if isinstance(batch, dict):
-        return {key: sub[idx] for key, sub in batch.items()}
-    return batch[idx]
+        return {key: _flat(sub) for key, sub in store.items()}
+    return store.reshape(-1, *store.shape[2:])
 
 
 class RolloutBuffer:
@@ -54,11 +33,9 @@ class RolloutBuffer:
         n_envs: int = 1,
         gamma: float = 0.99,
         gae_lambda: float = 0.95,
-        device: torch.device | str = "cpu",
     ) -> None:
         self.n_steps, self.n_envs = n_steps, n_envs
         self.gamma, self.gae_lambda = gamma, gae_lambda
-        self.device = torch.device(device)
         lead = (n_steps, n_envs)
         self.observations = allocate(observation_space, lead)
         self.obs_shape = (
@@ -157,37 +134,30 @@ class RolloutBuffer:
             self.gae_lambda,
         )
 
-    def minibatches(self, batch_size: int, rng: np.random.Generator) -> Iterator[RolloutBatch]:
-        """Shuffled minibatches over all ``n_steps * n_envs`` samples (the last may be short)."""
-        dev = self.device
-        obs = _flatten(self.observations, dev)
-        cols = [
-            _flatten(a, dev)
-            for a in (self.actions, self.values, self.log_probs, self.advantages, self.returns)
-        ]
-        total = self.n_steps * self.n_envs
-        perm = torch.as_tensor(rng.permutation(total), device=dev)
-        for start in range(0, total, batch_size):
-            idx = perm[start : start + batch_size]
-            yield RolloutBatch(_index(obs, idx), *(c[idx] for c in cols))
+    def flat_observations(self) -> Any:
+        """All stored observations as ``[n_steps * n_envs, ...]`` (views)."""
+        return _flat(self.observations)
 
-    def minibatch_arrays(self, batch_size: int, rng: np.random.Generator) -> Iterator[ArrayBatch]:
-        """``minibatches`` as numpy arrays (array observations; same draws from ``rng``):
-        ``(obs, actions, old_values, old_log_prob, advantages, returns)``."""
-        assert isinstance(self.observations, np.ndarray)
-        obs, act, val, logp, adv, ret = (
-            a.reshape(-1, *a.shape[2:])
-            for a in (
-                self.observations,
-                self.actions,
-                self.values,
-                self.log_probs,
-                self.advantages,
-                self.returns,
-            )
-        )
+    def minibatch_arrays(
+        self, batch_size: int, rng: np.random.Generator
+    ) -> Iterator[dict[str, Any]]:
+        """Shuffled minibatches over all ``n_steps * n_envs`` samples (the last may be short),
+        as the learners' batch fields."""
+        obs = _flat(self.observations)
+        cols = {
+            "actions": self.actions,
+            "old_values": self.values,
+            "old_log_prob": self.log_probs,
+            "advantages": self.advantages,
+            "returns": self.returns,
+        }
+        flat = {k: _flat(v) for k, v in cols.items()}
         total = self.n_steps * self.n_envs
         perm = rng.permutation(total)
         for start in range(0, total, batch_size):
             i = perm[start : start + batch_size]
-            yield obs[i], act[i], val[i], logp[i], adv[i], ret[i]
+            batch = {k: v[i] for k, v in flat.items()}
+            batch["observations"] = (
+                {k: v[i] for k, v in obs.items()} if isinstance(obs, dict) else obs[i]
+            )
+            yield batch

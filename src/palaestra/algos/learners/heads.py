@@ -1,0 +1,245 @@
+"""Action distributions written once over an array namespace ``xp`` (numpy or torch), each with
+its vector-Jacobian product beside it, and numpy samplers for acting.
+
+``*_evaluate(xp, ...)`` returns ``(log_prob [B], entropy, tape)``: entropy is ``[B]``, or a
+scalar where it does not depend on the row (a state-independent Gaussian); ``tape`` holds what
+the VJP needs (numpy). The VJPs take d(loss)/d(log_prob) per row and d(loss)/d(mean entropy)
+as one number: the losses use the entropy only through its mean, and keeping it one number
+keeps the numpy gradients exactly those of the trainers before this module.
+
+Heads: Categorical (Discrete), MultiCategorical (MultiDiscrete), Bernoulli (MultiBinary),
+diagonal Gaussian with a state-independent log-std (PPO's Box), the tanh-squashed Gaussian
+(SAC, with SB3's log-std bounds and 1e-6 in the squashing correction) and the deterministic
+tanh (TD3, DDPG). Sampling draws from the model's numpy generator whatever learner runs the
+networks, so the two learners act alike.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "LOG_STD_MAX",
+    "LOG_STD_MIN",
+    "bernoulli_evaluate",
+    "bernoulli_evaluate_vjp",
+    "bernoulli_sample",
+    "categorical_evaluate",
+    "categorical_evaluate_vjp",
+    "categorical_sample",
+    "gaussian_evaluate",
+    "gaussian_evaluate_vjp",
+    "gaussian_sample",
+    "multi_categorical_evaluate",
+    "multi_categorical_evaluate_vjp",
+    "multi_categorical_sample",
+    "squashed_gaussian_rsample",
+    "squashed_gaussian_rsample_vjp",
+    "tanh_action",
+    "tanh_action_vjp",
+]
+
+LOG_SQRT_2PI = 0.5 * math.log(2 * math.pi)
+LOG_STD_MIN, LOG_STD_MAX = -20.0, 2.0  # SB3's SAC actor bounds
+SQUASH_EPS = 1e-6  # SB3's TanhBijector epsilon
+
+
+# -- Categorical ------------------------------------------------------------------------------
+def categorical_sample(
+    logits: np.ndarray, rng: np.random.Generator, deterministic: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """Row-wise draws (inverse CDF) or the argmax of logits ``[B, n]``, and the
+    log-probability of each pick: ``(indices [B], log_probs [B])``.
+
+    Called every env step with B of 1-16, where each numpy call costs about a microsecond
+    whatever its size: the ufuncs' own ``reduce``/``accumulate`` skip the Python layers of
+    ``max``/``sum``/``cumsum``, and the CDF is the running sum of the unnormalised
+    probabilities (the draw is scaled by their total) so nothing is normalised twice.
+    """
+    shifted = logits - np.maximum.reduce(logits, axis=1, keepdims=True)
+    cdf = np.add.accumulate(np.exp(shifted), axis=1)
+    total = cdf[:, -1]
+    if deterministic:
+        idx = shifted.argmax(axis=1)
+    else:
+        # u < 1, so u * total < total == cdf[:, -1] (float64 product of a float32 total):
+        # at most n - 1 entries lie below, and the index needs no clamp.
+        u = rng.random(logits.shape[0]) * total
+        idx = np.add.reduce(cdf < u[:, None], axis=1)
+    return idx, shifted[np.arange(len(idx)), idx] - np.log(total)
+
+
+def categorical_evaluate(xp: Any, logits: Any, idx: Any) -> tuple[Any, Any, Any]:
+    """Log-probabilities of 0-based ``idx [B]`` under ``logits [B, n]``, and entropies."""
+    logp = xp.log_softmax(logits)
+    probs = xp.exp(logp)
+    entropy = -xp.sum_rows(probs * logp)
+    return xp.take_rows(logp, idx), entropy, (logp, probs, idx, entropy)
+
+
+def categorical_evaluate_vjp(
+    tape: Any, g_log_prob: np.ndarray, g_mean_entropy: float
+) -> np.ndarray:
+    """d(loss)/d(logits): ``g * (one_hot - p)`` from the log-prob, and from the mean entropy
+    ``-p * (log p + H) * g_H / B``."""
+    logp, probs, idx, entropy = tape
+    neg = -g_log_prob
+    g = neg[:, None] * probs
+    if g_mean_entropy:
+        g += (-g_mean_entropy / probs.shape[0]) * probs * (logp + entropy[:, None])
+    g[np.arange(probs.shape[0]), idx] -= neg
+    return g
+
+
+# -- MultiCategorical -------------------------------------------------------------------------
+def _splits(sizes: list[int]) -> list[tuple[int, int]]:
+    bounds = np.cumsum([0, *sizes]).tolist()
+    return list(itertools.pairwise(bounds))
+
+
+def multi_categorical_sample(
+    logits: np.ndarray, sizes: list[int], rng: np.random.Generator, deterministic: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """One categorical per dimension: ``(indices [B, len(sizes)], summed log_probs [B])``."""
+    picks, log_prob = [], np.zeros(logits.shape[0], dtype=np.float32)
+    for a, b in _splits(sizes):
+        idx, logp = categorical_sample(logits[:, a:b], rng, deterministic)
+        picks.append(idx)
+        log_prob += logp
+    return np.stack(picks, axis=1), log_prob
+
+
+def multi_categorical_evaluate(
+    xp: Any, logits: Any, idx: Any, sizes: list[int]
+) -> tuple[Any, Any, Any]:
+    """Summed log-probabilities and entropies of 0-based ``idx [B, len(sizes)]``."""
+    log_prob = entropy = None
+    tapes = []
+    for i, (a, b) in enumerate(_splits(sizes)):
+        lp, ent, tape = categorical_evaluate(xp, logits[:, a:b], idx[:, i])
+        log_prob = lp if log_prob is None else log_prob + lp
+        entropy = ent if entropy is None else entropy + ent
+        tapes.append(tape)
+    return log_prob, entropy, (tapes, sizes)
+
+
+def multi_categorical_evaluate_vjp(
+    tape: Any, g_log_prob: np.ndarray, g_mean_entropy: float
+) -> np.ndarray:
+    tapes, _ = tape
+    return np.concatenate(
+        [categorical_evaluate_vjp(t, g_log_prob, g_mean_entropy) for t in tapes], axis=1
+    )
+
+
+# -- Bernoulli --------------------------------------------------------------------------------
+def bernoulli_sample(
+    logits: np.ndarray, rng: np.random.Generator, deterministic: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bits ``[B, n]`` (float32 0/1) and their summed log-probabilities ``[B]``."""
+    if deterministic:
+        bits = logits > 0.0
+    else:
+        bits = rng.random(logits.shape) < 1.0 / (1.0 + np.exp(-logits))
+    log_prob = -np.logaddexp(0.0, np.where(bits, -logits, logits)).sum(axis=1)
+    return bits.astype(np.float32), log_prob.astype(np.float32)
+
+
+def bernoulli_evaluate(xp: Any, logits: Any, bits: Any) -> tuple[Any, Any, Any]:
+    """``log p(bits) = -softplus(-z)`` for a 1 and ``-softplus(z)`` for a 0, summed; entropy
+    ``softplus(z) - z * sigmoid(z)`` summed over the bits."""
+    signed = xp.where(bits > 0.5, -logits, logits)
+    log_prob = -xp.sum_rows(xp.softplus(signed))
+    sig = 1.0 / (1.0 + xp.exp(-logits))
+    entropy = xp.sum_rows(xp.softplus(logits) - logits * sig)
+    return log_prob, entropy, (logits, bits, sig)
+
+
+def bernoulli_evaluate_vjp(tape: Any, g_log_prob: np.ndarray, g_mean_entropy: float) -> np.ndarray:
+    logits, bits, sig = tape
+    g = g_log_prob[:, None] * (bits - sig)
+    if g_mean_entropy:  # dH/dz = -z * s * (1 - s)
+        g -= (g_mean_entropy / logits.shape[0]) * logits * sig * (1.0 - sig)
+    return g.astype(np.float32, copy=False)
+
+
+# -- Gaussian with a state-independent log-std (PPO) -------------------------------------------
+def gaussian_sample(
+    mean: np.ndarray, log_std: np.ndarray, rng: np.random.Generator, deterministic: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """``mean + std * noise`` (or the mean) and the log-densities ``[B]``."""
+    noise = np.zeros_like(mean) if deterministic else rng.standard_normal(mean.shape, np.float32)
+    actions = mean + noise * np.exp(log_std)
+    log_prob = (-0.5 * noise**2 - log_std - LOG_SQRT_2PI).sum(axis=1)
+    return actions, log_prob.astype(np.float32)
+
+
+def gaussian_evaluate(xp: Any, mean: Any, log_std: Any, actions: Any) -> tuple[Any, Any, Any]:
+    """Log-densities of ``actions [B, d]``; the entropy is one number (no row dependence)."""
+    inv_std = xp.exp(-log_std)
+    z = (actions - mean) * inv_std
+    log_prob = xp.sum_rows(-0.5 * z * z - log_std - LOG_SQRT_2PI)
+    entropy = xp.sum(0.5 + LOG_SQRT_2PI + log_std)
+    return log_prob, entropy, (z, inv_std)
+
+
+def gaussian_evaluate_vjp(
+    tape: Any, g_log_prob: np.ndarray, g_mean_entropy: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(d/d mean [B, d], d/d log_std [d])``."""
+    z, inv_std = tape
+    g_mean = g_log_prob[:, None] * z * inv_std
+    g_log_std = (g_log_prob[:, None] * (z * z - 1.0)).sum(axis=0) + g_mean_entropy
+    return g_mean, g_log_std
+
+
+# -- tanh-squashed Gaussian (SAC) --------------------------------------------------------------
+def squashed_gaussian_rsample(xp: Any, mean: Any, log_std: Any, noise: Any) -> tuple[Any, Any, Any]:
+    """Reparameterised ``a = tanh(mean + std * noise)`` with ``log_std`` clipped to SB3's
+    ``[-20, 2]``, and ``log pi(a) = log N(u) - sum log(1 - a^2 + 1e-6)``: ``(a, log_prob, tape)``.
+    ``noise`` is standard normal, drawn by the caller."""
+    clipped = xp.clip(log_std, LOG_STD_MIN, LOG_STD_MAX)
+    std = xp.exp(clipped)
+    u = mean + std * noise
+    a = xp.tanh(u)
+    one_minus = 1.0 - a * a
+    log_prob = xp.sum_rows(-0.5 * noise * noise - clipped - LOG_SQRT_2PI) - xp.sum_rows(
+        xp.log(one_minus + SQUASH_EPS)
+    )
+    return a, log_prob, (log_std, std, noise, a, one_minus)
+
+
+def squashed_gaussian_rsample_vjp(
+    tape: Any, g_action: np.ndarray | None, g_log_prob: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(d/d mean, d/d log_std)`` from the gradients on the action and on its log-prob.
+
+    d a/du = 1 - a^2; d/du of ``-log(1 - a^2 + eps)`` is ``2a(1 - a^2) / (1 - a^2 + eps)``;
+    u = mean + std * noise; the Gaussian term's gradient is -1 per log-std (the standardised
+    value is the noise itself). Outside the log-std bounds the clip passes no gradient."""
+    log_std, std, noise, a, one_minus = tape
+    g_u = np.zeros_like(a)
+    if g_action is not None:
+        g_u += g_action * one_minus
+    if g_log_prob is not None:
+        g_u += g_log_prob[:, None] * (2.0 * a * one_minus / (one_minus + SQUASH_EPS))
+    g_log_std = g_u * std * noise
+    if g_log_prob is not None:
+        g_log_std -= g_log_prob[:, None]
+    inside = (log_std >= LOG_STD_MIN) & (log_std <= LOG_STD_MAX)
+    return g_u, g_log_std * inside
+
+
+# -- deterministic tanh (TD3, DDPG) ------------------------------------------------------------
+def tanh_action(xp: Any, x: Any) -> tuple[Any, Any]:
+    """Actions in ``(-1, 1)``: ``(tanh(x), tape)``."""
+    a = xp.tanh(x)
+    return a, a
+
+
+def tanh_action_vjp(tape: Any, g_action: np.ndarray) -> np.ndarray:
+    return g_action * (1.0 - tape * tape)
