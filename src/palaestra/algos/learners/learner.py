@@ -3,9 +3,10 @@ losses with autograd; the numpy learner runs the same functions on numpy arrays 
 hand-written vector-Jacobian products, with a flat-buffer Adam.
 
 An algorithm describes its networks (``Net``: the torch modules, the optimizer group it trains
-in, or the net it is a target of) and hands each update an ``Objective``: which net reads which
-batch field, the loss over ``xp`` and, for numpy, the loss's VJP. ``update`` returns the
-logged metrics; ``forward`` runs a net for acting; ``polyak`` moves a target net.
+in, or the net it is a target of) and hands each update an ``Objective``: the loss over ``xp``,
+running nets through ``run``, and, for numpy, the loss's VJP, which sends gradients back
+through ``backprop``. Several groups (an actor, twin critics, an entropy coefficient) each
+take their own ``update``; ``forward`` runs a net for acting; ``polyak`` moves a target net.
 
 Ownership (numpy learner): the learner owns the parameters and the Adam state as flat numpy
 buffers while it trains and acts. The torch modules and optimizer the user sees are brought up
@@ -63,18 +64,25 @@ class Group:
     extras: dict[str, nn.Parameter] = field(default_factory=dict)  # by name, e.g. log_std
 
 
-class Objective(Protocol):
-    """An algorithm's loss for one update: ``inputs`` maps each net the loss reads to the
-    batch field it runs on; ``loss`` returns ``(loss, metrics, tape)``; ``vjp`` the gradient of
-    the loss with respect to each trained net's output and each extra parameter (numpy)."""
+Run = Callable[[str, Any], Any]  # (net name, input batch) -> output
+Backprop = Callable[..., "np.ndarray | None"]  # (net name, d/d output, input_grad=False)
 
-    inputs: dict[str, str]
+
+class Objective(Protocol):
+    """An algorithm's loss for one update, written once over ``xp``.
+
+    ``loss(xp, run, extras, batch)`` computes ``(loss, metrics, tape)``, running nets with
+    ``run(name, x)`` (each net at most once per loss; an input may be another net's output,
+    as an actor's action fed to a critic). On the numpy learner, ``vjp(tape, backprop)`` then
+    hands the gradient of the loss with respect to each net's output to
+    ``backprop(name, g, input_grad=False)``, in reverse order of the runs, which returns
+    d(loss)/d(input) when asked; it returns the gradients of the extra parameters by name."""
 
     def loss(
-        self, xp: Any, outputs: dict[str, Any], extras: dict[str, Any], batch: dict[str, Any]
+        self, xp: Any, run: Run, extras: dict[str, Any], batch: dict[str, Any]
     ) -> tuple[Any, dict[str, Any], Any]: ...
 
-    def vjp(self, tape: Any) -> dict[str, np.ndarray]: ...
+    def vjp(self, tape: Any, backprop: Backprop) -> dict[str, np.ndarray]: ...
 
 
 class Learner:
@@ -171,22 +179,8 @@ class TorchLearner(Learner):
     ) -> tuple[dict[str, float], bool]:
         """One gradient step of ``group`` on ``objective``; ``(metrics, applied)``."""
         tensors = {k: self.tensor(v) for k, v in batch.items()}
-        outputs: dict[str, Any] = {}
-        for names, fn in self.joint.items():  # nets sharing a features extractor: one pass
-            keys = {objective.inputs.get(name, "") for name in names}
-            if len(keys) == 1 and "" not in keys:
-                outputs.update(zip(names, fn(tensors[keys.pop()])))
-        for name, key in objective.inputs.items():
-            if name in outputs:
-                continue
-            net = self.nets[name]
-            if net.group is None:
-                with torch.no_grad():
-                    outputs[name] = net.torch_fn(tensors[key])
-            else:
-                outputs[name] = net.torch_fn(tensors[key])
         extras = {k: v for g in self.groups.values() for k, v in g.extras.items()}
-        loss, metrics, _ = objective.loss(torch_ops, outputs, extras, tensors)
+        loss, metrics, _ = objective.loss(torch_ops, self._runner(), extras, tensors)
         values = {k: torch_ops.scalar(v) for k, v in metrics.items()}
         if accept is not None and not accept(values):
             return values, False
@@ -196,6 +190,27 @@ class TorchLearner(Learner):
         torch.nn.utils.clip_grad_norm_(self.groups[group].params, max_grad_norm)
         opt.step()
         return values, True
+
+    def _runner(self) -> Run:
+        """``run`` for one loss: nets sharing a features extractor (``joint``) are computed
+        in one pass and the partner's output kept for its own ``run`` on the same input."""
+        kept: dict[tuple[str, int], Any] = {}
+
+        def run(name: str, x: Any) -> Any:
+            if (name, id(x)) in kept:
+                return kept.pop((name, id(x)))
+            for names, fn in self.joint.items():
+                if name in names:
+                    outs = fn(x)
+                    kept.update({(n, id(x)): out for n, out in zip(names, outs) if n != name})
+                    return outs[names.index(name)]
+            net = self.nets[name]
+            if net.group is None:  # a target net: no gradients
+                with torch.no_grad():
+                    return net.torch_fn(x)
+            return net.torch_fn(x)
+
+        return run
 
     def polyak(self, target: str, tau: float) -> None:
         net = self.nets[target]
@@ -331,28 +346,35 @@ class NumpyLearner(Learner):
         """One gradient step of ``group`` on ``objective``; ``(metrics, applied)``."""
         if self._torch_changed:
             self._own()
-        outputs, acts = {}, {}
-        for name, key in objective.inputs.items():
-            x = batch[key]
+        acts: dict[str, list[np.ndarray]] = {}
+
+        def run(name: str, x: np.ndarray) -> np.ndarray:
+            assert name not in acts, f"net {name!r} runs twice in one loss"
             x = x.reshape(x.shape[0], -1).astype(np.float32, copy=False)
             acts[name] = mlp_forward(self.layers[name], x)
-            outputs[name] = acts[name][-1]
-        _, metrics, tape = objective.loss(numpy_ops, outputs, self.extras, batch)
+            return acts[name][-1]
+
+        _, metrics, tape = objective.loss(numpy_ops, run, self.extras, batch)
         values = {k: float(v) for k, v in metrics.items()}
         if accept is not None and not accept(values):
             return values, False
-        grads = objective.vjp(tape)
-        trained = [n for n, net in self.nets.items() if net.group == group]
-        for name in trained:
-            if name in grads:
-                g = grads[name].astype(np.float32, copy=False)
-                mlp_forward_vjp(self.layers[name], acts[name], g, self.grads[name])
-            else:
+        reached: set[str] = set()
+
+        def backprop(name: str, g: np.ndarray, input_grad: bool = False) -> np.ndarray | None:
+            trained = self.nets[name].group == group
+            reached.add(name)
+            g = g.astype(np.float32, copy=False)
+            grads = self.grads[name] if trained else None
+            return mlp_forward_vjp(self.layers[name], acts[name], g, grads, input_grad)
+
+        extra_grads = objective.vjp(tape, backprop)
+        for name, net in self.nets.items():  # trained nets the loss did not reach
+            if net.group == group and name not in reached:
                 for view in self.grads[name]:
                     view[...] = 0.0
         for name, view in self.extra_grads.items():
             if name in self.groups[group].extras:
-                view[...] = grads.get(name, 0.0)
+                view[...] = extra_grads.get(name, 0.0)
         adam = self._adam[group]
         adam.clip_grad_norm(max_grad_norm)
         adam.step(self._buffers[group][0])

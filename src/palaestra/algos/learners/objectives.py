@@ -1,5 +1,5 @@
-"""The update of each algorithm as an ``Objective`` for the learners: which net reads which
-batch field, the loss (from ``losses``, over ``xp``) and its VJP chained through the head."""
+"""The update of each algorithm as an ``Objective`` for the learners: the nets it runs, the
+loss (from ``losses``, over ``xp``) and its VJP chained back through the head and the nets."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from palaestra.algos.learners.learner import Backprop, Run
 from palaestra.algos.learners.losses import dqn_loss, dqn_loss_vjp, ppo_loss, ppo_loss_vjp
 
 __all__ = ["DQNObjective", "PPOObjective"]
@@ -15,33 +16,26 @@ __all__ = ["DQNObjective", "PPOObjective"]
 class DQNObjective:
     """Huber TD loss of the online net ``q`` against the target net ``q_target``."""
 
-    inputs = {"q": "observations", "q_target": "next_observations"}
-
     def __init__(self, gamma: float) -> None:
         self.gamma = gamma
 
     def loss(
-        self, xp: Any, outputs: dict[str, Any], extras: dict[str, Any], batch: dict[str, Any]
+        self, xp: Any, run: Run, extras: dict[str, Any], batch: dict[str, Any]
     ) -> tuple[Any, dict[str, Any], Any]:
+        next_q = run("q_target", batch["next_observations"])
+        q = run("q", batch["observations"])
         return dqn_loss(
-            xp,
-            outputs["q"],
-            batch["actions"],
-            batch["rewards"],
-            batch["terminated"],
-            outputs["q_target"],
-            self.gamma,
+            xp, q, batch["actions"], batch["rewards"], batch["terminated"], next_q, self.gamma
         )
 
-    def vjp(self, tape: Any) -> dict[str, np.ndarray]:
-        return {"q": dqn_loss_vjp(tape)}
+    def vjp(self, tape: Any, backprop: Backprop) -> dict[str, np.ndarray]:
+        backprop("q", dqn_loss_vjp(tape))
+        return {}
 
 
 class PPOObjective:
     """Clipped surrogate, value and entropy terms of the actor ``pi`` (through ``head``) and
     the critic ``vf`` on one minibatch."""
-
-    inputs = {"pi": "observations", "vf": "observations"}
 
     def __init__(
         self,
@@ -56,11 +50,12 @@ class PPOObjective:
         self.args = (clip_range, clip_range_vf, ent_coef, vf_coef, normalize_advantage)
 
     def loss(
-        self, xp: Any, outputs: dict[str, Any], extras: dict[str, Any], batch: dict[str, Any]
+        self, xp: Any, run: Run, extras: dict[str, Any], batch: dict[str, Any]
     ) -> tuple[Any, dict[str, Any], Any]:
-        values = outputs["vf"][:, 0]
+        obs = batch["observations"]
+        head_params, values = run("pi", obs), run("vf", obs)[:, 0]
         log_prob, entropy, head_tape = self.head.evaluate(
-            xp, outputs["pi"], extras.get("log_std"), batch["actions"]
+            xp, head_params, extras.get("log_std"), batch["actions"]
         )
         loss, metrics, tape = ppo_loss(
             xp,
@@ -75,11 +70,10 @@ class PPOObjective:
         )
         return loss, metrics, (tape, head_tape)
 
-    def vjp(self, tape: Any) -> dict[str, np.ndarray]:
+    def vjp(self, tape: Any, backprop: Backprop) -> dict[str, np.ndarray]:
         loss_tape, head_tape = tape
         g_log_prob, g_values, g_mean_entropy = ppo_loss_vjp(loss_tape)
         g_params, g_log_std = self.head.evaluate_vjp(head_tape, g_log_prob, g_mean_entropy)
-        grads = {"pi": g_params, "vf": g_values[:, None]}
-        if g_log_std is not None:
-            grads["log_std"] = g_log_std
-        return grads
+        backprop("vf", g_values[:, None])
+        backprop("pi", g_params)
+        return {} if g_log_std is None else {"log_std": g_log_std}
