@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import torch
 
-from palaestra.algos import DQN, PPO
+from palaestra.algos import DQN, PPO, SAC, TD3, NormalActionNoise
 from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 from palaestra.vec_env import make_vec_env
 
@@ -41,7 +41,25 @@ CASES: dict[str, tuple[Any, dict[str, Any], str, int]] = {
         "CartPole-v1",
         900,
     ),
+    "sac": (
+        SAC,
+        dict(learning_starts=100, train_freq=2, batch_size=32, policy_kwargs={"net_arch": [32]}),
+        "Pendulum-v1",
+        900,
+    ),
+    "td3": (
+        TD3,
+        dict(
+            learning_starts=100,
+            batch_size=32,
+            policy_kwargs={"net_arch": [32]},
+            action_noise=NormalActionNoise(np.zeros(1), np.full(1, 0.1)),
+        ),
+        "Pendulum-v1",
+        900,
+    ),
 }
+OFF_POLICY = (DQN, SAC, TD3)
 
 
 def _run(case: str, stops: list[int], tmp: Path | None) -> tuple[dict[str, torch.Tensor], Any]:
@@ -53,11 +71,11 @@ def _run(case: str, stops: list[int], tmp: Path | None) -> tuple[dict[str, torch
         if stop < total and tmp is not None:  # save, drop the model, load it with its env
             env = model.get_env()
             model.save(tmp / f"m{i}.zip")
-            if algo is DQN:
+            if algo in OFF_POLICY:
                 model.save_replay_buffer(tmp / f"rb{i}.zip")
             del model
             model = algo.load(tmp / f"m{i}.zip", env=env)
-            if algo is DQN:
+            if algo in OFF_POLICY:
                 model.load_replay_buffer(tmp / f"rb{i}.zip")
     return model.policy.state_dict(), model
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from palaestra.algos import DQN, PPO, ModelFileError
+from palaestra.algos import DDPG, DQN, PPO, SAC, TD3, ModelFileError
 from palaestra.algos import hyperparams as hp
 from palaestra.algos.model_io import read_archive, write_archive
 from palaestra.algos.policies import ActorCritic, QNetwork
@@ -37,6 +37,27 @@ def _tamper(source: Path, target: Path, **changes: Any) -> Path:
         node[parts[-1]] = value
     write_archive(target, "model", meta, arrays)
     return target
+
+
+@pytest.mark.parametrize("cls", [SAC, TD3, DDPG])
+def test_every_saved_value_of_the_actor_critics_has_a_rule(cls: Any) -> None:
+    model = cls("MlpPolicy", "Pendulum-v1", buffer_size=100)
+    name = cls.__name__
+    assert set(model._hyperparameters()) == set(hp.HYPERPARAMETERS[name])
+    assert set(model._schedules()) == set(hp.SCHEDULES[name])
+    takes = {
+        "net_arch",
+        "activation_fn",
+        "features_extractor_class",
+        "features_extractor_kwargs",
+        "normalize_images",
+        "optimizer_class",
+        "optimizer_kwargs",
+        "share_features_extractor",
+        "n_critics",
+        "backend",
+    }
+    assert takes == set(hp.POLICY_KWARGS[name])
 
 
 @pytest.mark.parametrize("cls", [DQN, PPO])

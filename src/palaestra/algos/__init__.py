@@ -47,17 +47,30 @@ except ImportError as exc:  # pragma: no cover - exercised in a subprocess test
 # isort: skip_file
 from palaestra.algos import callbacks, schedules
 from palaestra.algos.dqn import DQN
+from palaestra.algos.sac import SAC
+from palaestra.algos.td3 import DDPG, TD3
+from palaestra.algos.action_noise import (
+    NormalActionNoise,
+    OrnsteinUhlenbeckActionNoise,
+    VectorizedActionNoise,
+)
 from palaestra.algos.ppo import PPO
 from palaestra.algos.evaluation import evaluate_policy
 from palaestra.algos.model_io import ModelFileError
 from palaestra.algos.schedules import ConstantSchedule, LinearSchedule
 
 __all__ = [
+    "DDPG",
     "DQN",
     "PPO",
+    "SAC",
+    "TD3",
     "ConstantSchedule",
     "LinearSchedule",
     "ModelFileError",
+    "NormalActionNoise",
+    "OrnsteinUhlenbeckActionNoise",
+    "VectorizedActionNoise",
     "callbacks",
     "evaluate_policy",
     "schedules",

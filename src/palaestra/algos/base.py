@@ -456,9 +456,17 @@ class BaseAlgorithm:
         """Rebuild a saved model; never unpickles. ``custom_objects`` overrides stored values."""
         return saving.load_model(cls, path, env, device, custom_objects or {}, kwargs)
 
+    def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
+        """Each optimizer by its model-file key, with SB3's ``get_parameters`` key."""
+        return {"optimizer": ("policy.optimizer", self.optimizer)}
+
     def get_parameters(self) -> dict[str, dict[str, Any]]:
-        """``{"policy": state_dict, "policy.optimizer": optimizer state_dict}`` (SB3's keys)."""
-        return {"policy": self.policy.state_dict(), "policy.optimizer": self.optimizer.state_dict()}
+        """``{"policy": state_dict, "policy.optimizer": optimizer state_dict}`` (SB3's keys;
+        SAC: ``actor.optimizer``, ``critic.optimizer``, ``ent_coef_optimizer``)."""
+        params = {"policy": self.policy.state_dict()}
+        for _, (name, optimizer) in self._optimizers().items():
+            params[name] = optimizer.state_dict()
+        return params
 
     def set_parameters(
         self, load_path_or_dict: Any, exact_match: bool = True, device: torch.device | str = "auto"

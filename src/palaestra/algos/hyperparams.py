@@ -207,9 +207,72 @@ HYPERPARAMETERS: dict[str, dict[str, Check]] = {
         "target_kl": _optional(_number(0.0, 1e6, low_open=True)),
     },
 }
+
+
+def _ent_coef(value: Any) -> str | None:
+    """SAC's ``"auto"``, ``"auto_<init>"`` or a fixed coefficient > 0."""
+    if isinstance(value, str):
+        head, _, init = value.partition("_")
+        try:
+            ok = head == "auto" and (not init or 0 < float(init) < 1e6)
+        except ValueError:
+            ok = False
+        return None if ok else '"auto", "auto_<value>" or a number > 0'
+    return _number(0.0, 1e6, low_open=True)(value)
+
+
+def _target_entropy(value: Any) -> str | None:
+    return None if value == "auto" else _number(-1e6, 1e6)(value)
+
+
+def _action_noise(value: Any) -> str | None:
+    from palaestra.algos.action_noise import noise_from_json
+
+    if value is None:
+        return None
+    try:
+        noise_from_json(value)
+    except (ValueError, TypeError):
+        return "a saved NormalActionNoise, OrnsteinUhlenbeckActionNoise or VectorizedActionNoise"
+    return None
+
+
+_OFF_POLICY: dict[str, Check] = {
+    key: HYPERPARAMETERS["DQN"][key]
+    for key in (
+        "buffer_size",
+        "learning_starts",
+        "batch_size",
+        "tau",
+        "train_freq",
+        "gradient_steps",
+        "replay_buffer_kwargs",
+        "optimize_memory_usage",
+    )
+}
+_COMMON_NO_CLIP = {k: v for k, v in _COMMON.items() if k != "max_grad_norm"}
+_OFF_POLICY["action_noise"] = _action_noise
+HYPERPARAMETERS["SAC"] = {
+    **_COMMON_NO_CLIP,
+    **_OFF_POLICY,
+    "ent_coef": _ent_coef,
+    "target_update_interval": _integer(1, MAX_STEPS),
+    "target_entropy": _target_entropy,
+}
+HYPERPARAMETERS["TD3"] = {
+    **_COMMON_NO_CLIP,
+    **_OFF_POLICY,
+    "policy_delay": _integer(1, MAX_STEPS),
+    "target_policy_noise": _number(0.0, 1e6),
+    "target_noise_clip": _number(0.0, 1e6),
+}
+HYPERPARAMETERS["DDPG"] = HYPERPARAMETERS["TD3"]
 # Each schedule's values: a learning rate, a clip range (>= 0; PPO refuses 0 for clip_range_vf).
 SCHEDULES: dict[str, dict[str, Check]] = {
     "DQN": {"learning_rate": _number(0.0, 1e6)},
+    "SAC": {"learning_rate": _number(0.0, 1e6)},
+    "TD3": {"learning_rate": _number(0.0, 1e6)},
+    "DDPG": {"learning_rate": _number(0.0, 1e6)},
     "PPO": {
         "learning_rate": _number(0.0, 1e6),
         "clip_range": _number(0.0, 1e6),
@@ -252,6 +315,14 @@ POLICY_KWARGS: dict[str, dict[str, Check]] = {
     "DQN": _POLICY_COMMON,
     "PPO": {**_POLICY_COMMON, "ortho_init": _boolean, "log_std_init": _number(-20.0, 20.0)},
 }
+_ACTOR_CRITIC = {
+    **_POLICY_COMMON,
+    "net_arch": _optional(
+        lambda v: _mapping({"pi": _layers, "qf": _layers})(v) if isinstance(v, dict) else _layers(v)
+    ),
+    "n_critics": _integer(1, 64),
+}
+POLICY_KWARGS.update(SAC=_ACTOR_CRITIC, TD3=_ACTOR_CRITIC, DDPG=_ACTOR_CRITIC)
 
 
 def _ours(ref: Any, packages: tuple[str, ...]) -> bool:

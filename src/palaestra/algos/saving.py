@@ -69,8 +69,7 @@ def save_model(model: Any, path: Any) -> None:
     """Everything needed to predict and to resume training, as JSON + arrays."""
     import palaestra
 
-    opt_meta, opt_arrays = optimizer_to_arrays(model.optimizer, "optimizer")
-    meta = {
+    meta: dict[str, Any] = {
         "algo": type(model).__name__,
         "palaestra_version": palaestra.__version__,
         "torch_version": torch.__version__,
@@ -86,10 +85,11 @@ def save_model(model: Any, path: Any) -> None:
         },
         "counters": {name: getattr(model, name) for name in (*COUNTERS, *model._extra_counters)},
         "rng": model._rng.bit_generator.state,
-        "optimizer": opt_meta,
     }
     arrays = {f"policy/{k}": v.detach().cpu().numpy() for k, v in model.policy.state_dict().items()}
-    arrays.update(opt_arrays)
+    for key, (_, optimizer) in model._optimizers().items():
+        meta[key], opt_arrays = optimizer_to_arrays(optimizer, key)
+        arrays.update(opt_arrays)
     meta["run"], run_arrays = _run_state(model)
     arrays.update(run_arrays)
     write_archive(path, "model", meta, arrays)
@@ -204,7 +204,7 @@ def load_model(
     model._setup_model()
     arrays = read_arrays(manifest, expect=_fits(model, exact_match=True, source=str(path)))
     _load_policy(model, arrays, exact_match=True, source=str(path))
-    optimizer_from_arrays(model.optimizer, meta["optimizer"], arrays, "optimizer")
+    _load_optimizers(model, meta, arrays, str(path))
     for name, value in counters.items():
         if name in (*COUNTERS, *model._extra_counters):
             setattr(model, name, _counter(name, value, str(path)))
@@ -247,7 +247,10 @@ def _fits(model: Any, exact_match: bool, source: str) -> Expect:
     must have this model's shapes (and, with ``exact_match``, its parameter names), checked
     before any of them is read. Other arrays are left to their own readers' checks."""
     params = {f"policy/{k}": tuple(v.shape) for k, v in model.policy.state_dict().items()}
-    shapes = [tuple(p.shape) for g in model.optimizer.param_groups for p in g["params"]]
+    shapes = {
+        key: [tuple(p.shape) for g in opt.param_groups for p in g["params"]]
+        for key, (_, opt) in model._optimizers().items()
+    }
 
     def expect(meta: dict[str, Any], declared: dict[str, ArraySpec]) -> None:
         for name, spec in declared.items():
@@ -263,10 +266,11 @@ def _fits(model: Any, exact_match: bool, source: str) -> Expect:
                         f"{source}: parameter {name[len('policy/') :]!r} has shape "
                         f"{spec.shape}, this model expects {want}"
                     )
-            elif name.startswith("optimizer/"):
-                index = name[len("optimizer/") :].partition("/")[0]
-                known = index.isascii() and index.isdigit() and int(index) < len(shapes)
-                want = shapes[int(index)] if known else None
+            elif name.partition("/")[0] in shapes:
+                key, _, rest = name.partition("/")
+                index = rest.partition("/")[0]
+                known = index.isascii() and index.isdigit() and int(index) < len(shapes[key])
+                want = shapes[key][int(index)] if known else None
                 # Per-parameter optimizer state is shaped like its parameter (Adam's moments)
                 # or is one number (its step count: shape () or, from the numpy trainer, (1,)).
                 if want is None or (spec.shape != want and math.prod(spec.shape) > 1):
@@ -341,10 +345,23 @@ def set_parameters(model: Any, source: Any, exact_match: bool) -> None:
                 f"expected keys 'policy' (and 'policy.optimizer'), got {sorted(source)}"
             )
         model.policy.load_state_dict(source["policy"], strict=exact_match)
-        if "policy.optimizer" in source:
-            model.optimizer.load_state_dict(source["policy.optimizer"])
+        for _, (name, optimizer) in model._optimizers().items():
+            if name in source:
+                optimizer.load_state_dict(source[name])
         return
     meta, arrays = read_archive(source, "model", expect=_fits(model, exact_match, str(source)))
     _load_policy(model, arrays, exact_match, str(source))
-    if "optimizer" in meta:
-        optimizer_from_arrays(model.optimizer, meta["optimizer"], arrays, "optimizer")
+    _load_optimizers(model, meta, arrays, str(source), required=False)
+
+
+def _load_optimizers(
+    model: Any, meta: Any, arrays: dict[str, np.ndarray], source: str, required: bool = True
+) -> None:
+    """Each optimizer's state from the file (``"optimizer"`` for DQN/PPO, one entry per
+    optimizer otherwise)."""
+    for key, (_, optimizer) in model._optimizers().items():
+        if key not in meta:
+            if required:
+                raise ModelFileError(f"{source}: no state for the {key!r} optimizer")
+            continue
+        optimizer_from_arrays(optimizer, meta[key], arrays, key)

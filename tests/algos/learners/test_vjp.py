@@ -223,3 +223,43 @@ def test_ppo_loss_vjp(name: str) -> None:
     for key, value in metrics.items():
         tol = 2.5 / n if key == "clip_fraction" else 1e-6  # the rows on the bounds may flip
         assert value == pytest.approx(float(t_metrics[key]), rel=1e-4, abs=tol), key
+
+
+@pytest.mark.parametrize("n_critics", [1, 2, 3])
+def test_actor_critic_loss_vjps(n_critics: int) -> None:
+    """The SAC/TD3 losses' VJPs, with a tie between critics (torch.minimum splits it)."""
+    from palaestra.algos.learners import losses
+
+    n = 10
+    qs = [_f32(n) for _ in range(n_critics)]
+    if n_critics > 1:
+        qs[1][:3] = qs[0][:3]  # ties in the minimum
+    log_prob, target = _f32(n), _f32(n)
+    t_qs = [_leaf(q) for q in qs]
+    t_lp = _leaf(log_prob)
+
+    _, _, tape = losses.q_regression_loss(numpy_ops, qs, target, 0.5)
+    loss, _, _ = losses.q_regression_loss(torch_ops, t_qs, torch.as_tensor(target), 0.5)
+    loss.backward()
+    for ours, t in zip(losses.q_regression_loss_vjp(tape), t_qs):
+        _close(ours, t.grad)
+
+    t_qs = [_leaf(q) for q in qs]
+    _, _, tape = losses.soft_actor_loss(numpy_ops, 0.2, log_prob, qs)
+    loss, _, _ = losses.soft_actor_loss(torch_ops, 0.2, t_lp, t_qs)
+    loss.backward()
+    g_lp, g_qs = losses.soft_actor_loss_vjp(tape)
+    _close(g_lp, t_lp.grad)
+    for ours, t in zip(g_qs, t_qs):
+        _close(ours, t.grad)
+
+    t_q = _leaf(qs[0])
+    _, _, tape = losses.deterministic_actor_loss(numpy_ops, qs[0])
+    losses.deterministic_actor_loss(torch_ops, t_q)[0].backward()
+    _close(losses.deterministic_actor_loss_vjp(tape), t_q.grad)
+
+    log_alpha = np.array([-0.3], np.float32)
+    t_alpha = _leaf(log_alpha)
+    _, _, tape = losses.ent_coef_loss(numpy_ops, log_alpha, log_prob, -1.0)
+    losses.ent_coef_loss(torch_ops, t_alpha, t_lp.detach(), -1.0)[0].backward()
+    _close(losses.ent_coef_loss_vjp(tape), t_alpha.grad)

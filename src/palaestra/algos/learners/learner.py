@@ -42,8 +42,9 @@ __all__ = ["Learner", "Net", "NumpyLearner", "Objective", "TorchLearner", "build
 class Net:
     """One network of an algorithm.
 
-    ``torch_fn`` maps an observation (or input) tensor batch to the output (a module, for a
-    net that has a target); ``modules`` are
+    ``torch_fn`` maps an observation (or input) tensor batch, or a tuple of them (a critic's
+    observation and action), to the output; ``module`` holds its parameters where
+    ``torch_fn`` is not a module itself (for ``polyak``); ``modules`` are
     the torch modules it consists of in order, for the numpy learner (None: not an MLP, with
     ``why``). ``group`` names the optimizer group that trains it; ``target_of`` makes it a
     frozen copy of another net, moved by ``polyak``."""
@@ -53,6 +54,7 @@ class Net:
     group: str | None = None
     target_of: str | None = None
     why: str = ""
+    module: nn.Module | None = None  # all its torch parameters (polyak), if not torch_fn
 
 
 @dataclass
@@ -151,6 +153,8 @@ class TorchLearner(Learner):
         self.device, self.joint = device, dict(joint or {})
 
     def tensor(self, value: Any) -> Any:
+        if isinstance(value, tuple):
+            return tuple(self.tensor(v) for v in value)
         if isinstance(value, dict):
             return {k: torch.as_tensor(np.asarray(v), device=self.device) for k, v in value.items()}
         return torch.as_tensor(np.asarray(value), device=self.device)
@@ -214,11 +218,15 @@ class TorchLearner(Learner):
 
     def polyak(self, target: str, tau: float) -> None:
         net = self.nets[target]
-        assert net.target_of is not None and isinstance(net.torch_fn, nn.Module)
-        source = self.nets[net.target_of].torch_fn
-        assert isinstance(source, nn.Module)
+        assert net.target_of is not None
+        source, frozen = self.nets[net.target_of], net
+        params = []
+        for n in (source, frozen):
+            module = n.module if n.module is not None else n.torch_fn
+            assert isinstance(module, nn.Module)
+            params.append(list(module.parameters()))
         with torch.no_grad():
-            polyak(list(source.parameters()), list(net.torch_fn.parameters()), tau)
+            polyak(params[0], params[1], tau)
 
 
 class NumpyLearner(Learner):
@@ -318,11 +326,10 @@ class NumpyLearner(Learner):
         with one_blas_thread():  # once per batch of updates: it costs a few µs per entry
             yield
 
-    def forward(self, name: str, x: np.ndarray) -> np.ndarray:
+    def forward(self, name: str, x: Any) -> np.ndarray:
         if self._torch_changed:
             self._own()
-        x = np.asarray(x, dtype=np.float32)
-        return mlp_forward(self.layers[name], x.reshape(x.shape[0], -1))[-1]
+        return mlp_forward(self.layers[name], _flat_input(x))[-1]
 
     def set_learning_rate(self, group: str, lr: float) -> None:
         if self._torch_changed:
@@ -348,9 +355,9 @@ class NumpyLearner(Learner):
             self._own()
         acts: dict[str, list[np.ndarray]] = {}
 
-        def run(name: str, x: np.ndarray) -> np.ndarray:
+        def run(name: str, x: Any) -> np.ndarray:
             assert name not in acts, f"net {name!r} runs twice in one loss"
-            x = x.reshape(x.shape[0], -1).astype(np.float32, copy=False)
+            x = _flat_input(x)
             acts[name] = mlp_forward(self.layers[name], x)
             return acts[name][-1]
 
@@ -399,6 +406,16 @@ class NumpyLearner(Learner):
                 tau,
             )
         self._numpy_changed = True
+
+
+def _flat_input(x: Any) -> np.ndarray:
+    """An MLP's input ``[B, in]`` float32: a batch flattened, or a tuple of batches (a
+    critic's observation and action) flattened and side by side."""
+    if isinstance(x, tuple):
+        parts = [np.asarray(p).reshape(len(p), -1) for p in x]
+        return np.concatenate(parts, axis=1).astype(np.float32, copy=False)
+    x = np.asarray(x)
+    return x.reshape(x.shape[0], -1).astype(np.float32, copy=False)
 
 
 def numpy_unsupported(nets: dict[str, Net], groups: dict[str, Group]) -> str | None:

@@ -18,13 +18,23 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "deterministic_actor_loss",
+    "deterministic_actor_loss_vjp",
     "dqn_loss",
     "dqn_loss_vjp",
+    "ent_coef_loss",
+    "ent_coef_loss_vjp",
     "explained_variance",
     "gae",
+    "min_of",
+    "min_of_vjp",
     "polyak",
     "ppo_loss",
     "ppo_loss_vjp",
+    "q_regression_loss",
+    "q_regression_loss_vjp",
+    "soft_actor_loss",
+    "soft_actor_loss_vjp",
 ]
 
 
@@ -133,6 +143,91 @@ def ppo_loss_vjp(tape: Any) -> tuple[np.ndarray, np.ndarray, float]:
     if no_entropy:  # entropy_loss = mean(log_prob)
         return g_log_prob + np.float32(ent_coef / n), g_values, 0.0
     return g_log_prob, g_values, -ent_coef
+
+
+def q_regression_loss(
+    xp: Any, current_qs: list[Any], target_q: Any, scale: float
+) -> tuple[Any, dict[str, Any], Any]:
+    """``scale * sum_i mean((Q_i - target)^2)`` over the critics (``[B]`` each; the target
+    not differentiated). SAC halves it (``scale=0.5``), TD3 and DDPG do not (``scale=1``).
+
+    >>> from palaestra.algos.learners.xp import numpy_ops as xp
+    >>> q_regression_loss(xp, [np.array([1.0, 2.0]), np.array([0.0, 2.0])], np.array([1.0, 1.0]),
+    ...                   0.5)[0]
+    0.5
+    """
+    errors = [q - target_q for q in current_qs]
+    loss = scale * sum(xp.mean(e * e) for e in errors)
+    return loss, {"critic_loss": loss}, (errors, scale)
+
+
+def q_regression_loss_vjp(tape: Any) -> list[np.ndarray]:
+    """d(loss)/d(Q_i) ``= 2 * scale * (Q_i - target) / B`` for each critic."""
+    errors, scale = tape
+    return [(2.0 * scale / e.shape[0]) * e for e in errors]
+
+
+def min_of(xp: Any, qs: list[Any]) -> Any:
+    m = qs[0]
+    for q in qs[1:]:
+        m = xp.minimum(m, q)
+    return m
+
+
+def min_of_vjp(qs: list[np.ndarray], g: np.ndarray) -> list[np.ndarray]:
+    """The gradient of ``minimum(minimum(q0, q1), q2)...`` (ties split evenly, as torch)."""
+    mins = [qs[0]]
+    for q in qs[1:]:
+        mins.append(np.minimum(mins[-1], q))
+    grads: list[np.ndarray] = [np.zeros_like(q) for q in qs]
+    for k in range(len(qs) - 1, 0, -1):
+        left, right = mins[k - 1], qs[k]
+        half = 0.5 * g * (left == right)
+        grads[k] = g * (right < left) + half
+        g = g * (left < right) + half
+    grads[0] = g
+    return grads
+
+
+def soft_actor_loss(
+    xp: Any, ent_coef: float, log_prob: Any, qs_pi: list[Any]
+) -> tuple[Any, dict[str, Any], Any]:
+    """SAC's actor loss ``mean(alpha * log pi(a|s) - min_i Q_i(s, a))`` with ``a`` drawn by the
+    actor (reparameterised), ``alpha`` a number (not differentiated here)."""
+    loss = xp.mean(ent_coef * log_prob - min_of(xp, qs_pi))
+    return loss, {"actor_loss": loss}, (ent_coef, log_prob.shape[0], qs_pi)
+
+
+def soft_actor_loss_vjp(tape: Any) -> tuple[np.ndarray, list[np.ndarray]]:
+    """``(d/d log_prob [B], [d/d Q_i [B]])``."""
+    ent_coef, n, qs = tape
+    g_log_prob = np.full(n, ent_coef / n, dtype=np.float32)
+    return g_log_prob, min_of_vjp(qs, np.full(n, -1.0 / n, dtype=np.float32))
+
+
+def deterministic_actor_loss(xp: Any, q_pi: Any) -> tuple[Any, dict[str, Any], Any]:
+    """TD3's and DDPG's actor loss ``-mean(Q_0(s, mu(s)))``."""
+    loss = -xp.mean(q_pi)
+    return loss, {"actor_loss": loss}, q_pi.shape[0]
+
+
+def deterministic_actor_loss_vjp(tape: Any) -> np.ndarray:
+    return np.full(tape, -1.0 / tape, dtype=np.float32)
+
+
+def ent_coef_loss(
+    xp: Any, log_ent_coef: Any, log_prob: Any, target_entropy: float
+) -> tuple[Any, dict[str, Any], Any]:
+    """SAC's temperature loss ``-mean(log_alpha * (log pi + target_entropy))``, the log-prob
+    not differentiated (softlearning issue 60, kept by SB3)."""
+    shifted = xp.stop_gradient(log_prob) + target_entropy
+    loss = -xp.mean(log_ent_coef * shifted)
+    return loss, {"ent_coef_loss": loss}, shifted
+
+
+def ent_coef_loss_vjp(tape: Any) -> np.ndarray:
+    """d(loss)/d(log_alpha) ``= -mean(log pi + target_entropy)`` (shape ``(1,)``)."""
+    return np.array([-float(np.mean(tape))], dtype=np.float32)
 
 
 def polyak(params: list[Any], target_params: list[Any], tau: float) -> None:

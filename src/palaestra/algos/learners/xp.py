@@ -11,6 +11,7 @@ mean the same on both arrays.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from types import SimpleNamespace
 from typing import Any
@@ -72,6 +73,8 @@ numpy_ops = SimpleNamespace(
     standardize=_np_standardize,
     count_mean=lambda mask: float(np.count_nonzero(mask)) / mask.size,
     scalar=float,
+    stop_gradient=lambda x: x,
+    no_grad=contextlib.nullcontext,
 )
 
 
@@ -99,6 +102,8 @@ def _torch_ops() -> SimpleNamespace:
         standardize=standardize,
         count_mean=lambda mask: mask.float().mean(),
         scalar=lambda x: float(x.detach()) if hasattr(x, "detach") else float(x),
+        stop_gradient=lambda x: x.detach(),
+        no_grad=torch.no_grad,
     )
 
 

@@ -1,0 +1,213 @@
+"""What SAC, TD3 and DDPG share on top of the replay loop: Box actions kept in ``[-1, 1]``
+inside the networks and the buffer (scaled to the env's bounds when sent), uniform actions
+before ``learning_starts``, optional exploration noise, twin (or single) critics with target
+copies, and one optimizer per part (SB3's ``actor.optimizer``/``critic.optimizer``)."""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+import torch
+
+from palaestra import spaces
+from palaestra.algos.action_noise import (
+    ActionNoise,
+    VectorizedActionNoise,
+    noise_from_json,
+    noise_to_json,
+)
+from palaestra.algos.continuous_policies import ContinuousCritic, split_net_arch
+from palaestra.algos.learners import Net
+from palaestra.algos.networks import BaseFeaturesExtractor
+from palaestra.algos.off_policy import OffPolicyAlgorithm
+from palaestra.algos.policies import _numpy_input_problem, extractor_class
+
+__all__ = ["ActorCriticOffPolicy"]
+
+
+class ActorCriticOffPolicy(OffPolicyAlgorithm):
+    """The continuous-action part of SAC, TD3 and DDPG (see the module docstring)."""
+
+    supported_action_spaces = (spaces.Box,)
+    action_noise: ActionNoise | None
+
+    def _init_actor_critic(self, tau: float, action_noise: Any) -> None:
+        """Checks SB3 leaves to a crash later: ``tau`` in [0, 1], an ``ActionNoise``."""
+        if isinstance(tau, bool) or not isinstance(tau, (int, float)) or not 0.0 <= tau <= 1.0:
+            raise ValueError(f"tau must be a number in [0, 1], got {tau!r}")
+        if isinstance(action_noise, dict):  # from a model file
+            action_noise = noise_from_json(action_noise)
+        if action_noise is not None and not isinstance(action_noise, ActionNoise):
+            raise TypeError(
+                f"action_noise must be a palaestra.algos.action_noise.ActionNoise, got "
+                f"{type(action_noise).__name__}"
+            )
+        self.action_noise = action_noise
+
+    def _check_action_space(self) -> None:
+        box = self.action_space
+        if not isinstance(box, spaces.Box):
+            raise TypeError(f"{type(self).__name__} only supports Box action spaces, got {box}")
+        if not (np.all(np.isfinite(box.low)) and np.all(np.isfinite(box.high))):
+            raise ValueError(
+                f"{type(self).__name__} needs a bounded Box action space (actions are squashed "
+                f"to its bounds), got {box}"
+            )
+        self._low = box.low.astype(np.float64)
+        self._span = box.high.astype(np.float64) - self._low
+        self.action_dim = int(np.prod(box.shape))
+        noise = self.action_noise
+        if noise is not None:
+            want = tuple(box.shape)
+            got = noise.shape
+            ok = got == want or (isinstance(noise, VectorizedActionNoise) and got[1:] == want)
+            if not ok:
+                raise ValueError(
+                    f"action_noise of shape {got} does not fit the action space {box} "
+                    f"(expected {want}, or (n_envs, *{want}) for VectorizedActionNoise)"
+                )
+
+    # -- acting --------------------------------------------------------------------------------
+    def _unscale(self, scaled: np.ndarray) -> np.ndarray:
+        """``[-1, 1]`` -> the env's bounds."""
+        shape = (-1, *self.action_space.shape)
+        out = self._low + 0.5 * (scaled.reshape(shape) + 1.0) * self._span
+        return out.astype(self.action_space.dtype)
+
+    def _policy_actions(self, obs: Any, deterministic: bool) -> np.ndarray:
+        """Actions in ``[-1, 1]`` ``[B, action_dim]`` (subclasses)."""
+        raise NotImplementedError
+
+    def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
+        return self._unscale(self._policy_actions(observation, deterministic))
+
+    def _sample_actions(self) -> tuple[np.ndarray, np.ndarray]:
+        n = self.n_envs
+        if self.num_timesteps < self.learning_starts:
+            scaled = 2.0 * self._rng.random((n, self.action_dim)) - 1.0  # uniform in the bounds
+        else:
+            scaled = self._policy_actions(self._last_obs, deterministic=False)
+        if self.action_noise is not None:
+            if n > 1 and not isinstance(self.action_noise, VectorizedActionNoise):
+                self.action_noise = VectorizedActionNoise(self.action_noise, n)  # as SB3
+            noise = self.action_noise(self._rng).reshape(n, self.action_dim)
+            scaled = np.clip(scaled + noise, -1.0, 1.0)
+        scaled = scaled.astype(np.float32)
+        return self._unscale(scaled), scaled.reshape(-1, *self.action_space.shape)
+
+    def _on_episode_end(self, index: int) -> None:
+        noise = self.action_noise
+        if isinstance(noise, VectorizedActionNoise):
+            noise.reset([index])
+        elif noise is not None:
+            noise.reset()
+
+    # -- networks ------------------------------------------------------------------------------
+    def _parts(self) -> tuple[dict[str, Any], Any, Any, list[int], list[int], bool, Any]:
+        """The policy_kwargs, split: ``(rest, extractor class, its kwargs, actor widths, critic
+        widths, share_features_extractor, activation)``."""
+        kwargs = dict(self.policy_kwargs)
+        kwargs.pop("backend", None)
+        extractor = kwargs.pop("features_extractor_class", extractor_class(self.policy_name))
+        extractor_kwargs = kwargs.pop("features_extractor_kwargs", None) or {}
+        pi_arch, qf_arch = split_net_arch(kwargs.pop("net_arch", None), self._default_net_arch)
+        share = bool(kwargs.pop("share_features_extractor", False))
+        activation = kwargs.pop("activation_fn", torch.nn.ReLU)
+        unknown = set(kwargs) - {
+            "n_critics",
+            "normalize_images",
+            "optimizer_class",
+            "optimizer_kwargs",
+        }
+        if unknown:
+            raise TypeError(
+                f"{type(self).__name__} policy_kwargs got unexpected keys {sorted(unknown)}"
+            )
+        return kwargs, extractor, extractor_kwargs, pi_arch, qf_arch, share, activation
+
+    def _new_extractor(self) -> BaseFeaturesExtractor:
+        _, cls, kwargs, *_ = self._parts()
+        extractor: BaseFeaturesExtractor = cls(self.observation_space, **kwargs)
+        return extractor
+
+    def _critic(self, shared: BaseFeaturesExtractor | None) -> ContinuousCritic:
+        kwargs, _, _, _, qf_arch, share, activation = self._parts()
+        return ContinuousCritic(
+            self.observation_space,
+            self.action_dim,
+            shared if share and shared is not None else self._new_extractor(),
+            qf_arch,
+            activation,
+            n_critics=kwargs.get("n_critics", self._default_n_critics),
+            share_features_extractor=share,
+            normalize_images=kwargs.get("normalize_images", True),
+        )
+
+    _default_n_critics = 2
+    _default_net_arch = [256, 256]  # SAC's; TD3 and DDPG: [400, 300]
+
+    def _critic_nets(
+        self, critic: ContinuousCritic, target: ContinuousCritic
+    ) -> tuple[dict[str, Net], list[torch.nn.Parameter]]:
+        """``qf{i}`` and ``qf{i}_target`` nets, and the critic optimizer's parameters (without
+        a features extractor shared with the actor, which SB3 trains with the actor only)."""
+        why = _numpy_input_problem(
+            self.observation_space, critic.features_extractor, critic.normalize_images
+        )
+        nets: dict[str, Net] = {}
+        for i in range(len(critic.q_networks)):
+            own: torch.nn.Module = critic.q_networks[i]
+            frozen: torch.nn.Module = target.q_networks[i]
+            if i == 0 and not critic.share_features_extractor:  # the extractor moves with qf0
+                own = torch.nn.ModuleList([critic.features_extractor, own])
+                frozen = torch.nn.ModuleList([target.features_extractor, frozen])
+            nets[f"qf{i}"] = Net(
+                functools.partial(critic.q, i),
+                None if why else [critic.q_networks[i]],
+                group="critic",
+                why=why,
+                module=own,
+            )
+            nets[f"qf{i}_target"] = Net(
+                functools.partial(target.q, i),
+                None if why else [target.q_networks[i]],
+                target_of=f"qf{i}",
+                why=why,
+                module=frozen,
+            )
+        shared = {id(p) for p in critic.features_extractor.parameters()}
+        params = [
+            p
+            for p in critic.parameters()
+            if not (critic.share_features_extractor and id(p) in shared)
+        ]
+        return nets, params
+
+    def _make_optimizer_for(self, params: list[torch.nn.Parameter]) -> torch.optim.Optimizer:
+        kwargs = dict(self.policy_kwargs)
+        optimizer_class = kwargs.get("optimizer_class", torch.optim.Adam)
+        optimizer_kwargs = kwargs.get("optimizer_kwargs", None) or {}
+        return self._make_optimizer(params, optimizer_class, optimizer_kwargs)
+
+    def _polyak_critics(self) -> None:
+        for name in [n for n in self.learner.nets if n.startswith("qf") and n.endswith("_target")]:
+            self.learner.polyak(name, self.tau)
+
+    def _noise_json(self) -> dict[str, Any] | None:
+        """The exploration noise with its state, for the model file."""
+        return noise_to_json(self.action_noise)
+
+    def _sample_batch(self, batch_size: int) -> dict[str, Any]:
+        assert self.replay_buffer is not None
+        obs, actions, next_obs, rewards, terminated = self.replay_buffer.sample_arrays(
+            batch_size, self._rng
+        )
+        return {
+            "observations": obs,
+            "actions": actions.reshape(batch_size, -1),
+            "next_observations": next_obs,
+            "rewards": rewards,
+            "terminated": terminated,
+        }

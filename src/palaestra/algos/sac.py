@@ -1,0 +1,289 @@
+"""SAC (Haarnoja et al. 2018) with Stable-Baselines3's parameters, defaults and update rules."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import torch
+
+from palaestra.algos.continuous_policies import SquashedGaussianActor
+from palaestra.algos.learners import Group, Net
+from palaestra.algos.learners.heads import squashed_gaussian_rsample
+from palaestra.algos.learners.objectives import (
+    EntCoefObjective,
+    SACActorObjective,
+    SACCriticObjective,
+)
+from palaestra.algos.learners.xp import numpy_ops
+from palaestra.algos.off_policy_actor_critic import ActorCriticOffPolicy
+from palaestra.algos.policies import _numpy_input_problem
+from palaestra.algos.schedules import Schedule
+
+__all__ = ["SAC"]
+
+
+def _ent_coef_init(ent_coef: Any) -> tuple[bool, float]:
+    """``"auto"`` / ``"auto_0.1"`` (learned, from 1.0 / 0.1) or a fixed number > 0."""
+    if isinstance(ent_coef, str):
+        head, _, value = ent_coef.partition("_")
+        try:
+            init = float(value) if value else 1.0
+        except ValueError:
+            init = -1.0
+        if head != "auto" or not init > 0 or not math.isfinite(init):
+            raise ValueError(
+                f'ent_coef must be "auto", "auto_<initial value > 0>" or a number > 0, '
+                f"got {ent_coef!r}"
+            )
+        return True, init
+    if isinstance(ent_coef, bool) or not isinstance(ent_coef, (int, float)) or not ent_coef > 0:
+        raise ValueError(
+            f'ent_coef must be "auto", "auto_<value>" or a number > 0, got {ent_coef!r}'
+        )
+    return False, float(ent_coef)
+
+
+class SAC(ActorCriticOffPolicy):
+    """Soft Actor-Critic: ``SAC("MlpPolicy", env, ...)``; arguments as SB3's ``SAC``.
+
+    Kept from SB3: a tanh-squashed Gaussian actor (log-std in [-20, 2]), twin critics and
+    their polyak-averaged targets (``tau``, every ``target_update_interval`` gradient steps),
+    the entropy coefficient learned in log space towards ``target_entropy`` (``"auto"``:
+    ``-dim(A)``) unless fixed, uniform actions before ``learning_starts``. Changed: noise is
+    drawn from the model's generator (same seed, same run, on either learner), and the
+    temperature is updated after the actor with the actor's log-probs of that step, which
+    is the same update as SB3's (the coefficient used by both losses is the one before it).
+    ``use_sde`` (gSDE) is not implemented.
+    """
+
+    _extra_counters = ("_n_calls", "_collected_steps", "_collected_episodes")
+
+    def __init__(
+        self,
+        policy: str,
+        env: Any,
+        learning_rate: float | Schedule = 3e-4,
+        buffer_size: int = 1_000_000,
+        learning_starts: int = 100,
+        batch_size: int = 256,
+        tau: float = 0.005,
+        gamma: float = 0.99,
+        train_freq: int | tuple[int, str] = 1,
+        gradient_steps: int = 1,
+        action_noise: Any = None,
+        replay_buffer_class: None = None,
+        replay_buffer_kwargs: dict[str, Any] | None = None,
+        optimize_memory_usage: bool = False,
+        n_steps: int = 1,
+        ent_coef: str | float = "auto",
+        target_update_interval: int = 1,
+        target_entropy: str | float = "auto",
+        use_sde: bool = False,
+        sde_sample_freq: int = -1,
+        use_sde_at_warmup: bool = False,
+        stats_window_size: int = 100,
+        tensorboard_log: str | None = None,
+        policy_kwargs: dict[str, Any] | None = None,
+        verbose: int = 0,
+        seed: int | None = None,
+        device: torch.device | str = "auto",
+        num_threads: int | None = None,
+        _init_setup_model: bool = True,
+    ) -> None:
+        if use_sde or use_sde_at_warmup:
+            raise NotImplementedError("use_sde (gSDE) is not supported by palaestra's SAC yet")
+        self._learn_ent_coef, self._ent_coef_init = _ent_coef_init(ent_coef)
+        if isinstance(target_entropy, str) and target_entropy != "auto":
+            raise ValueError(f'target_entropy must be "auto" or a number, got {target_entropy!r}')
+        interval = target_update_interval
+        if isinstance(interval, bool) or not isinstance(interval, int) or interval < 1:
+            raise ValueError(f"target_update_interval must be a positive int, got {interval!r}")
+        self.ent_coef, self.target_entropy_setting = ent_coef, target_entropy
+        self.target_update_interval = interval
+        self._init_actor_critic(tau, action_noise)
+        self._init_off_policy(
+            learning_rate,
+            buffer_size,
+            learning_starts,
+            batch_size,
+            tau,
+            gamma,
+            train_freq,
+            gradient_steps,
+            replay_buffer_class,
+            replay_buffer_kwargs,
+            optimize_memory_usage,
+            n_steps,
+        )
+        self._init_common(
+            policy,
+            env,
+            policy_kwargs,
+            verbose,
+            seed,
+            device,
+            tensorboard_log,
+            num_threads,
+            stats_window_size,
+        )
+        if _init_setup_model:
+            if self.env is None:
+                raise ValueError("SAC needs an env (an id string, an Env or a VecEnv)")
+            self._setup_model()
+
+    def _setup_model(self) -> None:
+        self._check_action_space()
+        self.set_random_seed(self.seed)
+        kwargs, _, _, pi_arch, _, _, activation = self._parts()
+        backend = self.policy_kwargs.get("backend", "auto")
+        self.target_entropy = (
+            float(-np.prod(self.action_space.shape).astype(np.float32))
+            if self.target_entropy_setting == "auto"
+            else float(self.target_entropy_setting)
+        )
+        actor = SquashedGaussianActor(
+            self.observation_space,
+            self.action_dim,
+            self._new_extractor(),
+            pi_arch,
+            activation,
+            kwargs.get("normalize_images", True),
+        )
+        critic, critic_target = self._critic(actor.features_extractor), self._critic(None)
+        critic_target.load_state_dict(critic.state_dict())
+        critic_target.requires_grad_(False)
+        parts: dict[str, torch.nn.Module] = {
+            "actor": actor,
+            "critic": critic,
+            "critic_target": critic_target,
+        }
+        log_ent_coef = torch.nn.Parameter(torch.full((1,), math.log(self._ent_coef_init)))
+        if self._learn_ent_coef:
+            parts["ent_coef"] = torch.nn.ParameterDict({"log_ent_coef": log_ent_coef})
+        policy = torch.nn.ModuleDict(parts).to(self.device)
+        why = _numpy_input_problem(
+            self.observation_space, actor.features_extractor, actor.normalize_images
+        )
+        nets = {
+            "latent": Net(
+                actor.latent,
+                None if why else [actor.features_extractor, actor.latent_pi],
+                group="actor",
+                why=why,
+            ),
+            "mu": Net(actor.mu, [actor.mu], group="actor"),
+            "log_std": Net(actor.log_std, [actor.log_std], group="actor"),
+        }
+        critic_nets, critic_params = self._critic_nets(critic, critic_target)
+        nets.update(critic_nets)
+        actor_params = list(actor.parameters())
+        groups = {
+            "actor": Group(self._make_optimizer_for(actor_params), actor_params),
+            "critic": Group(self._make_optimizer_for(critic_params), critic_params),
+        }
+        if self._learn_ent_coef:
+            # SB3: plain Adam at the learning rate, whatever optimizer the networks use.
+            ent_optimizer = self._make_optimizer([log_ent_coef], torch.optim.Adam, {})
+            groups["ent_coef"] = Group(
+                ent_optimizer, [log_ent_coef], {"log_ent_coef": log_ent_coef}
+            )
+        self._fixed_ent_coef = self._ent_coef_init
+        self._set_learner(policy, groups["actor"].optimizer, backend, nets, groups)
+        self._groups = list(groups)
+        self._make_replay_buffer()
+
+    @property
+    def actor(self) -> SquashedGaussianActor:
+        return self.policy["actor"]
+
+    @property
+    def critic(self) -> Any:
+        return self.policy["critic"]
+
+    @property
+    def critic_target(self) -> Any:
+        return self.policy["critic_target"]
+
+    def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
+        self.learner.to_torch()
+        groups = self.learner.groups
+        optimizers = {
+            "actor_optimizer": ("actor.optimizer", groups["actor"].optimizer),
+            "critic_optimizer": ("critic.optimizer", groups["critic"].optimizer),
+        }
+        if "ent_coef" in groups:
+            optimizers["ent_coef_optimizer"] = ("ent_coef_optimizer", groups["ent_coef"].optimizer)
+        return optimizers
+
+    def _current_ent_coef(self) -> float:
+        if not self._learn_ent_coef:
+            return self._fixed_ent_coef
+        return float(np.exp(self.learner.extra("log_ent_coef")[0]))
+
+    # -- acting ------------------------------------------------------------------------------
+    def _policy_actions(self, obs: Any, deterministic: bool) -> np.ndarray:
+        latent = self.learner.forward("latent", obs)
+        mean = self.learner.forward("mu", latent)
+        if deterministic:
+            return np.tanh(mean)
+        log_std = self.learner.forward("log_std", latent)
+        noise = self._rng.standard_normal(mean.shape, np.float32)
+        return squashed_gaussian_rsample(numpy_ops, mean, log_std, noise)[0]
+
+    # -- learning ----------------------------------------------------------------------------
+    def train(self, gradient_steps: int, batch_size: int = 64) -> None:
+        """``gradient_steps`` updates of the critics, the actor and the temperature."""
+        for group in self._groups:
+            self._update_learning_rate(group)
+        logs: dict[str, list[float]] = {}
+        n_critics = len([n for n in self.learner.nets if n.startswith("qf") and "_" not in n])
+        with self.learner.session():
+            for step in range(gradient_steps):
+                batch = self._sample_batch(batch_size)
+                shape = (batch_size, self.action_dim)
+                batch["noise"] = self._rng.standard_normal(shape, np.float32)
+                batch["next_noise"] = self._rng.standard_normal(shape, np.float32)
+                ent_coef = self._current_ent_coef()
+                logs.setdefault("ent_coef", []).append(ent_coef)
+                critic = SACCriticObjective(n_critics, self.gamma, ent_coef)
+                metrics, _ = self.learner.update("critic", critic, batch)
+                actor = SACActorObjective(n_critics, ent_coef, self.action_dim)
+                metrics.update(self.learner.update("actor", actor, batch)[0])
+                if self._learn_ent_coef:
+                    temperature = EntCoefObjective(self.target_entropy, actor.last_log_prob)
+                    metrics.update(self.learner.update("ent_coef", temperature, {})[0])
+                if step % self.target_update_interval == 0:
+                    self._polyak_critics()
+                for key, value in metrics.items():
+                    logs.setdefault(key, []).append(value)
+        self._n_updates += gradient_steps
+        self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
+        for key in ("ent_coef", "actor_loss", "critic_loss", "ent_coef_loss"):
+            if key in logs:
+                self.logger.record(f"train/{key}", float(np.mean(logs[key])))
+
+    # -- persistence ---------------------------------------------------------------------------
+    def _hyperparameters(self) -> dict[str, Any]:
+        return {
+            "buffer_size": self.buffer_size,
+            "learning_starts": self.learning_starts,
+            "batch_size": self.batch_size,
+            "tau": self.tau,
+            "gamma": self.gamma,
+            "train_freq": list(self.train_freq),
+            "gradient_steps": self.gradient_steps,
+            "action_noise": self._noise_json(),
+            "ent_coef": self.ent_coef,
+            "target_update_interval": self.target_update_interval,
+            "target_entropy": self.target_entropy_setting,
+            "verbose": self.verbose,
+            "seed": self.seed,
+            "stats_window_size": self._stats_window_size,
+            "replay_buffer_kwargs": self.replay_buffer_kwargs,
+            "optimize_memory_usage": self.optimize_memory_usage,
+        }
+
+    def _schedules(self) -> dict[str, Any]:
+        return {"learning_rate": self.lr_schedule}

@@ -1,0 +1,310 @@
+"""TD3 (Fujimoto et al. 2018) and DDPG (Lillicrap et al. 2016, as SB3 defines it: TD3 with one
+critic, no target smoothing and no delay) with Stable-Baselines3's parameters and defaults."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+
+from palaestra.algos.continuous_policies import DeterministicActor
+from palaestra.algos.learners import Group, Net
+from palaestra.algos.learners.objectives import TD3ActorObjective, TD3CriticObjective
+from palaestra.algos.off_policy_actor_critic import ActorCriticOffPolicy
+from palaestra.algos.policies import _numpy_input_problem
+from palaestra.algos.schedules import Schedule
+
+__all__ = ["DDPG", "TD3"]
+
+
+class TD3(ActorCriticOffPolicy):
+    """Twin Delayed DDPG: ``TD3("MlpPolicy", env, ...)``; arguments as SB3's ``TD3``.
+
+    Kept from SB3: a deterministic tanh actor, twin critics regressed on the minimum of the
+    target critics at the target actor's action plus clipped Gaussian noise
+    (``target_policy_noise``, ``target_noise_clip``), the actor and the targets updated every
+    ``policy_delay`` critic updates (polyak with ``tau``), uniform actions before
+    ``learning_starts``, exploration only through ``action_noise``. Changed: noise is drawn
+    from the model's generator (same seed, same run, on either learner).
+    """
+
+    _extra_counters = ("_n_calls", "_collected_steps", "_collected_episodes")
+    _default_net_arch = [400, 300]  # SB3's TD3 and DDPG
+
+    def __init__(
+        self,
+        policy: str,
+        env: Any,
+        learning_rate: float | Schedule = 1e-3,
+        buffer_size: int = 1_000_000,
+        learning_starts: int = 100,
+        batch_size: int = 256,
+        tau: float = 0.005,
+        gamma: float = 0.99,
+        train_freq: int | tuple[int, str] = 1,
+        gradient_steps: int = 1,
+        action_noise: Any = None,
+        replay_buffer_class: None = None,
+        replay_buffer_kwargs: dict[str, Any] | None = None,
+        optimize_memory_usage: bool = False,
+        n_steps: int = 1,
+        policy_delay: int = 2,
+        target_policy_noise: float = 0.2,
+        target_noise_clip: float = 0.5,
+        stats_window_size: int = 100,
+        tensorboard_log: str | None = None,
+        policy_kwargs: dict[str, Any] | None = None,
+        verbose: int = 0,
+        seed: int | None = None,
+        device: torch.device | str = "auto",
+        num_threads: int | None = None,
+        _init_setup_model: bool = True,
+    ) -> None:
+        if isinstance(policy_delay, bool) or not isinstance(policy_delay, int) or policy_delay < 1:
+            raise ValueError(f"policy_delay must be a positive int, got {policy_delay!r}")
+        for name, value in [
+            ("target_policy_noise", target_policy_noise),
+            ("target_noise_clip", target_noise_clip),
+        ]:
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
+                raise ValueError(f"{name} must be a number >= 0, got {value!r}")
+        self.policy_delay = policy_delay
+        self.target_policy_noise, self.target_noise_clip = target_policy_noise, target_noise_clip
+        self._init_actor_critic(tau, action_noise)
+        self._init_off_policy(
+            learning_rate,
+            buffer_size,
+            learning_starts,
+            batch_size,
+            tau,
+            gamma,
+            train_freq,
+            gradient_steps,
+            replay_buffer_class,
+            replay_buffer_kwargs,
+            optimize_memory_usage,
+            n_steps,
+        )
+        self._init_common(
+            policy,
+            env,
+            policy_kwargs,
+            verbose,
+            seed,
+            device,
+            tensorboard_log,
+            num_threads,
+            stats_window_size,
+        )
+        if _init_setup_model:
+            if self.env is None:
+                raise ValueError(f"{type(self).__name__} needs an env (an id, an Env or a VecEnv)")
+            self._setup_model()
+
+    def _setup_model(self) -> None:
+        self._check_action_space()
+        self.set_random_seed(self.seed)
+        kwargs, _, _, pi_arch, _, _, activation = self._parts()
+        normalize = kwargs.get("normalize_images", True)
+        actor = DeterministicActor(
+            self.observation_space,
+            self.action_dim,
+            self._new_extractor(),
+            pi_arch,
+            activation,
+            normalize,
+        )
+        actor_target = DeterministicActor(
+            self.observation_space,
+            self.action_dim,
+            self._new_extractor(),
+            pi_arch,
+            activation,
+            normalize,
+        )
+        actor_target.load_state_dict(actor.state_dict())
+        critic, critic_target = self._critic(actor.features_extractor), self._critic(None)
+        critic_target.load_state_dict(critic.state_dict())
+        for frozen in (actor_target, critic_target):
+            frozen.requires_grad_(False)
+        policy = torch.nn.ModuleDict(
+            {
+                "actor": actor,
+                "actor_target": actor_target,
+                "critic": critic,
+                "critic_target": critic_target,
+            }
+        ).to(self.device)
+        why = _numpy_input_problem(
+            self.observation_space, actor.features_extractor, actor.normalize_images
+        )
+        nets = {
+            "actor": Net(
+                actor, None if why else [actor.features_extractor, actor.mu], group="actor", why=why
+            ),
+            "actor_target": Net(
+                actor_target,
+                None if why else [actor_target.features_extractor, actor_target.mu],
+                target_of="actor",
+                why=why,
+            ),
+        }
+        critic_nets, critic_params = self._critic_nets(critic, critic_target)
+        nets.update(critic_nets)
+        actor_params = list(actor.parameters())
+        groups = {
+            "actor": Group(self._make_optimizer_for(actor_params), actor_params),
+            "critic": Group(self._make_optimizer_for(critic_params), critic_params),
+        }
+        self._set_learner(
+            policy,
+            groups["actor"].optimizer,
+            self.policy_kwargs.get("backend", "auto"),
+            nets,
+            groups,
+        )
+        self._make_replay_buffer()
+
+    @property
+    def actor(self) -> DeterministicActor:
+        return self.policy["actor"]
+
+    @property
+    def actor_target(self) -> DeterministicActor:
+        return self.policy["actor_target"]
+
+    @property
+    def critic(self) -> Any:
+        return self.policy["critic"]
+
+    @property
+    def critic_target(self) -> Any:
+        return self.policy["critic_target"]
+
+    def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
+        self.learner.to_torch()
+        groups = self.learner.groups
+        return {
+            "actor_optimizer": ("actor.optimizer", groups["actor"].optimizer),
+            "critic_optimizer": ("critic.optimizer", groups["critic"].optimizer),
+        }
+
+    # -- acting ------------------------------------------------------------------------------
+    def _policy_actions(self, obs: Any, deterministic: bool) -> np.ndarray:
+        return self.learner.forward("actor", obs)  # exploration: action_noise only
+
+    # -- learning ----------------------------------------------------------------------------
+    def train(self, gradient_steps: int, batch_size: int = 100) -> None:
+        """Critic updates every step; actor and target updates every ``policy_delay``."""
+        for group in ("actor", "critic"):
+            self._update_learning_rate(group)
+        n_critics = len([n for n in self.learner.nets if n.startswith("qf") and "_" not in n])
+        critic = TD3CriticObjective(n_critics, self.gamma)
+        actor = TD3ActorObjective(self.action_dim)
+        actor_losses, critic_losses = [], []
+        with self.learner.session():
+            for _ in range(gradient_steps):
+                self._n_updates += 1
+                batch = self._sample_batch(batch_size)
+                noise = self._rng.normal(0.0, self.target_policy_noise, batch["actions"].shape)
+                clip = self.target_noise_clip
+                batch["target_noise"] = np.clip(noise, -clip, clip).astype(np.float32)
+                critic_losses.append(self.learner.update("critic", critic, batch)[0]["critic_loss"])
+                if self._n_updates % self.policy_delay == 0:
+                    metrics, _ = self.learner.update("actor", actor, batch)
+                    actor_losses.append(metrics["actor_loss"])
+                    self._polyak_critics()
+                    self.learner.polyak("actor_target", self.tau)
+        self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
+        if actor_losses:
+            self.logger.record("train/actor_loss", float(np.mean(actor_losses)))
+        self.logger.record("train/critic_loss", float(np.mean(critic_losses)))
+
+    # -- persistence ---------------------------------------------------------------------------
+    def _hyperparameters(self) -> dict[str, Any]:
+        return {
+            "buffer_size": self.buffer_size,
+            "learning_starts": self.learning_starts,
+            "batch_size": self.batch_size,
+            "tau": self.tau,
+            "gamma": self.gamma,
+            "train_freq": list(self.train_freq),
+            "gradient_steps": self.gradient_steps,
+            "action_noise": self._noise_json(),
+            "policy_delay": self.policy_delay,
+            "target_policy_noise": self.target_policy_noise,
+            "target_noise_clip": self.target_noise_clip,
+            "verbose": self.verbose,
+            "seed": self.seed,
+            "stats_window_size": self._stats_window_size,
+            "replay_buffer_kwargs": self.replay_buffer_kwargs,
+            "optimize_memory_usage": self.optimize_memory_usage,
+        }
+
+    def _schedules(self) -> dict[str, Any]:
+        return {"learning_rate": self.lr_schedule}
+
+
+class DDPG(TD3):
+    """DDPG as SB3 defines it: TD3 with one critic (``n_critics=1`` unless ``policy_kwargs``
+    says otherwise), no target policy smoothing (``target_noise_clip=0``) and
+    ``policy_delay=1``; SB3's constructor arguments and defaults."""
+
+    _default_n_critics = 1
+
+    def __init__(
+        self,
+        policy: str,
+        env: Any,
+        learning_rate: float | Schedule = 1e-3,
+        buffer_size: int = 1_000_000,
+        learning_starts: int = 100,
+        batch_size: int = 256,
+        tau: float = 0.005,
+        gamma: float = 0.99,
+        train_freq: int | tuple[int, str] = 1,
+        gradient_steps: int = 1,
+        action_noise: Any = None,
+        replay_buffer_class: None = None,
+        replay_buffer_kwargs: dict[str, Any] | None = None,
+        optimize_memory_usage: bool = False,
+        n_steps: int = 1,
+        tensorboard_log: str | None = None,
+        policy_kwargs: dict[str, Any] | None = None,
+        verbose: int = 0,
+        seed: int | None = None,
+        device: torch.device | str = "auto",
+        num_threads: int | None = None,
+        _init_setup_model: bool = True,
+        **_loaded: Any,
+    ) -> None:
+        # A saved DDPG holds TD3's keys; they are DDPG's fixed values.
+        super().__init__(
+            policy,
+            env,
+            learning_rate,
+            buffer_size,
+            learning_starts,
+            batch_size,
+            tau,
+            gamma,
+            train_freq,
+            gradient_steps,
+            action_noise,
+            replay_buffer_class,
+            replay_buffer_kwargs,
+            optimize_memory_usage,
+            n_steps,
+            policy_delay=1,
+            target_policy_noise=0.1,
+            target_noise_clip=0.0,
+            stats_window_size=_loaded.get("stats_window_size", 100),
+            tensorboard_log=tensorboard_log,
+            policy_kwargs=policy_kwargs,
+            verbose=verbose,
+            seed=seed,
+            device=device,
+            num_threads=num_threads,
+            _init_setup_model=_init_setup_model,
+        )
