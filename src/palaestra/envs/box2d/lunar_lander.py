@@ -283,7 +283,8 @@ class LunarLander(ClassicControlEnv):
         tip0, tip1 = math.sin(angle), math.cos(angle)  # the lander's up axis
         side0, side1 = -tip1, tip0
         d0, d1 = (self.np_random.uniform(-1.0, +1.0, size=2) / SCALE).tolist()  # dispersion
-        px, py = lander.position
+        pos = lander.position
+        px, py = pos.x, pos.y  # not tuple(pos): b2Vec2.__iter__ is a Python lambda
 
         m_power = 0.0
         if fire_main:
