@@ -6,8 +6,8 @@ Run from the repository root::
     .venv/bin/python benchmarks/env_step.py --quick    # smoke run
     .venv/bin/python benchmarks/env_step.py --ids LunarLander-v3   # some single envs only
 
-The Box2D ids (LunarLander) are measured when the ``box2d`` package is installed (Gymnasium's
-own LunarLander needs it too); they step 5x fewer actions, a Box2D step being ~20x slower.
+The Box2D ids (LunarLander, BipedalWalker) are measured when the ``box2d`` package is installed (Gymnasium's
+own LunarLander needs it too); they step 5x fewer actions, a Box2D step being 20-100x slower.
 
 Single envs go through ``make(id)`` in both libraries (so TimeLimit, OrderEnforcing and the
 passive checker are included), step pre-sampled ``action_space.sample()`` actions (numpy
@@ -40,7 +40,12 @@ IDS = [
     "Pendulum-v1",
     "Acrobot-v1",
 ]
-BOX2D_IDS = ["LunarLander-v3", "LunarLanderContinuous-v3"]
+BOX2D_IDS = [
+    "LunarLander-v3",
+    "LunarLanderContinuous-v3",
+    "BipedalWalker-v3",
+    "BipedalWalkerHardcore-v3",
+]
 BATCH_SIZES = [1, 64, 1024, 16384]
 
 

@@ -66,6 +66,17 @@ _BOX2D: dict[str, dict] = {
         max_episode_steps=1000,
         reward_threshold=200,
     ),
+    "BipedalWalker-v3": dict(
+        entry_point=f"{_B2}.bipedal_walker:BipedalWalker",
+        max_episode_steps=1600,
+        reward_threshold=300,
+    ),
+    "BipedalWalkerHardcore-v3": dict(
+        entry_point=f"{_B2}.bipedal_walker:BipedalWalker",
+        kwargs={"hardcore": True},
+        max_episode_steps=2000,
+        reward_threshold=300,
+    ),
 }
 for _id, _kwargs in _BOX2D.items():
     if _id not in registry:

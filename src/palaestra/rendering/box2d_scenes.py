@@ -8,6 +8,8 @@ are pygame's), but every shape is where Gymnasium puts it, in its colour.
 
 from __future__ import annotations
 
+import itertools
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -88,4 +90,104 @@ def render_lunar_lander(
         raster.blend(img, raster.polygon_patch(pts, img.shape, grow=1.0), _LL_OUTLINE)
         raster.blend(img, raster.polygon_patch(pts, img.shape, grow=0.0), _LL_FILL)
     _flags(img, pad_xs, pad_y)  # Gymnasium draws the flags over everything
+    return img
+
+
+# BipedalWalker (Gymnasium: bipedal_walker.py)
+WALKER_SIZE = (400, 600)
+_BW_SCALE = 30.0
+_BW_SKY: Color = (215, 215, 255)
+_BW_GROUND: Color = (102, 153, 76)
+_BW_GRASS: tuple[Color, Color] = ((76, 255, 76), (76, 204, 76))  # even, odd segments
+_BW_OBSTACLE: tuple[Color, Color] = ((255, 255, 255), (153, 153, 153))
+_BW_FLAG: Color = (230, 51, 0)
+_BW_LIDAR: Color = (255, 0, 0)
+_BW_STRIP_MARGIN = 600  # pixels of sky past the terrain's end, for the last frames
+
+
+def _segment(img: np.ndarray, a: tuple[float, float], b: tuple[float, float], color: Color) -> None:
+    """An anti-aliased line about one pixel wide, drawn as a thin quad (pixel coordinates)."""
+    (ax, ay), (bx, by) = a, b
+    length = float(np.hypot(bx - ax, by - ay))
+    if length == 0.0:
+        return
+    nx, ny = -(by - ay) / length * 0.5, (bx - ax) / length * 0.5
+    quad = [(ax + nx, ay + ny), (bx + nx, by + ny), (bx - nx, by - ny), (ax - nx, ay - ny)]
+    raster.blend(img, raster.polygon_patch(quad, img.shape, grow=0.5), color)
+
+
+def _outlined(img: np.ndarray, pts: np.ndarray, fill: Color, outline: Color) -> None:
+    """A convex polygon with a one-pixel outline in a second colour."""
+    raster.blend(img, raster.polygon_patch(pts, img.shape, grow=1.0), outline)
+    raster.blend(img, raster.polygon_patch(pts, img.shape, grow=0.0), fill)
+
+
+def walker_terrain_strip(
+    grass: Sequence[tuple[float, float]], obstacles: Sequence[Points]
+) -> np.ndarray:
+    """The whole course of one episode, drawn once: sky, ground, grass line, obstacles, flag.
+
+    ``grass`` is the terrain's surface points and ``obstacles`` the stumps, stairs and pit
+    walls, in world metres. Frames are 600-pixel windows of this strip.
+    """
+    h = WALKER_SIZE[0]
+    width = math.ceil(grass[-1][0] * _BW_SCALE) + _BW_STRIP_MARGIN
+    img = np.empty((h, width, 3), dtype=np.uint8)
+    img[:] = _BW_SKY
+    pts = _to_pixels(grass, _BW_SCALE, h)  # [200, 2]
+    bottom = float(h - 1)
+    for (x0, y0), (x1, y1) in itertools.pairwise(pts):
+        raster.fill_polygon(img, [(x0, y0), (x1, y1), (x1, bottom), (x0, bottom)], _BW_GROUND)
+    for i, (a, b) in enumerate(itertools.pairwise(pts)):
+        _segment(img, tuple(a), tuple(b), _BW_GRASS[i % 2])
+    for poly in obstacles:  # over the grass line, which runs through the pits
+        _outlined(img, _to_pixels(poly, _BW_SCALE, h), *_BW_OBSTACLE)
+    # The start flag, 3 terrain steps in: a black pole and a red pennant.
+    x, y1 = 14 / _BW_SCALE * 3 * _BW_SCALE, 400 / _BW_SCALE / 4 * _BW_SCALE
+    y2 = y1 + 50
+    raster.vline(img, round(x), h - 1 - round(y1), h - 1 - round(y2), BLACK)
+    pennant = np.array([(x, h - 1 - y2), (x, h - 1 - (y2 - 10)), (x + 25, h - 1 - (y2 - 5))])
+    _outlined(img, pennant, _BW_FLAG, BLACK)
+    img.setflags(write=False)
+    return img
+
+
+def render_bipedal_walker(
+    strip: np.ndarray,
+    scroll: float,
+    clouds: Sequence[Points],
+    ray: tuple[tuple[float, float], tuple[float, float]] | None,
+    bodies: Sequence[tuple[Points, tuple[Color, Color]]],
+) -> np.ndarray:
+    """BipedalWalker frame ``[400, 600, 3] uint8``: the strip's window at ``scroll`` metres,
+    clouds (half the ground's speed, behind it), one lidar ray and the walker's parts."""
+    h, w = WALKER_SIZE
+    off = round(max(0.0, scroll) * _BW_SCALE)
+    img = np.empty((h, w, 3), dtype=np.uint8)
+    img[:] = _BW_SKY
+    window = strip[:, off : off + w]
+    img[:, : window.shape[1]] = window
+    # Clouds (half the ground's speed) go behind the ground: one coverage for all of them, so
+    # overlapping clouds leave no seams, painted where the strip shows sky only.
+    shift = np.array([scroll * _BW_SCALE / 2 - off, 0.0])
+    cover = np.zeros((h, w), dtype=np.float32)
+    for poly in clouds:
+        pts = _to_pixels(poly, _BW_SCALE, h) + shift
+        # A cloud is star-shaped, not convex: a fan of triangles around its centre.
+        centre = pts.mean(axis=0)
+        fan = [(centre, a, b) for a, b in zip(pts, np.roll(pts, -1, axis=0))]
+        patch = raster.polygons_patch(fan, img.shape)
+        if patch is not None:
+            x0, y0, cov = patch
+            cov = cov[: h - y0, : w - x0]
+            view = cover[y0 : y0 + cov.shape[0], x0 : x0 + cov.shape[1]]
+            np.maximum(view, cov, out=view)
+    cover *= (img == _BW_SKY).all(axis=-1)
+    raster.blend_mask(img, cover, WHITE)
+    move = np.array([-off, 0.0])
+    if ray is not None:
+        a, b = _to_pixels(ray, _BW_SCALE, h) + move
+        _segment(img, tuple(a), tuple(b), _BW_LIDAR)
+    for poly, (fill, outline) in bodies:
+        _outlined(img, _to_pixels(poly, _BW_SCALE, h) + move, fill, outline)
     return img

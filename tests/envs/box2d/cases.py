@@ -12,7 +12,12 @@ from typing import Any
 
 import numpy as np
 
-BOX2D_IDS = ["LunarLander-v3", "LunarLanderContinuous-v3"]
+BOX2D_IDS = [
+    "LunarLander-v3",
+    "LunarLanderContinuous-v3",
+    "BipedalWalker-v3",
+    "BipedalWalkerHardcore-v3",
+]
 
 # (id, kwargs) pairs for parity: every documented knob of each env at least once.
 LUNAR_VARIANTS: list[tuple[str, dict[str, Any]]] = [
@@ -63,3 +68,12 @@ def lander_continuous(
 def policy_for(env: Any) -> Policy:
     """The action rule for a made env (continuous or discrete)."""
     return lander_continuous if env.unwrapped.continuous else lander_discrete
+
+
+def walker_action(rng: np.random.Generator, t: int, dtype: Any = np.float32) -> np.ndarray:
+    """A rough open-loop stride (hips in antiphase, knees lagging) plus noise, some of it
+    beyond [-1, 1]: it walks a few metres before falling, so contacts come and go."""
+    s = np.sin(0.1 * t)
+    k = np.sin(0.1 * t - 1.5)
+    stride = np.array([s, k, -s, -k])
+    return (stride + rng.normal(0.0, 0.4, size=4)).astype(dtype)

@@ -41,11 +41,13 @@ def check_real(name: str, value: Any) -> float:
     return number
 
 
-def box_action(action: Any, space: Any) -> np.ndarray:
+def box_action(action: Any, space: Any, keep_float_dtype: bool = False) -> np.ndarray:
     """A continuous action as a float64 ``space.shape`` array, else InvalidAction.
 
     Values keep their own precision (a float64 action is not rounded to float32), because
-    Gymnasium clips and computes with ``astype(np.float64)``. Out-of-bound finite values are
+    Gymnasium clips and computes with ``astype(np.float64)``; with ``keep_float_dtype`` a float
+    array keeps its dtype (for envs whose Gymnasium arithmetic runs in the action's own type)
+    and integers still become float64. Out-of-bound finite values are
     accepted and clipped by the env, as in Gymnasium; NaN, inf, strings, complex numbers and
     wrong shapes are refused with the action and the space in the message.
     """
@@ -61,7 +63,7 @@ def box_action(action: Any, space: Any) -> np.ndarray:
         if raw.ndim == 0:
             why += " (a discrete action given to a continuous env?)"
         raise invalid_action(action, space, why)
-    arr = raw.astype(np.float64)
+    arr = raw if keep_float_dtype and raw.dtype.kind == "f" else raw.astype(np.float64)
     if not np.isfinite(arr).all():
         raise invalid_action(action, space, "actions must be finite (no NaN or inf)")
     return arr
