@@ -77,6 +77,11 @@ _BOX2D: dict[str, dict] = {
         max_episode_steps=2000,
         reward_threshold=300,
     ),
+    "CarRacing-v3": dict(
+        entry_point=f"{_B2}.car_racing:CarRacing",
+        max_episode_steps=1000,
+        reward_threshold=900,
+    ),
 }
 for _id, _kwargs in _BOX2D.items():
     if _id not in registry:

@@ -11,13 +11,24 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import pytest
 
 BOX2D_IDS = [
     "LunarLander-v3",
     "LunarLanderContinuous-v3",
     "BipedalWalker-v3",
     "BipedalWalkerHardcore-v3",
+    "CarRacing-v3",
 ]
+# Every CarRacing observation is a drawn frame (~0.05-0.1 s a step on the test machines):
+# its whole-contract checks run with the slow tests, its short parity run in the fast suite.
+SLOW_IDS = {"CarRacing-v3"}
+
+
+def id_params(ids: list[str]) -> list[Any]:
+    """``ids`` for ``parametrize``, the slow ones marked ``slow``."""
+    return [pytest.param(i, marks=pytest.mark.slow) if i in SLOW_IDS else i for i in ids]
+
 
 # (id, kwargs) pairs for parity: every documented knob of each env at least once.
 LUNAR_VARIANTS: list[tuple[str, dict[str, Any]]] = [

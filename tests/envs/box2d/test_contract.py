@@ -5,7 +5,7 @@ from __future__ import annotations
 import warnings
 
 import pytest
-from tests.envs.box2d.cases import BOX2D_IDS
+from tests.envs.box2d.cases import BOX2D_IDS, id_params
 
 import palaestra
 from palaestra.utils.env_checker import check_env
@@ -13,13 +13,16 @@ from palaestra.utils.env_checker import check_env
 pytest.importorskip("Box2D")
 
 
-@pytest.mark.parametrize("env_id", BOX2D_IDS)
+@pytest.mark.parametrize("env_id", id_params(BOX2D_IDS))
 def test_check_env_passes_without_warnings(env_id: str) -> None:
     env = palaestra.make(env_id, render_mode="rgb_array")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         check_env(env.unwrapped)
-    assert [str(w.message) for w in caught] == []
+    messages = [str(w.message) for w in caught]
+    if env_id == "CarRacing-v3":  # Gymnasium's checker says the same of its CarRacing
+        messages = [m for m in messages if "symmetric" not in m and "normalised" not in m]
+    assert messages == []
 
 
 @pytest.mark.parametrize("env_id", BOX2D_IDS)
@@ -36,7 +39,7 @@ def test_spec_and_spaces_match_gymnasium(env_id: str) -> None:
     assert env.unwrapped.metadata == ref_env.unwrapped.metadata
 
 
-@pytest.mark.parametrize("env_id", BOX2D_IDS)
+@pytest.mark.parametrize("env_id", id_params(BOX2D_IDS))
 def test_seeding_is_deterministic_and_seeds_differ(env_id: str) -> None:
     def rollout(seed: int) -> bytes:
         env = palaestra.make(env_id)
@@ -55,7 +58,7 @@ def test_seeding_is_deterministic_and_seeds_differ(env_id: str) -> None:
 def test_every_box2d_id_is_registered_like_gymnasium(env_id: str) -> None:
     gymnasium = pytest.importorskip("gymnasium")
     box2d_ids = {i for i, s in gymnasium.registry.items() if "box2d" in str(s.entry_point)}
-    assert box2d_ids - {"CarRacing-v3"} == set(BOX2D_IDS)  # CarRacing: not built yet
+    assert box2d_ids == set(BOX2D_IDS)
     env = palaestra.make(env_id)
     env.reset(seed=0)
     env.close()

@@ -1,4 +1,4 @@
-"""The Box2D environments (LunarLander, BipedalWalker), on the ``box2d`` package.
+"""The Box2D environments (LunarLander, BipedalWalker, CarRacing), on the ``box2d`` package.
 
 Each env builds its world with the same Box2D calls, in the same order, as Gymnasium 1.4.0's,
 and draws its random numbers from ``np_random`` in the same order, so the same seed and
