@@ -6,8 +6,10 @@ Run from the repository root::
     .venv/bin/python benchmarks/env_step.py --quick    # smoke run
     .venv/bin/python benchmarks/env_step.py --ids LunarLander-v3   # some single envs only
 
-The Box2D ids (LunarLander, BipedalWalker) are measured when the ``box2d`` package is installed (Gymnasium's
-own LunarLander needs it too); they step 5x fewer actions, a Box2D step being 20-100x slower.
+The Box2D ids (LunarLander, BipedalWalker) are measured when the ``box2d`` package is
+installed (Gymnasium's own need it too); they step 5x fewer actions, a Box2D step being
+20-100x slower. CarRacing (a drawn frame per step, 50x fewer actions) runs only when named:
+``--ids CarRacing-v3 --repeats 3``.
 
 Single envs go through ``make(id)`` in both libraries (so TimeLimit, OrderEnforcing and the
 passive checker are included), step pre-sampled ``action_space.sample()`` actions (numpy
@@ -46,6 +48,7 @@ BOX2D_IDS = [
     "BipedalWalker-v3",
     "BipedalWalkerHardcore-v3",
 ]
+FRAME_IDS = ["CarRacing-v3"]  # observations are rendered frames: only with --ids
 BATCH_SIZES = [1, 64, 1024, 16384]
 
 
@@ -100,6 +103,7 @@ def main() -> None:
         space.seed(0)
         steps = args.steps // 4 if env_id == "Acrobot-v1" else args.steps
         steps = steps // 5 if env_id in BOX2D_IDS else steps
+        steps = steps // 50 if env_id in FRAME_IDS else steps
         actions = [space.sample() for _ in range(steps)]
         ours, ref = [], []
         for _ in range(args.repeats):
