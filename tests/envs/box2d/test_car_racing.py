@@ -149,3 +149,28 @@ def test_bad_kwargs(kwargs: dict[str, Any], exc: type, match: str) -> None:
 def test_step_before_reset() -> None:
     with pytest.raises(error.ResetNeeded):
         palaestra.make("CarRacing-v3").unwrapped.step(np.zeros(3))
+
+
+def test_human_mode_shows_video_frames(monkeypatch: pytest.MonkeyPatch) -> None:
+    from palaestra.rendering import window
+
+    shown: list[np.ndarray] = []
+
+    class FakeWindow:
+        def __init__(self, title: str, fps: int) -> None:
+            assert (title, fps) == ("CarRacing-v3", 50)
+
+        def show(self, frame: np.ndarray) -> None:
+            shown.append(frame)
+
+        def close(self) -> None:
+            shown.append(np.zeros(0))
+
+    monkeypatch.setattr(window, "HumanWindow", FakeWindow)
+    env = palaestra.make("CarRacing-v3", render_mode="human")
+    env.reset(seed=0)
+    env.step(np.array([0.0, 1.0, 0.0], dtype=np.float32))
+    # Gymnasium renders in reset, in the step reset takes, and in each step.
+    assert [f.shape for f in shown] == [(400, 600, 3)] * 3
+    env.close()
+    assert shown[-1].size == 0

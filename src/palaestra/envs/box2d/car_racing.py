@@ -141,10 +141,9 @@ class CarRacing(ClassicControlEnv):
                 f"got {lap_complete_percent!r}"
             )
         self._init_render(render_mode)
-        import_box2d()
+        b2 = import_box2d().b2  # after the argument checks: they need no Box2D
         self._init_colors()
         self._listener = _friction_detector_class()(self, self.lap_complete_percent)
-        b2 = import_box2d().b2
         self.world = b2.world((0, 0), contactListener=self._listener)
         self._fd_tile = b2.fixtureDef(
             shape=b2.polygonShape(vertices=[(0, 0), (1, 0), (1, -1), (0, -1)])
