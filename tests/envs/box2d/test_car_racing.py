@@ -83,6 +83,7 @@ def test_long_parity(kwargs: dict[str, Any], seed: int, steps: int) -> None:
         assert result["endings"] and all(result["endings"])  # lap_finished=True
 
 
+@pytest.mark.slow  # two resets and a 600x400 frame of the zoomed-out start: ~1-3 s
 def test_frames_and_render_modes() -> None:
     env = palaestra.make("CarRacing-v3", render_mode="rgb_array")
     obs, _ = env.reset(seed=0)
