@@ -1,9 +1,15 @@
-"""Steps per second of the classic-control envs: palaestra vs Gymnasium, single and batched.
+"""Steps per second of the built-in envs: palaestra vs Gymnasium, single and batched.
 
 Run from the repository root::
 
-    .venv/bin/python benchmarks/env_step.py            # full run (~1 minute)
+    .venv/bin/python benchmarks/env_step.py            # full run (~2 minutes)
     .venv/bin/python benchmarks/env_step.py --quick    # smoke run
+    .venv/bin/python benchmarks/env_step.py --ids LunarLander-v3   # some single envs only
+
+The Box2D ids (LunarLander, BipedalWalker) are measured when the ``box2d`` package is
+installed (Gymnasium's own need it too); they step 5x fewer actions, a Box2D step being
+20-100x slower. CarRacing (a drawn frame per step, 50x fewer actions) runs only when named:
+``--ids CarRacing-v3 --repeats 3``.
 
 Single envs go through ``make(id)`` in both libraries (so TimeLimit, OrderEnforcing and the
 passive checker are included), step pre-sampled ``action_space.sample()`` actions (numpy
@@ -17,6 +23,7 @@ time there measured their load as much as ours. The batched engines step ``[N]``
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import statistics
 import time
 import warnings
@@ -35,6 +42,13 @@ IDS = [
     "Pendulum-v1",
     "Acrobot-v1",
 ]
+BOX2D_IDS = [
+    "LunarLander-v3",
+    "LunarLanderContinuous-v3",
+    "BipedalWalker-v3",
+    "BipedalWalkerHardcore-v3",
+]
+FRAME_IDS = ["CarRacing-v3"]  # observations are rendered frames: only with --ids
 BATCH_SIZES = [1, 64, 1024, 16384]
 
 
@@ -73,6 +87,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--steps", type=int, default=20_000)
     parser.add_argument("--quick", action="store_true", help="few steps, for a smoke test")
+    parser.add_argument("--ids", nargs="+", help="only these single-env ids (no batched part)")
     args = parser.parse_args()
     if args.quick:
         args.repeats, args.steps = 1, 500
@@ -82,10 +97,13 @@ def main() -> None:
 
     print(f"numpy {np.__version__}, gymnasium {gymnasium.__version__}, repeats {args.repeats}")
     print(f"{'env id':<26}{'palaestra':>12}{'gymnasium':>12}{'ratio':>8}   (steps/s)")
-    for env_id in IDS:
+    ids = IDS + (BOX2D_IDS if importlib.util.find_spec("Box2D") else [])
+    for env_id in args.ids or ids:
         space = gymnasium.make(env_id).action_space
         space.seed(0)
         steps = args.steps // 4 if env_id == "Acrobot-v1" else args.steps
+        steps = steps // 5 if env_id in BOX2D_IDS else steps
+        steps = steps // 50 if env_id in FRAME_IDS else steps
         actions = [space.sample() for _ in range(steps)]
         ours, ref = [], []
         for _ in range(args.repeats):
@@ -93,6 +111,8 @@ def main() -> None:
             ref.append(single_rate(gymnasium, env_id, actions))
         p, g = statistics.median(ours), statistics.median(ref)
         print(f"{env_id:<26}{p:>12,.0f}{g:>12,.0f}{p / g:>7.2f}x")
+    if args.ids:
+        return
 
     print(f"\n{'batched engine':<22}{'N':>7}{'step only':>16}{'with resets':>16}   (env-steps/s)")
     for cls in (MountainCarBatch, CartPoleBatch):

@@ -3,7 +3,7 @@
 import subprocess
 import sys
 
-HEAVY = ["torch", "pygame", "matplotlib", "PIL", "imageio", "ale_py", "gymnasium", "scipy",
+HEAVY = ["torch", "pygame", "matplotlib", "PIL", "imageio", "ale_py", "Box2D", "gymnasium", "scipy",
          "multiprocessing", "palaestra.vector", "palaestra.utils.video"]  # fmt: skip
 
 

@@ -16,11 +16,17 @@ from palaestra.envs.registration import make, registry
 # Every Atari id is the same env class and each make loads a ROM (~80 ms): three stand for all
 # here; tests/envs/atari makes every one of them (marked slow).
 ATARI_SAMPLE = {"ALE/Breakout-v5", "ALE/Pong-v5", "BreakoutNoFrameskip-v4"}
-ALL_IDS = sorted(
-    i
-    for i, s in registry.items()
-    if i in ATARI_SAMPLE or not str(s.entry_point).startswith("palaestra.envs.atari")
-)
+# CarRacing draws every observation (~0.1 s a step): its 50-step contract runs with the slow
+# tests; tests/envs/box2d checks it briefly in the fast suite.
+SLOW_IDS = {"CarRacing-v3"}
+ALL_IDS = [
+    pytest.param(i, marks=pytest.mark.slow) if i in SLOW_IDS else i
+    for i in sorted(
+        i
+        for i, s in registry.items()
+        if i in ATARI_SAMPLE or not str(s.entry_point).startswith("palaestra.envs.atari")
+    )
+]
 pytestmark = pytest.mark.filterwarnings("ignore:.*is out of date")
 
 

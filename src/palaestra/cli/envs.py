@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import re
 from typing import Any
 
 __all__ = ["add_parser", "env_rows", "run"]
@@ -19,6 +20,10 @@ _ATARI_OBS = {
     "grayscale": "Box(0, 255, (210, 160), uint8)",
     "ram": "Box(0, 255, (128,), uint8)",
 }
+
+
+def _one_line(space: Any) -> str:
+    return re.sub(r"\s*\n\s*", " ", str(space))
 
 
 def _spaces(spec: Any) -> tuple[str, str, bool]:
@@ -36,7 +41,8 @@ def _spaces(spec: Any) -> tuple[str, str, bool]:
     except Exception:  # a third-party entry point may fail in any way: show the row anyway
         return "?", "?", False
     try:
-        return str(env.observation_space), str(env.action_space), False
+        # One line per row: numpy wraps long Box bounds (LunarLander's 8) over several lines.
+        return _one_line(env.observation_space), _one_line(env.action_space), False
     finally:
         env.close()
 

@@ -51,6 +51,42 @@ for _id, _kwargs in _CLASSIC_CONTROL.items():
     if _id not in registry:  # importing this module twice (pytest's importlib mode) is harmless
         register(id=_id, **_kwargs)
 
+# Box2D (on the optional box2d package, imported when one of these envs is made): Gymnasium
+# 1.4.0's ids, kwargs, limits and thresholds.
+_B2 = "palaestra.envs.box2d"
+_BOX2D: dict[str, dict] = {
+    "LunarLander-v3": dict(
+        entry_point=f"{_B2}.lunar_lander:LunarLander",
+        max_episode_steps=1000,
+        reward_threshold=200,
+    ),
+    "LunarLanderContinuous-v3": dict(
+        entry_point=f"{_B2}.lunar_lander:LunarLander",
+        kwargs={"continuous": True},
+        max_episode_steps=1000,
+        reward_threshold=200,
+    ),
+    "BipedalWalker-v3": dict(
+        entry_point=f"{_B2}.bipedal_walker:BipedalWalker",
+        max_episode_steps=1600,
+        reward_threshold=300,
+    ),
+    "BipedalWalkerHardcore-v3": dict(
+        entry_point=f"{_B2}.bipedal_walker:BipedalWalker",
+        kwargs={"hardcore": True},
+        max_episode_steps=2000,
+        reward_threshold=300,
+    ),
+    "CarRacing-v3": dict(
+        entry_point=f"{_B2}.car_racing:CarRacing",
+        max_episode_steps=1000,
+        reward_threshold=900,
+    ),
+}
+for _id, _kwargs in _BOX2D.items():
+    if _id not in registry:
+        register(id=_id, **_kwargs)
+
 # Atari: every id ale-py registers for v5, plus the NoFrameskip-v4 ids of SB3/RL-Zoo pipelines,
 # from a static game list so that this import does not load ale-py.
 for _id, _kwargs in atari_specs().items():
