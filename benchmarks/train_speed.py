@@ -16,6 +16,10 @@ Cases (one torch thread, ``torch.set_num_threads(1)``, both libraries in this pr
 * ``ppo-cartpole-8``: PPO on CartPole-v1, 8 envs x 128 steps, 4 epochs, 4 minibatches
   (``batch_size=256``).
 
+Acting latency (``--acting``, also after the cases of a full run): microseconds per
+``model.predict`` of one vector step's observations (stochastic, as in collection) on each
+case's model, fresh from construction, median of repeats of 5,000 calls.
+
 SB3 gets ``gymnasium.make`` (single env) or SB3's ``make_vec_env``; palaestra gets
 ``palaestra.make`` or ``palaestra.vec_env.make_vec_env``. Each measurement is one
 ``learn(warmup + steps)`` call: a callback notes the process CPU time (and wall time) when
@@ -149,12 +153,38 @@ def report(case: Case, rates: dict[str, list[float]]) -> str:
     )
 
 
+def acting_latency(lib: str, case: Case, calls: int = 5_000) -> float:
+    """Microseconds per ``predict`` of one vector step (``n_envs`` rows, 1 for a single env)."""
+    model = make_model(lib, case)
+    obs = model.get_env().reset()  # [n_envs, *obs_shape], as collection sees them
+    for _ in range(200):  # warm-up: first-call allocations, caches
+        model.predict(obs)
+    start = time.process_time()
+    for _ in range(calls):
+        model.predict(obs)
+    return (time.process_time() - start) / calls * 1e6
+
+
+def run_acting(cases: list[Case], repeats: int, log: Callable[[str], None]) -> list[str]:
+    lines = []
+    for case in cases:
+        times: dict[str, list[float]] = {"palaestra": [], "sb3": []}
+        for i in range(repeats):
+            for lib in ["palaestra", "sb3"] if i % 2 == 0 else ["sb3", "palaestra"]:
+                times[lib].append(acting_latency(lib, case))
+                log(f"  acting {case.name} repeat {i} {lib:9s} {times[lib][-1]:8.1f} us/step")
+        pal, sb3 = statistics.median(times["palaestra"]), statistics.median(times["sb3"])
+        lines.append(f"| {case.name} | {pal:.1f} | {sb3:.1f} | {sb3 / pal:.2f}x |")
+    return lines
+
+
 def parse_args() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     names = [c.name for c in CASES]
     parser.add_argument("--cases", nargs="+", default=names, choices=names)
     parser.add_argument("--quick", action="store_true", help="1 repeat, a tenth of the steps")
+    parser.add_argument("--acting", action="store_true", help="only the acting latencies")
     return parser.parse_args()
 
 
@@ -169,15 +199,21 @@ def main() -> None:
             for c in cases
         ]
     lines = []
-    for case in cases:
+    for case in [] if args.acting else cases:
         rates = run_case(case, repeats, lambda s: print(s, flush=True))
         lines.append(report(case, rates))
         print(lines[-1], flush=True)
-    print(
-        "\n| case | palaestra steps/cpu-s | SB3 steps/cpu-s | ratio | target | per-repeat ratios |"
-    )
-    print("|---|---:|---:|---:|---|---|")
-    print("\n".join(lines))
+    acting = run_acting(cases, repeats, lambda s: print(s, flush=True))
+    if lines:
+        print(
+            "\n| case | palaestra steps/cpu-s | SB3 steps/cpu-s | ratio | target "
+            "| per-repeat ratios |"
+        )
+        print("|---|---:|---:|---:|---|---|")
+        print("\n".join(lines))
+    print("\n| acting | palaestra µs/step | SB3 µs/step | palaestra speed-up |")
+    print("|---|---:|---:|---:|")
+    print("\n".join(acting))
 
 
 if __name__ == "__main__":
