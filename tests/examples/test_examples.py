@@ -8,6 +8,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
 NUMBER = r"-?\d[\d,]*(?:\.\d+)?"
@@ -83,3 +86,30 @@ def test_tabular_mountain_car(tmp_path: Path) -> None:
         assert gif.size == (600, 400) and gif.n_frames >= 2
     with Image.open(tmp_path / "learning_curve.png") as png:
         assert png.format == "PNG"
+
+
+def test_robot_arm_sac() -> None:
+    out = run_example("robot_arm_sac.py")
+    assert re.search(
+        rf"SAC, 300 steps in {NUMBER} s: reaches the target in \d+% of 3 test episodes "
+        r"\(random actions: \d+%\)",
+        out,
+    ), out
+
+
+def test_reaching_arm_passes_check_env_and_rewards_reaching() -> None:
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        from robot_arm_sac import ReachingArm
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    from palaestra.utils.env_checker import check_env
+
+    env = ReachingArm()
+    check_env(env)
+    env.reset(seed=0)
+    env.angles[:] = 0.0  # arm stretched along x: the tip at (0.9, 0)
+    env.target[:] = (0.9, 0.02)
+    _, reward, terminated, truncated, info = env.step(np.zeros(3, np.float32))
+    assert terminated and not truncated and info["is_success"]
+    assert reward == pytest.approx(1.0 - 0.02)
