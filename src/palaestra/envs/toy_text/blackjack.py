@@ -1,0 +1,232 @@
+"""Blackjack-v1: draw cards (hit) or stop (stick) to beat the dealer without going over 21.
+
+Gymnasium 1.x's ``BlackjackEnv`` (Sutton & Barto, Example 5.1): an infinite deck, the dealer
+hits below 17, reward +1 / 0 / -1 (``natural=True``: 1.5 for a winning natural; ``sab=True``:
+a natural wins outright unless the dealer has one too, and ``natural`` is ignored).
+
+A hand is kept as ``(sum counting aces as 1, has an ace, cards)``; the rules below are written
+once over :mod:`~palaestra.envs.classic_control._ops` (``where``) and run on ints for the
+single env and on ``[N]`` arrays for the batch. Cards are ``deck[integers(13)]``: what
+Gymnasium's ``choice(deck)`` draws.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from palaestra import error
+from palaestra.envs.classic_control._common import check_discrete_action
+from palaestra.envs.classic_control._ops import ARRAY, SCALAR
+from palaestra.envs.toy_text._common import ToyTextBatch, ToyTextEnv
+from palaestra.spaces import Discrete, Tuple
+
+DECK = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 10, 10, 10)  # ace, 2-10, jack, queen, king
+_DECK = np.array(DECK, dtype=np.int64)
+SUITS = ("C", "D", "H", "S")
+FACES = ("J", "Q", "K")
+
+
+def total(ops: Any, raw: Any, ace: Any) -> Any:
+    """A hand's value: an ace counts 11 when that does not bust it."""
+    return ops.where(ace & (raw + 10 <= 21), raw + 10, raw)
+
+
+def usable_ace(raw: Any, ace: Any) -> Any:
+    """Whether an ace counts 11 (the observation's third entry)."""
+    return ace & (raw + 10 <= 21)
+
+
+def is_natural(raw: Any, ace: Any, cards: Any) -> Any:
+    """An ace and a ten-card as the first two cards."""
+    return (cards == 2) & ace & (raw == 11)
+
+
+def settle(
+    ops: Any,
+    player: tuple[Any, Any, Any],
+    dealer: tuple[Any, Any, Any],
+    natural: bool,
+    sab: bool,
+) -> Any:
+    """The reward of a stick, once the dealer has drawn to 17 (hands: raw, ace, cards)."""
+    p_total, d_total = total(ops, *player[:2]), total(ops, *dealer[:2])
+    p_score = ops.where(p_total > 21, 0, p_total)
+    d_score = ops.where(d_total > 21, 0, d_total)
+    reward = (p_score > d_score) * 1.0 - (p_score < d_score) * 1.0
+    p_natural = is_natural(*player)
+    if sab:  # Sutton & Barto: a natural wins unless the dealer has one too
+        # `>` on booleans: "player natural and dealer not", for Python bools and arrays alike.
+        return ops.where(p_natural > is_natural(*dealer), 1.0, reward)
+    if natural:  # casino rules: a winning natural pays 1.5
+        return ops.where(p_natural & (reward == 1.0), 1.5, reward)
+    return reward
+
+
+def _space() -> Tuple:
+    return Tuple((Discrete(32), Discrete(11), Discrete(2)))
+
+
+class BlackjackEnv(ToyTextEnv):
+    """Single Blackjack. Actions: 0 stick, 1 hit. Observation: (player sum, dealer card, ace)."""
+
+    metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 4}
+
+    def __init__(self, render_mode: str | None = None, natural: bool = False, sab: bool = False):
+        self.action_space = Discrete(2)
+        self.observation_space = _space()
+        self.natural = natural
+        self.sab = sab
+        self.player: list[int] = []
+        self.dealer: list[int] = []
+        self._init_render(render_mode)
+
+    def _draw(self) -> int:
+        return DECK[int(self.np_random.integers(13))]
+
+    def _obs(self) -> tuple[int, int, int]:
+        raw, ace = sum(self.player), 1 in self.player
+        return total(SCALAR, raw, ace), self.dealer[0], int(usable_ace(raw, ace))
+
+    @staticmethod
+    def _hand(cards: list[int]) -> tuple[int, bool, int]:
+        return sum(cards), 1 in cards, len(cards)
+
+    def step(self, action: Any) -> tuple[tuple[int, int, int], float, bool, bool, dict[str, Any]]:
+        """Hit (1) draws a card; stick (0) lets the dealer play and settles."""
+        if type(action) is not int or not 0 <= action < 2:
+            action = check_discrete_action(action, self.action_space, 2)
+        if not self.player:
+            raise error.ResetNeeded("Call reset before using step method.")
+        if action:
+            self.player.append(self._draw())
+            terminated = total(SCALAR, sum(self.player), 1 in self.player) > 21
+            reward = -1.0 if terminated else 0.0
+        else:
+            terminated = True
+            while total(SCALAR, sum(self.dealer), 1 in self.dealer) < 17:
+                self.dealer.append(self._draw())
+            reward = float(
+                settle(SCALAR, self._hand(self.player), self._hand(self.dealer), self.natural, self.sab)
+            )
+        if self.render_mode == "human":
+            self.render()
+        return self._obs(), reward, terminated, False, {}
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[tuple[int, int, int], dict[str, Any]]:
+        """Deal two cards to the dealer, then two to the player; pick the face-up card's look."""
+        super().reset(seed=seed)
+        self.dealer = [self._draw(), self._draw()]
+        self.player = [self._draw(), self._draw()]
+        # Only the picture uses these, but Gymnasium draws them: so must we, to stay in step.
+        self.dealer_top_card_suit = SUITS[int(self.np_random.integers(4))]
+        first = self.dealer[0]
+        if first == 1:
+            self.dealer_top_card_value_str = "A"
+        elif first == 10:
+            self.dealer_top_card_value_str = FACES[int(self.np_random.integers(3))]
+        else:
+            self.dealer_top_card_value_str = str(first)
+        if self.render_mode == "human":
+            self.render()
+        return self._obs(), {}
+
+    def _frame(self) -> np.ndarray:
+        from palaestra.rendering.toy_text import render_blackjack
+
+        if not self.player:
+            raise error.ResetNeeded("Call reset before render.")
+        player_sum, dealer_value, ace = self._obs()
+        card = self.dealer_top_card_value_str + self.dealer_top_card_suit
+        return render_blackjack(player_sum, dealer_value, bool(ace), card)
+
+
+class BlackjackBatch(ToyTextBatch):
+    """N Blackjack tables as arrays; the dealer's draws loop over rounds, never over rows."""
+
+    RUN_STATE = (
+        *ToyTextBatch.RUN_STATE,
+        "_player",
+        "_dealer",
+        "_first",
+        "_suit",
+        "_face",
+    )
+
+    def __init__(self, num_envs: int, natural: bool = False, sab: bool = False) -> None:
+        super().__init__(num_envs)
+        self.natural, self.sab = natural, sab
+        self.single_observation_space = _space()
+        self.single_action_space = Discrete(2)
+        n = self.num_envs
+        # Hands as [3, N] int64: raw sum (aces count 1), has an ace (0/1), number of cards.
+        self._player = np.zeros((3, n), dtype=np.int64)
+        self._dealer = np.zeros((3, n), dtype=np.int64)
+        self._first = np.zeros(n, dtype=np.int64)  # [N] the dealer's face-up card
+        self._suit = np.zeros(n, dtype=np.int64)  # [N] index into SUITS (for pictures)
+        self._face = np.zeros(n, dtype=np.int64)  # [N] index into FACES when the card is 10
+        self._obs = tuple(np.zeros(n, dtype=np.int64) for _ in range(3))  # 3 x [N]
+        self._reward = np.zeros(n)
+        self._terminated = np.zeros(n, dtype=bool)
+
+    def _cards(self, rows: np.ndarray) -> np.ndarray:
+        return _DECK.take(self._streams.bounded(rows, 13))
+
+    @staticmethod
+    def _deal(hand: np.ndarray, rows: np.ndarray, first: np.ndarray, second: np.ndarray) -> None:
+        hand[0, rows] = first + second
+        hand[1, rows] = (first == 1) | (second == 1)
+        hand[2, rows] = 2
+
+    @staticmethod
+    def _add(hand: np.ndarray, rows: np.ndarray, card: np.ndarray) -> None:
+        hand[0, rows] += card
+        hand[1, rows] |= card == 1
+        hand[2, rows] += 1
+
+    def _reset_rows(self, rows: np.ndarray, mask: np.ndarray | None) -> Any:
+        d1, d2 = self._cards(rows), self._cards(rows)
+        p1, p2 = self._cards(rows), self._cards(rows)
+        self._deal(self._dealer, rows, d1, d2)
+        self._deal(self._player, rows, p1, p2)
+        self._first[rows] = d1
+        self._suit[rows] = self._streams.bounded(rows, 4)
+        tens = rows[d1 == 10]
+        if len(tens):
+            self._face[tens] = self._streams.bounded(tens, 3)
+        self._observe(rows)
+        return None
+
+    def _observe(self, rows: np.ndarray) -> None:
+        raw, ace = self._player[0, rows], self._player[1, rows].astype(bool)
+        self._obs[0][rows] = total(ARRAY, raw, ace)
+        self._obs[1][rows] = self._first[rows]
+        self._obs[2][rows] = usable_ace(raw, ace)
+
+    def _step_rows(self, rows: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        hit = actions == 1
+        hitters, stickers = rows[hit], rows[~hit]
+        if len(hitters):
+            self._add(self._player, hitters, self._cards(hitters))
+            p = self._player[:, hitters]
+            bust = total(ARRAY, p[0], p[1].astype(bool)) > 21
+            self._terminated[hitters] = bust
+            self._reward[hitters] = np.where(bust, -1.0, 0.0)
+        if len(stickers):
+            drawing = stickers
+            while True:  # one round per dealer card (rarely more than 4), never per row
+                d = self._dealer[:, drawing]
+                drawing = drawing[total(ARRAY, d[0], d[1].astype(bool)) < 17]
+                if not len(drawing):
+                    break
+                self._add(self._dealer, drawing, self._cards(drawing))
+            p, d = self._player[:, stickers], self._dealer[:, stickers]
+            player = (p[0], p[1].astype(bool), p[2])
+            dealer = (d[0], d[1].astype(bool), d[2])
+            self._reward[stickers] = settle(ARRAY, player, dealer, self.natural, self.sab)
+            self._terminated[stickers] = True
+        self._observe(rows)
+        return self._reward, self._terminated
