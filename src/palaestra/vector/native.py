@@ -71,7 +71,9 @@ def _make(
         from palaestra.envs import toy_text as tt
 
         batch_cls, env_cls = (getattr(tt, name) for name in _TOY_TEXT[kind])
-        return _build(batch_cls, env_cls, num_envs, max_episode_steps, render_mode, vector_kwargs, env_kwargs)
+        return _build(
+            batch_cls, env_cls, num_envs, max_episode_steps, render_mode, vector_kwargs, env_kwargs
+        )
     from palaestra.envs import classic_control as cc
 
     classes: dict[str, tuple[Any, Any]] = {
@@ -85,7 +87,9 @@ def _make(
         "acrobot": (cc.AcrobotBatch, cc.AcrobotEnv),
     }
     batch_cls, env_cls = classes[kind]
-    return _build(batch_cls, env_cls, num_envs, max_episode_steps, render_mode, vector_kwargs, env_kwargs)
+    return _build(
+        batch_cls, env_cls, num_envs, max_episode_steps, render_mode, vector_kwargs, env_kwargs
+    )
 
 
 # kind -> (batch class, env class) in palaestra.envs.toy_text

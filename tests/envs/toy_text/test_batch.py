@@ -52,11 +52,12 @@ def test_batch_rows_equal_single_envs(case: tuple[str, dict[str, Any]]) -> None:
     policies = [Policy(env, i, 0.4) for i, env in enumerate(singles)]
     rng = np.random.default_rng(0)
     ends = 0
+    ended = np.zeros(N, dtype=bool)
     for t in range(300):
         actions = np.array([p(o) for p, o in zip(policies, _rows(obs))])
         # Rows that ended are reset in place of a step, as autoreset does (their generator
         # draws a reset's numbers, not a step's); a few more are reset at random.
-        reset = np.zeros(N, dtype=bool) if t == 0 else ended | (rng.random(N) < 0.02)
+        reset = ended | (rng.random(N) < 0.02)
         obs, reward, terminated = batch.step(actions, reset)
         infos = batch.last_infos()
         want = []
@@ -83,8 +84,16 @@ def _same_infos(ours: dict[str, Any], ref: dict[str, Any], where: str) -> None:
     assert ours.keys() == ref.keys(), where
     for key, value in ref.items():
         if key == "final_obs":
-            assert [o if o is None else _rows(np.atleast_1d(o))[0] if not isinstance(o, tuple) else tuple(int(x) for x in o) for o in ours[key]] == [
-                o if o is None else int(o) if not isinstance(o, tuple) else tuple(int(x) for x in o) for o in value
+            assert [
+                o
+                if o is None
+                else _rows(np.atleast_1d(o))[0]
+                if not isinstance(o, tuple)
+                else tuple(int(x) for x in o)
+                for o in ours[key]
+            ] == [
+                o if o is None else int(o) if not isinstance(o, tuple) else tuple(int(x) for x in o)
+                for o in value
             ], where
         elif key == "final_info":
             _same_infos(ours[key], value, where)
@@ -121,7 +130,11 @@ def test_make_vec_matches_gymnasium_sync_vector_env(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ref = gym.make_vec(
-            env_id, N, vectorization_mode="sync", vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode(mode)}, **kwargs
+            env_id,
+            N,
+            vectorization_mode="sync",
+            vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode(mode)},
+            **kwargs,
         )
     assert ours.metadata["autoreset_mode"] == AutoresetMode(mode)
     obs, info = ours.reset(seed=3)
@@ -190,7 +203,9 @@ def test_batch_errors() -> None:
     with pytest.raises(error.ResetNeeded, match=r"Rows \[0, 1, 2, 3\] were never reset"):
         batch.step(np.zeros(4, dtype=np.int64))
     batch.reset(seed=0)
-    with pytest.raises(error.InvalidAction, match=r"rows \[2\]: \[6\] not in action space Discrete\(6\)"):
+    with pytest.raises(
+        error.InvalidAction, match=r"rows \[2\]: \[6\] not in action space Discrete\(6\)"
+    ):
         batch.step(np.array([0, 1, 6, 2]))
     with pytest.raises(error.InvalidAction, match="expected 4 integers"):
         batch.step(np.array([0.0, 1.0, 2.0, 3.0]))

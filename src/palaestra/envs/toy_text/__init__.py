@@ -13,7 +13,7 @@ its own generator, so row i equals a single env seeded ``seed + i``.
 >>> obs, reward, terminated = batch.step([2, 2, 1])
 >>> env = FrozenLakeEnv()
 >>> _ = env.reset(seed=43)
->>> env.step(2)[0] == obs[1]  # row i behaves like a single env seeded 42 + i
+>>> env.step(2)[0] == int(obs[1])  # row i behaves like a single env seeded 42 + i
 True
 """
 

@@ -108,7 +108,9 @@ class BlackjackEnv(ToyTextEnv):
             while total(SCALAR, sum(self.dealer), 1 in self.dealer) < 17:
                 self.dealer.append(self._draw())
             reward = float(
-                settle(SCALAR, self._hand(self.player), self._hand(self.dealer), self.natural, self.sab)
+                settle(
+                    SCALAR, self._hand(self.player), self._hand(self.dealer), self.natural, self.sab
+                )
             )
         if self.render_mode == "human":
             self.render()

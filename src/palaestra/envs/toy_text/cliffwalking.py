@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, TransitionTable, Transitions
+from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, Transitions, TransitionTable
 
 UP, RIGHT, DOWN, LEFT = 0, 1, 2, 3
 _MOVES = {UP: (-1, 0), RIGHT: (0, 1), DOWN: (1, 0), LEFT: (0, -1)}
@@ -99,4 +99,6 @@ class CliffWalkingBatch(TabularBatch):
     """N CliffWalkings stepped as arrays."""
 
     def __init__(self, num_envs: int, is_slippery: bool = False) -> None:
-        super().__init__(num_envs, TransitionTable(build_transitions(bool(is_slippery)), _initial()))
+        super().__init__(
+            num_envs, TransitionTable(build_transitions(bool(is_slippery)), _initial())
+        )

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, TransitionTable, Transitions
+from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, Transitions, TransitionTable
 from palaestra.utils.colorize import colorize
 from palaestra.utils.seeding import np_random
 
@@ -73,7 +73,9 @@ def generate_random_map(size: int = 8, p: float = 0.8, seed: int | None = None) 
         raise TypeError(f"p must be a number in (0, 1], got {p!r} ({type(p).__name__})")
     if not 0 < p <= 1:
         why = "every tile would be a hole: no map has a path" if p == 0 else ""
-        raise ValueError(f"p must be a probability in (0, 1], got {p!r}{' (' + why + ')' if why else ''}")
+        raise ValueError(
+            f"p must be a probability in (0, 1], got {p!r}{' (' + why + ')' if why else ''}"
+        )
     rng, _ = np_random(seed)
     size = int(size)
     while True:
@@ -165,7 +167,7 @@ def build_transitions(
 
 def _check_options(
     is_slippery: Any, success_rate: Any, reward_schedule: Any
-) -> tuple[float, tuple[Any, ...]]:
+) -> tuple[Any, tuple[Any, ...]]:
     if not isinstance(success_rate, (int, float, np.integer, np.floating)) or isinstance(
         success_rate, bool
     ):
@@ -177,10 +179,9 @@ def _check_options(
         isinstance(r, (int, float, np.integer, np.floating)) for r in schedule
     ):
         raise ValueError(
-            "reward_schedule must be 3 numbers (goal, hole, frozen), got "
-            f"{reward_schedule!r}"
+            f"reward_schedule must be 3 numbers (goal, hole, frozen), got {reward_schedule!r}"
         )
-    return success_rate, schedule
+    return success_rate, schedule  # kept as given: P holds it as Gymnasium's does
 
 
 def _resolve_map(desc: Any, map_name: str | None) -> np.ndarray:

@@ -63,8 +63,7 @@ class TransitionTable:
                     self.reward[i, j], self.terminated[i, j] = r, t
                 per_action.append(
                     tuple(
-                        (float(c), (t[0], int(t[1]), t[2], bool(t[3])))
-                        for c, t in zip(cum, trans)
+                        (float(c), (t[0], int(t[1]), t[2], bool(t[3]))) for c, t in zip(cum, trans)
                     )
                 )
             outcomes.append(tuple(per_action))

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, TransitionTable, Transitions
+from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, Transitions, TransitionTable
 from palaestra.utils.colorize import colorize
 
 MAP = [
@@ -159,9 +159,7 @@ def _check(rainy_probability: Any, fickle_probability: Any) -> None:
         ("rainy_probability", rainy_probability),
         ("fickle_probability", fickle_probability),
     ):
-        if isinstance(value, bool) or not isinstance(
-            value, (int, float, np.integer, np.floating)
-        ):
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise TypeError(f"{name} must be a number in [0, 1], got {value!r}")
         if not 0.0 <= value <= 1.0:
             raise ValueError(f"{name} must be a probability in [0, 1], got {value!r}")
@@ -204,7 +202,9 @@ class TaxiEnv(TabularEnv):
         return {"prob": prob, "action_mask": _MASKS[s].copy()}
 
     def _after_reset(self) -> None:
-        self.fickle_step = self.fickle_passenger and self.np_random.random() < self.fickle_probability
+        self.fickle_step = (
+            self.fickle_passenger and self.np_random.random() < self.fickle_probability
+        )
         self.taxi_orientation = 0
 
     def _after_move(self, old: int, new: int) -> int:
@@ -225,12 +225,16 @@ class TaxiEnv(TabularEnv):
         out = [[c.decode() for c in line] for line in self.desc.tolist()]
         row, col, passenger, dest = decode(self.s)
         if passenger < 4:
-            out[1 + row][2 * col + 1] = colorize(out[1 + row][2 * col + 1], "yellow", highlight=True)
+            out[1 + row][2 * col + 1] = colorize(
+                out[1 + row][2 * col + 1], "yellow", highlight=True
+            )
             pi, pj = LOCS[passenger]
             out[1 + pi][2 * pj + 1] = colorize(out[1 + pi][2 * pj + 1], "blue", bold=True)
         else:  # passenger in the taxi: a blank cell shows as "_"
             cell = out[1 + row][2 * col + 1]
-            out[1 + row][2 * col + 1] = colorize("_" if cell == " " else cell, "green", highlight=True)
+            out[1 + row][2 * col + 1] = colorize(
+                "_" if cell == " " else cell, "green", highlight=True
+            )
         di, dj = LOCS[dest]
         out[1 + di][2 * dj + 1] = colorize(out[1 + di][2 * dj + 1], "magenta")
         text = "\n".join("".join(line) for line in out) + "\n"
@@ -283,7 +287,9 @@ class TaxiBatch(TabularBatch):
             return new
         old_row, old_col, old_passenger, old_dest = decode(old)
         row, col, passenger, _ = decode(new)
-        fickle = self._fickle_step[rows] & (old_passenger == 4) & ((row != old_row) | (col != old_col))
+        fickle = (
+            self._fickle_step[rows] & (old_passenger == 4) & ((row != old_row) | (col != old_col))
+        )
         hit = np.flatnonzero(fickle)  # [F] positions within rows
         if len(hit):
             self._fickle_step[rows[hit]] = False

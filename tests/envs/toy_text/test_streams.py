@@ -1,0 +1,65 @@
+"""RowStreams draws what each row's ``Generator`` would: ``random()``, ``integers(0, n)`` and
+``choice`` of n items, in any interleaving, rejections included."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from palaestra.envs.toy_text._streams import RowStreams
+
+
+def _streams(seeds: list[int]) -> RowStreams:
+    rngs: list[np.random.Generator | None] = [np.random.default_rng(s) for s in seeds]
+    streams = RowStreams(rngs)
+    streams.restart(np.arange(len(seeds)))
+    return streams
+
+
+def test_interleaved_draws_equal_each_rows_generator() -> None:
+    n = 5
+    streams = _streams(list(range(100, 100 + n)))
+    refs = [np.random.default_rng(100 + i) for i in range(n)]
+    plan = np.random.default_rng(0)
+    for _ in range(3000):  # several top-ups (a row holds at most 8192 words)
+        rows = np.flatnonzero(plan.random(n) < 0.7)
+        kind = int(plan.integers(4))
+        if kind == 0:
+            got = streams.doubles(rows)
+            want = [refs[i].random() for i in rows]
+        else:
+            span = (13, 3, 4)[kind - 1]
+            got = streams.bounded(rows, span)
+            want = [refs[i].choice(span) for i in rows]
+        np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("span", [2, 3, 6, 13, 1000, 2**31 + 11])
+def test_bounded_equals_integers_for_any_span(span: int) -> None:
+    streams = _streams([7, 8])
+    refs = [np.random.default_rng(7), np.random.default_rng(8)]
+    rows = np.arange(2)
+    for _ in range(200):
+        got = streams.bounded(rows, span)
+        assert got.tolist() == [int(r.integers(span)) for r in refs]
+
+
+def test_rejected_draw_takes_the_next_word_as_numpy_does() -> None:
+    # span 2**31 + 11 rejects about half of the 32-bit words: both paths are exercised a lot.
+    streams = _streams([1])
+    ref = np.random.default_rng(1)
+    span = 2**31 + 11
+    for _ in range(500):
+        assert int(streams.bounded(np.array([0]), span)[0]) == int(ref.integers(span))
+        assert float(streams.doubles(np.array([0]))[0]) == ref.random()
+
+
+def test_restart_drops_the_old_draws_and_the_kept_half_word() -> None:
+    rngs: list[np.random.Generator | None] = [np.random.default_rng(1)]
+    streams = RowStreams(rngs)
+    streams.restart(np.array([0]))
+    streams.bounded(np.array([0]), 13)  # leaves a half-word kept
+    rngs[0] = np.random.default_rng(2)
+    streams.restart(np.array([0]))
+    ref = np.random.default_rng(2)
+    assert int(streams.bounded(np.array([0]), 13)[0]) == int(ref.integers(13))
