@@ -83,7 +83,13 @@ class ToyTextBatch:
     single_observation_space: Space[Any]
     single_action_space: Discrete
     # Everything a step or reset changes (utils.run_state); subclasses extend it.
-    RUN_STATE: ClassVar[tuple[str, ...]] = ("_rngs", "seeds", "_streams", "_needs_reset")
+    RUN_STATE: ClassVar[tuple[str, ...]] = (
+        "_rngs",
+        "seeds",
+        "_streams",
+        "_needs_reset",
+        "_all_reset",
+    )
 
     def __init__(self, num_envs: int) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
@@ -95,6 +101,7 @@ class ToyTextBatch:
         self.seeds: list[int | None] = [None] * n
         self._streams = RowStreams(self._rngs)
         self._needs_reset = np.ones(n, dtype=bool)  # [N]
+        self._all_reset = False
         self._all = np.arange(n)  # [N] every row, for the streams' gathers
         self._infos: Any = None
 
@@ -137,6 +144,7 @@ class ToyTextBatch:
         if fresh:
             self._streams.restart(np.array(fresh, dtype=np.intp))
         self._needs_reset[rows] = False
+        self._all_reset = not self._needs_reset.any()  # only ever turns True
         self._infos = self._reset_rows(rows, None if mask is None else mask)
         return self._obs
 
@@ -147,7 +155,7 @@ class ToyTextBatch:
         nothing for a step); their reward is 0 and terminated False. The returned arrays are
         reused by the next call: copy them to keep them.
         """
-        if self._needs_reset.any():
+        if not self._all_reset and self._needs_reset.any():
             rows = np.flatnonzero(self._needs_reset)[:10].tolist()
             raise error.ResetNeeded(f"Rows {rows} were never reset; call reset() before step().")
         act = check_discrete_batch(actions, self.single_action_space, self.num_envs)

@@ -190,8 +190,10 @@ class BlackjackBatch(ToyTextBatch):
         hand[2, rows] += 1
 
     def _reset_rows(self, rows: np.ndarray, mask: np.ndarray | None) -> Any:
-        d1, d2 = self._cards(rows), self._cards(rows)
-        p1, p2 = self._cards(rows), self._cards(rows)
+        # Four cards in one read: dealer, dealer, player, player (Gymnasium's order).
+        peek = self._streams.peek_bounded(rows, 13, 4)
+        self._streams.consume(peek, np.full(len(rows), 4))
+        d1, d2, p1, p2 = _DECK.take(peek.draws).T
         self._deal(self._dealer, rows, d1, d2)
         self._deal(self._player, rows, p1, p2)
         self._first[rows] = d1
@@ -201,6 +203,26 @@ class BlackjackBatch(ToyTextBatch):
             self._face[tens] = self._streams.bounded(tens, 3)
         self._observe(rows)
         return None
+
+    def _dealer_plays(self, rows: np.ndarray) -> None:
+        """The dealer hits below 17. Cards are read a few at a time for all rows, then each
+        row keeps the ones it drew: a loop over rounds of cards, never over rows."""
+        raw, ace, cards = (h.copy() for h in self._dealer[:, rows])
+        pending = np.arange(len(rows))  # positions in `rows` still drawing
+        while len(pending):
+            sub = rows[pending]
+            peek = self._streams.peek_bounded(sub, 13, 4)
+            drawn = _DECK.take(peek.draws)  # [P, 4]
+            used = np.zeros(len(sub), dtype=np.int64)
+            r, a, c = raw[pending], ace[pending], cards[pending]
+            for j in range(4):
+                hits = total(ARRAY, r, a.astype(bool)) < 17
+                card = np.where(hits, drawn[:, j], 0)
+                r, a, c, used = r + card, a | (card == 1), c + hits, used + hits
+            self._streams.consume(peek, used)
+            raw[pending], ace[pending], cards[pending] = r, a, c
+            pending = pending[total(ARRAY, r, a.astype(bool)) < 17]
+        self._dealer[:, rows] = raw, ace, cards
 
     def _observe(self, rows: np.ndarray) -> None:
         raw, ace = self._player[0, rows], self._player[1, rows].astype(bool)
@@ -218,13 +240,7 @@ class BlackjackBatch(ToyTextBatch):
             self._terminated[hitters] = bust
             self._reward[hitters] = np.where(bust, -1.0, 0.0)
         if len(stickers):
-            drawing = stickers
-            while True:  # one round per dealer card (rarely more than 4), never per row
-                d = self._dealer[:, drawing]
-                drawing = drawing[total(ARRAY, d[0], d[1].astype(bool)) < 17]
-                if not len(drawing):
-                    break
-                self._add(self._dealer, drawing, self._cards(drawing))
+            self._dealer_plays(stickers)
             p, d = self._player[:, stickers], self._dealer[:, stickers]
             player = (p[0], p[1].astype(bool), p[2])
             dealer = (d[0], d[1].astype(bool), d[2])

@@ -74,6 +74,7 @@ class TransitionTable:
         self.initial_cum = np.cumsum(np.asarray(initial, dtype=np.float64))  # [S]
         self.flat = tuple(a.reshape(-1) for a in (self.next_state, self.reward, self.terminated))
         self.flat_prob = self.prob.reshape(-1)
+        self.cum_columns = tuple(np.ascontiguousarray(self.cum[:, j]) for j in range(k))
 
     def sample(self, s: int, a: int, u: float) -> tuple[Any, int, Any, bool]:
         """The outcome ``(prob, next_state, reward, terminated)`` that ``u`` selects."""
@@ -185,19 +186,27 @@ class TabularBatch(ToyTextBatch):
 
     def _step_rows(self, rows: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         table = self.table
-        u = self._streams.doubles(rows)  # [R], drawn even when the outcome is certain
-        old = self._state[rows]
+        every = rows is self._all  # the usual case: whole arrays, no index gathers
+        at = slice(None) if every else rows
+        u = self._streams.doubles(None if every else rows)  # [R], drawn even if certain
+        old = self._state[at]
         sa = old * table.n_actions + actions  # [R]
         if table.certain:
             idx = sa * 2  # outcome 0 of each K + 1 = 2 entries
         else:
-            idx = sa * (table.k + 1) + np.count_nonzero(table.cum[sa] <= u[:, None], axis=1)
+            # The outcome index: how many cumulative thresholds u reaches (1-D takes per
+            # column are cheaper than gathering [R, K] rows).
+            k = table.cum_columns[0].take(sa) <= u
+            k = k.astype(np.int64)
+            for column in table.cum_columns[1:]:
+                k += column.take(sa) <= u
+            idx = sa * (table.k + 1) + k
         next_state, reward, terminated = (a.take(idx) for a in table.flat)
-        self._state[rows] = self._after_move(rows, old, next_state)
-        self._obs[rows] = self._state[rows]
-        self._prob[rows] = table.flat_prob.take(idx)
-        self._reward[rows] = reward
-        self._terminated[rows] = terminated
+        self._state[at] = self._after_move(rows, old, next_state)
+        self._obs[at] = self._state[at]
+        self._prob[at] = table.flat_prob.take(idx)
+        self._reward[at] = reward
+        self._terminated[at] = terminated
         return self._reward, self._terminated
 
     def _after_move(self, rows: np.ndarray, old: np.ndarray, new: np.ndarray) -> np.ndarray:
