@@ -1,9 +1,11 @@
-"""Steps per second of the classic-control envs: palaestra vs Gymnasium, single and batched.
+"""Steps per second of the classic-control and toy-text envs: palaestra vs Gymnasium, single
+and batched.
 
 Run from the repository root::
 
-    .venv/bin/python benchmarks/env_step.py            # full run (~1 minute)
-    .venv/bin/python benchmarks/env_step.py --quick    # smoke run
+    .venv/bin/python benchmarks/env_step.py              # full run (~2 minutes)
+    .venv/bin/python benchmarks/env_step.py --quick      # smoke run
+    .venv/bin/python benchmarks/env_step.py --toy-text   # only the toy-text envs and batches
 
 Single envs go through ``make(id)`` in both libraries (so TimeLimit, OrderEnforcing and the
 passive checker are included), step pre-sampled ``action_space.sample()`` actions (numpy
@@ -26,6 +28,7 @@ import numpy as np
 
 import palaestra
 from palaestra.envs.classic_control import CartPoleBatch, MountainCarBatch
+from palaestra.envs.toy_text import BlackjackBatch, CliffWalkingBatch, FrozenLakeBatch, TaxiBatch
 
 IDS = [
     "CartPole-v0",
@@ -35,6 +38,16 @@ IDS = [
     "Pendulum-v1",
     "Acrobot-v1",
 ]
+TOY_TEXT_IDS = [
+    "FrozenLake-v1",
+    "FrozenLake8x8-v1",
+    "CliffWalking-v1",
+    "CliffWalkingSlippery-v1",
+    "Taxi-v4",
+    "Blackjack-v1",
+]
+CLASSIC_BATCHES = [MountainCarBatch, CartPoleBatch]
+TOY_TEXT_BATCHES = [FrozenLakeBatch, CliffWalkingBatch, TaxiBatch, BlackjackBatch]
 BATCH_SIZES = [1, 64, 1024, 16384]
 
 
@@ -73,7 +86,10 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--steps", type=int, default=20_000)
     parser.add_argument("--quick", action="store_true", help="few steps, for a smoke test")
+    parser.add_argument("--toy-text", action="store_true", help="only the toy-text envs")
     args = parser.parse_args()
+    ids = TOY_TEXT_IDS if args.toy_text else IDS + TOY_TEXT_IDS
+    batches = TOY_TEXT_BATCHES if args.toy_text else CLASSIC_BATCHES + TOY_TEXT_BATCHES
     if args.quick:
         args.repeats, args.steps = 1, 500
     import gymnasium
@@ -82,7 +98,7 @@ def main() -> None:
 
     print(f"numpy {np.__version__}, gymnasium {gymnasium.__version__}, repeats {args.repeats}")
     print(f"{'env id':<26}{'palaestra':>12}{'gymnasium':>12}{'ratio':>8}   (steps/s)")
-    for env_id in IDS:
+    for env_id in ids:
         space = gymnasium.make(env_id).action_space
         space.seed(0)
         steps = args.steps // 4 if env_id == "Acrobot-v1" else args.steps
@@ -95,7 +111,7 @@ def main() -> None:
         print(f"{env_id:<26}{p:>12,.0f}{g:>12,.0f}{p / g:>7.2f}x")
 
     print(f"\n{'batched engine':<22}{'N':>7}{'step only':>16}{'with resets':>16}   (env-steps/s)")
-    for cls in (MountainCarBatch, CartPoleBatch):
+    for cls in batches:
         for num_envs in BATCH_SIZES:
             steps = max(20, min(2000, 400_000 // num_envs)) if not args.quick else 10
             rates = {}
