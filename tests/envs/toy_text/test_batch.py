@@ -225,3 +225,82 @@ def test_vector_env_rejects_bad_actions_by_row() -> None:
     envs.reset(seed=0)
     with pytest.raises(error.InvalidAction, match=r"rows \[1\]: \[-1\]"):
         envs.step(np.array([0, -1, 2]))
+
+
+def test_blackjack_slow_path_draws_the_same(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With no values read beyond the cards, resets take the one-at-a-time path (the one a
+    rejected draw would take): rows still equal single envs."""
+    batch = toy_text.BlackjackBatch(N)
+    streams = batch._streams
+    exact = type(streams).peek_bounded
+    monkeypatch.setattr(streams, "peek_bounded", lambda *a, **k: exact(streams, *a, slack=0))
+    singles = [toy_text.BlackjackEnv() for _ in range(N)]
+    obs = batch.reset(seed=50)
+    assert _rows(obs) == [env.reset(seed=50 + i)[0] for i, env in enumerate(singles)]
+    rng = np.random.default_rng(2)
+    ended = np.zeros(N, dtype=bool)
+    for _ in range(200):
+        actions = rng.integers(0, 2, N)
+        obs, reward, terminated = batch.step(actions, ended)
+        want = [env.reset() + (0.0, False) if ended[i] else env.step(int(actions[i]))
+                for i, env in enumerate(singles)]  # fmt: skip
+        want = [(w[0], w[2], w[3]) if ended[i] else (w[0], w[1], w[2]) for i, w in enumerate(want)]
+        assert _rows(obs) == [w[0] for w in want]
+        np.testing.assert_array_equal(reward, [w[1] for w in want])
+        np.testing.assert_array_equal(terminated, [w[2] for w in want])
+        ended = terminated.copy()
+    assert [s.dealer_top_card_suit for s in singles] == [
+        toy_text.blackjack.SUITS[k] for k in batch._suit
+    ]
+
+
+def test_disabled_autoreset_and_partial_resets_report_reset_infos() -> None:
+    envs = palaestra.make_vec("Taxi-v4", num_envs=3, vector_kwargs={"autoreset_mode": "Disabled"})
+    envs.reset(seed=0)
+    mask = np.array([False, True, False])
+    obs, infos = envs.reset(seed=9, options={"reset_mask": mask})
+    single, single_info = palaestra.make("Taxi-v4").reset(seed=10)  # row 1 gets seed 9 + 1
+    assert obs[1] == single
+    np.testing.assert_array_equal(infos["_prob"], mask)
+    np.testing.assert_array_equal(infos["action_mask"][1], single_info["action_mask"])
+    assert infos["prob"].tolist() == [0.0, 1.0, 0.0]  # rows without an info read 0
+    cliff = palaestra.make_vec(
+        "CliffWalking-v1", num_envs=2, vector_kwargs={"autoreset_mode": "Disabled"}
+    )
+    cliff.reset(seed=0)
+    cliff.step(np.array([1, 0]))  # row 0 steps right from the start: onto the cliff, not ended
+    # Up, then down, then right x11, then down: the goal ends row 0.
+    for action in [0] + [1] * 11 + [2]:
+        _, _, terminated, _, _ = cliff.step(np.array([action, 0]))
+    assert terminated.tolist() == [True, False]
+    with pytest.raises(error.ResetNeeded, match=r"Sub-environments \[0\] have finished"):
+        cliff.step(np.array([0, 0]))
+
+
+@pytest.mark.parametrize("case", [VARIANTS[0], VARIANTS[10], VARIANTS[12]], ids=variant_id)
+def test_run_state_round_trip_continues_exactly(case: tuple[str, dict[str, Any]]) -> None:
+    from palaestra.utils import run_state
+
+    env_id, kwargs = case
+    batch_cls, _ = _classes(env_id)
+    batch = batch_cls(N, **_kwargs(env_id, kwargs))
+    batch.reset(seed=4)
+    rng = np.random.default_rng(0)
+    n = int(batch.single_action_space.n)
+    ended = np.zeros(N, dtype=bool)
+
+    def run(steps: int) -> list[Any]:
+        nonlocal ended
+        out = []
+        for _ in range(steps):
+            obs, reward, terminated = batch.step(rng.integers(0, n, N), ended)
+            out.append((_rows(obs), reward.tolist(), terminated.tolist()))
+            ended = terminated.copy()
+        return out
+
+    run(150)
+    saved, saved_ended, saved_rng = run_state.capture(batch), ended.copy(), rng.bit_generator.state
+    first = run(300)
+    run_state.restore(batch, saved)
+    ended, rng.bit_generator.state = saved_ended, saved_rng
+    assert run(300) == first

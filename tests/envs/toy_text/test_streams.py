@@ -63,3 +63,23 @@ def test_restart_drops_the_old_draws_and_the_kept_half_word() -> None:
     streams.restart(np.array([0]))
     ref = np.random.default_rng(2)
     assert int(streams.bounded(np.array([0]), 13)[0]) == int(ref.integers(13))
+
+
+@pytest.mark.parametrize("span", [13, 2**31 + 11])
+def test_peek_then_consume_a_different_number_per_row(span: int) -> None:
+    n = 6
+    streams = _streams(list(range(n)))
+    refs = [np.random.default_rng(i) for i in range(n)]
+    plan = np.random.default_rng(1)
+    rows = np.arange(n)
+    for _ in range(300):
+        if plan.random() < 0.3:  # interleave doubles and single draws, as Taxi's fickle does
+            np.testing.assert_array_equal(streams.doubles(rows), [r.random() for r in refs])
+            np.testing.assert_array_equal(streams.bounded(rows, 3), [r.choice(3) for r in refs])
+        peek = streams.peek_bounded(rows, span, 4)
+        taken = plan.integers(0, 5, n)  # each row uses its first `taken` draws
+        for i, r in enumerate(refs):
+            assert peek.draws[i, : taken[i]].tolist() == [
+                int(r.integers(span)) for _ in range(taken[i])
+            ]
+        streams.consume(peek, peek.values_for(taken))

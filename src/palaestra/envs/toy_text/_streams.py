@@ -43,6 +43,11 @@ class Peek:
         self.places: np.ndarray = values  # [R, count] index in `values` of each accepted draw
         self.draws: np.ndarray = values  # [R, count] the bounded draws
 
+    def values_for(self, count: np.ndarray) -> np.ndarray:
+        """How many 32-bit values the first ``count`` accepted draws of each row took."""
+        last = self.places[np.arange(len(count)), np.maximum(count, 1) - 1]
+        return np.where(count > 0, last + 1, 0)
+
 
 class RowStreams:
     """Raw words drawn ahead for each of ``len(rngs)`` rows, plus each row's kept half-word.
@@ -122,15 +127,16 @@ class RowStreams:
                 redo = redo[(m[redo] & _LOW32) < threshold]
         return (m >> _SHIFT32).astype(np.int64)
 
-    def peek_bounded(self, rows: np.ndarray, n: int, count: int) -> Peek:
+    def peek_bounded(self, rows: np.ndarray, n: int, count: int, slack: int = 2) -> Peek:
         """The next ``count`` draws of ``integers(0, n)`` of each row, not consumed yet.
 
         For a variable number of draws per row (a dealer draws until 17): read them all in
-        one go, decide, then :meth:`consume` what each row used.
+        one go, decide, then :meth:`consume` what each row used. ``slack`` more values are
+        read for rejections (and for a caller that wants the values after the draws).
         """
         span = np.uint64(n)
         threshold = np.uint64((2**32 - n) % n)
-        window = count + 2  # room for rejections (each about once in 2**32 / n draws)
+        window = count + slack  # rejections: each about once in 2**32 / n draws
         while True:
             peek = self._halves(rows, window)
             prod = peek.values * span  # [R, window]
@@ -153,10 +159,9 @@ class RowStreams:
         return peek
 
     def consume(self, peek: Peek, used: np.ndarray) -> None:
-        """Advance each row of ``peek`` past its first ``used`` draws (int ``[R]``, may be 0)."""
-        # The index in `full` of the last 32-bit word used (-1 + offset when none is used).
-        last = np.where(used > 0, peek.places[np.arange(len(used)), np.maximum(used, 1) - 1], -1)
-        end = peek.offset + last  # [R] in `full`: 0 is the kept half, then low/high halves
+        """Advance each row of ``peek`` past its first ``used`` 32-bit values (int ``[R]``,
+        may be 0; :meth:`Peek.values_for` converts a number of accepted draws)."""
+        end = peek.offset + used - 1  # [R] index in `full` of the last value used
         rows = peek.rows
         self._pos[rows] += (end + 1) // 2  # whole words read past
         keeps = (end % 2) == 1  # ended on a low half: its high half is kept (end -1: unchanged)

@@ -24,6 +24,8 @@ from palaestra.spaces import Discrete, Tuple
 
 DECK = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 10, 10, 10)  # ace, 2-10, jack, queen, king
 _DECK = np.array(DECK, dtype=np.int64)
+_U3, _U4, _U32 = np.uint64(3), np.uint64(4), np.uint64(32)
+_LOW32 = np.uint64(0xFFFFFFFF)
 SUITS = ("C", "D", "H", "S")
 FACES = ("J", "Q", "K")
 
@@ -151,8 +153,12 @@ class BlackjackBatch(ToyTextBatch):
 
     RUN_STATE = (
         *ToyTextBatch.RUN_STATE,
-        "_player",
-        "_dealer",
+        "_p_raw",
+        "_p_ace",
+        "_p_cards",
+        "_d_raw",
+        "_d_ace",
+        "_d_cards",
         "_first",
         "_suit",
         "_face",
@@ -164,9 +170,10 @@ class BlackjackBatch(ToyTextBatch):
         self.single_observation_space = _space()
         self.single_action_space = Discrete(2)
         n = self.num_envs
-        # Hands as [3, N] int64: raw sum (aces count 1), has an ace (0/1), number of cards.
-        self._player = np.zeros((3, n), dtype=np.int64)
-        self._dealer = np.zeros((3, n), dtype=np.int64)
+        # Hands: raw sum (aces count 1), holds an ace, number of cards; [N] each.
+        self._p_raw, self._d_raw = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
+        self._p_ace, self._d_ace = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+        self._p_cards, self._d_cards = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
         self._first = np.zeros(n, dtype=np.int64)  # [N] the dealer's face-up card
         self._suit = np.zeros(n, dtype=np.int64)  # [N] index into SUITS (for pictures)
         self._face = np.zeros(n, dtype=np.int64)  # [N] index into FACES when the card is 10
@@ -174,58 +181,41 @@ class BlackjackBatch(ToyTextBatch):
         self._reward = np.zeros(n)
         self._terminated = np.zeros(n, dtype=bool)
 
-    def _cards(self, rows: np.ndarray) -> np.ndarray:
-        return _DECK.take(self._streams.bounded(rows, 13))
-
-    @staticmethod
-    def _deal(hand: np.ndarray, rows: np.ndarray, first: np.ndarray, second: np.ndarray) -> None:
-        hand[0, rows] = first + second
-        hand[1, rows] = (first == 1) | (second == 1)
-        hand[2, rows] = 2
-
-    @staticmethod
-    def _add(hand: np.ndarray, rows: np.ndarray, card: np.ndarray) -> None:
-        hand[0, rows] += card
-        hand[1, rows] |= card == 1
-        hand[2, rows] += 1
-
     def _reset_rows(self, rows: np.ndarray, mask: np.ndarray | None) -> Any:
-        # Four cards in one read: dealer, dealer, player, player (Gymnasium's order).
-        peek = self._streams.peek_bounded(rows, 13, 4)
-        self._streams.consume(peek, np.full(len(rows), 4))
+        # Dealer, dealer, player, player, then the face-up card's suit (and its face when it
+        # is a ten): Gymnasium's order, read in one go.
+        streams = self._streams
+        peek = streams.peek_bounded(rows, 13, 4)
         d1, d2, p1, p2 = _DECK.take(peek.draws).T
-        self._deal(self._dealer, rows, d1, d2)
-        self._deal(self._player, rows, p1, p2)
+        tens = d1 == 10
+        suit_at = peek.places[:, 3] + 1  # the values after the cards: suit, face
+        window = peek.values.shape[1]
+        if (suit_at + 1 < window).all():
+            nxt = np.take_along_axis(peek.values, suit_at[:, None] + np.arange(2), axis=1)
+            suit = (nxt[:, 0] * _U4) >> _U32
+            face = nxt[:, 1] * _U3
+            # integers(3) rejects a value whose product's low half is 0 (the value 0 itself).
+            fits = not (tens & ((face & _LOW32) == 0)).any()
+        else:
+            fits = False
+        if fits:
+            streams.consume(peek, suit_at + 1 + tens)
+            self._suit[rows] = suit.astype(np.int64)
+            self._face[rows[tens]] = (face[tens] >> _U32).astype(np.int64)
+        else:  # a rejected draw in the way (about once in 10**8 resets): one at a time
+            streams.consume(peek, suit_at)
+            self._suit[rows] = streams.bounded(rows, 4)
+            if tens.any():
+                self._face[rows[tens]] = streams.bounded(rows[tens], 3)
+        self._d_raw[rows], self._d_ace[rows] = d1 + d2, (d1 == 1) | (d2 == 1)
+        self._p_raw[rows], self._p_ace[rows] = p1 + p2, (p1 == 1) | (p2 == 1)
+        self._d_cards[rows] = self._p_cards[rows] = 2
         self._first[rows] = d1
-        self._suit[rows] = self._streams.bounded(rows, 4)
-        tens = rows[d1 == 10]
-        if len(tens):
-            self._face[tens] = self._streams.bounded(tens, 3)
         self._observe(rows)
         return None
 
-    def _dealer_plays(self, rows: np.ndarray) -> None:
-        """The dealer hits below 17. Cards are read a few at a time for all rows, then each
-        row keeps the ones it drew: a loop over rounds of cards, never over rows."""
-        raw, ace, cards = (h.copy() for h in self._dealer[:, rows])
-        pending = np.arange(len(rows))  # positions in `rows` still drawing
-        while len(pending):
-            sub = rows[pending]
-            peek = self._streams.peek_bounded(sub, 13, 4)
-            drawn = _DECK.take(peek.draws)  # [P, 4]
-            used = np.zeros(len(sub), dtype=np.int64)
-            r, a, c = raw[pending], ace[pending], cards[pending]
-            for j in range(4):
-                hits = total(ARRAY, r, a.astype(bool)) < 17
-                card = np.where(hits, drawn[:, j], 0)
-                r, a, c, used = r + card, a | (card == 1), c + hits, used + hits
-            self._streams.consume(peek, used)
-            raw[pending], ace[pending], cards[pending] = r, a, c
-            pending = pending[total(ARRAY, r, a.astype(bool)) < 17]
-        self._dealer[:, rows] = raw, ace, cards
-
     def _observe(self, rows: np.ndarray) -> None:
-        raw, ace = self._player[0, rows], self._player[1, rows].astype(bool)
+        raw, ace = self._p_raw[rows], self._p_ace[rows]
         self._obs[0][rows] = total(ARRAY, raw, ace)
         self._obs[1][rows] = self._first[rows]
         self._obs[2][rows] = usable_ace(raw, ace)
@@ -234,17 +224,42 @@ class BlackjackBatch(ToyTextBatch):
         hit = actions == 1
         hitters, stickers = rows[hit], rows[~hit]
         if len(hitters):
-            self._add(self._player, hitters, self._cards(hitters))
-            p = self._player[:, hitters]
-            bust = total(ARRAY, p[0], p[1].astype(bool)) > 21
+            card = _DECK.take(self._streams.bounded(hitters, 13))
+            raw = self._p_raw[hitters] + card
+            ace = self._p_ace[hitters] | (card == 1)
+            self._p_raw[hitters], self._p_ace[hitters] = raw, ace
+            self._p_cards[hitters] += 1
+            bust = total(ARRAY, raw, ace) > 21
             self._terminated[hitters] = bust
             self._reward[hitters] = np.where(bust, -1.0, 0.0)
         if len(stickers):
-            self._dealer_plays(stickers)
-            p, d = self._player[:, stickers], self._dealer[:, stickers]
-            player = (p[0], p[1].astype(bool), p[2])
-            dealer = (d[0], d[1].astype(bool), d[2])
+            dealer = self._dealer_plays(stickers)
+            player = (self._p_raw[stickers], self._p_ace[stickers], self._p_cards[stickers])
             self._reward[stickers] = settle(ARRAY, player, dealer, self.natural, self.sab)
             self._terminated[stickers] = True
         self._observe(rows)
         return self._reward, self._terminated
+
+    def _dealer_plays(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The dealer hits below 17; returns the final hands of ``rows``. Cards are read a
+        few at a time for all rows, then each row keeps the ones it drew: a loop over rounds
+        of cards, never over rows."""
+        raw, ace, cards = self._d_raw[rows], self._d_ace[rows], self._d_cards[rows]
+        pending = np.flatnonzero(total(ARRAY, raw, ace) < 17)  # positions in `rows`
+        while len(pending):
+            peek = self._streams.peek_bounded(rows[pending], 13, 4)
+            drawn = _DECK.take(peek.draws)  # [P, 4]
+            r, a = raw[pending], ace[pending]
+            taken = np.zeros(len(pending), dtype=np.int64)
+            for j in range(4):
+                hits = total(ARRAY, r, a) < 17
+                if not hits.any():
+                    break
+                card = np.where(hits, drawn[:, j], 0)
+                r, a, taken = r + card, a | (card == 1), taken + hits
+            self._streams.consume(peek, peek.values_for(taken))
+            raw[pending], ace[pending] = r, a
+            cards[pending] += taken
+            pending = pending[total(ARRAY, r, a) < 17]
+        self._d_raw[rows], self._d_ace[rows], self._d_cards[rows] = raw, ace, cards
+        return raw, ace, cards
