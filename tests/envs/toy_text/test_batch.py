@@ -242,7 +242,7 @@ def test_blackjack_slow_path_draws_the_same(monkeypatch: pytest.MonkeyPatch) -> 
     for _ in range(200):
         actions = rng.integers(0, 2, N)
         obs, reward, terminated = batch.step(actions, ended)
-        want = [env.reset() + (0.0, False) if ended[i] else env.step(int(actions[i]))
+        want = [(*env.reset(), 0.0, False) if ended[i] else env.step(int(actions[i]))
                 for i, env in enumerate(singles)]  # fmt: skip
         want = [(w[0], w[2], w[3]) if ended[i] else (w[0], w[1], w[2]) for i, w in enumerate(want)]
         assert _rows(obs) == [w[0] for w in want]
