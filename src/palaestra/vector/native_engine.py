@@ -96,7 +96,8 @@ class NativeEngine:
         self._infos = getattr(batch, "last_infos", None)  # None: the batch's infos are empty
 
     def reset(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> Infos:
-        """Re-sample the masked rows (all if None); classic-control resets have empty infos."""
+        """Re-sample the masked rows (all if None); infos from the batch (toy text's ``prob``),
+        or None (classic control's are empty)."""
         self.batch.reset(seed=seeds, options=options, mask=mask)
         if mask is None:
             self._reset_at[:] = self._steps

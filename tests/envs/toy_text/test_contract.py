@@ -151,3 +151,18 @@ def test_vector_render_mode_uses_real_envs(env_id: str) -> None:
     frames = envs.render()
     assert len(frames) == 2 and frames[0].shape == SIZES[env_id]
     envs.close()
+
+
+def test_a_single_env_does_not_load_the_vector_package() -> None:
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, palaestra\n"
+        "for i in ['FrozenLake-v1', 'Taxi-v4', 'CliffWalking-v1', 'Blackjack-v1']:\n"
+        "    palaestra.make(i).reset(seed=0)\n"
+        "print(sorted(m for m in ('palaestra.vector', 'multiprocessing', 'torch', 'pygame')"
+        " if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

@@ -240,7 +240,11 @@ class FrozenLakeEnv(TabularEnv):
 
 
 class FrozenLakeBatch(TabularBatch):
-    """N FrozenLakes (same arguments as the env, minus rendering) stepped as arrays."""
+    """N FrozenLakes (same arguments as the env, minus rendering) stepped as arrays.
+
+    All rows share one map: with ``desc=None, map_name=None`` that is one random map, where N
+    separate envs would each draw their own.
+    """
 
     def __init__(
         self,
