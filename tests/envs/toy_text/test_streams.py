@@ -83,3 +83,48 @@ def test_peek_then_consume_a_different_number_per_row(span: int) -> None:
                 int(r.integers(span)) for _ in range(taken[i])
             ]
         streams.consume(peek, peek.values_for(taken))
+
+
+@pytest.mark.parametrize("half_words_only", [False, True])
+def test_tiny_blocks_refill_often_and_stay_exact(
+    half_words_only: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from palaestra.envs.toy_text import _streams
+
+    monkeypatch.setattr(_streams, "_ROW_WORDS", (16, 16))  # a top-up every few draws
+    n = 4
+    cls = _streams.HalfWordStreams if half_words_only else RowStreams
+    rngs: list[np.random.Generator | None] = [np.random.default_rng(30 + i) for i in range(n)]
+    streams = cls(rngs)
+    assert streams.per == 16
+    streams.restart(np.arange(n))
+    refs = [np.random.default_rng(30 + i) for i in range(n)]
+    plan = np.random.default_rng(5)
+    for _ in range(2000):
+        rows = np.flatnonzero(plan.random(n) < 0.8)
+        kind = int(plan.integers(3 if half_words_only else 4))
+        if kind == 0:
+            np.testing.assert_array_equal(
+                streams.bounded(rows, 13), [refs[i].integers(13) for i in rows]
+            )
+        elif kind == 1:
+            peek = streams.peek_bounded(rows, 13, 4)
+            taken = plan.integers(0, 5, len(rows))
+            for j, i in enumerate(rows):
+                got = peek.draws[j, : taken[j]].tolist()
+                assert got == [int(refs[i].integers(13)) for _ in range(taken[j])]
+            streams.consume(peek, peek.values_for(taken))
+        elif kind == 2:
+            np.testing.assert_array_equal(
+                streams.bounded(rows, 3), [refs[i].choice(3) for i in rows]
+            )
+        else:
+            np.testing.assert_array_equal(streams.doubles(rows), [refs[i].random() for i in rows])
+
+
+def test_half_word_streams_refuse_doubles() -> None:
+    from palaestra.envs.toy_text._streams import HalfWordStreams
+
+    streams = HalfWordStreams([np.random.default_rng(0)])
+    with pytest.raises(TypeError, match="32-bit values only"):
+        streams.doubles(None)

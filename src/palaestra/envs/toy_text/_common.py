@@ -82,6 +82,7 @@ class ToyTextBatch:
 
     single_observation_space: Space[Any]
     single_action_space: Discrete
+    streams_class: ClassVar[type[RowStreams]] = RowStreams
     # Everything a step or reset changes (utils.run_state); subclasses extend it.
     RUN_STATE: ClassVar[tuple[str, ...]] = (
         "_rngs",
@@ -99,7 +100,7 @@ class ToyTextBatch:
         n = self.num_envs = int(num_envs)
         self._rngs: list[np.random.Generator | None] = [None] * n
         self.seeds: list[int | None] = [None] * n
-        self._streams = RowStreams(self._rngs)
+        self._streams = self.streams_class(self._rngs)
         self._needs_reset = np.ones(n, dtype=bool)  # [N]
         self._all_reset = False
         self._all = np.arange(n)  # [N] every row, for the streams' gathers

@@ -186,16 +186,72 @@ class RowStreams:
         return Peek(rows, full, offset, values)
 
     def _top_up(self) -> None:
-        """Refill every live row with half a block or less left; reset the budget."""
+        """Refill every live row with half a block or less left; reset the budget.
+
+        A row keeping a half-word keeps the word it came from too (``HalfWordStreams``
+        reads it there).
+        """
         per = self.per
         left = per - self._pos  # [N]
         for i in np.flatnonzero(self._live & (left <= per // 2)).tolist():
             rng = self._rngs[i]
             assert rng is not None
-            k = int(left[i])
+            back = int(self._has_half[i] and self._pos[i] > 0)
+            k = int(left[i]) + back  # words kept: the unused ones (and the half-used one)
             column = self._words[:, i]
-            column[:k] = column[per - k :]  # the unused words first (k <= per/2: no overlap)
+            column[:k] = column[per - k :].copy()  # to the front (k <= per/2 + 1)
             column[k:] = rng.bit_generator.random_raw(per - k)
-            self._pos[i] = 0
-            left[i] = per
+            self._pos[i] = back
+            left[i] = per - back
         self._budget = int(np.min(left, where=self._live, initial=per))
+
+
+class HalfWordStreams(RowStreams):
+    """Streams for a batch that draws only 32-bit values (Blackjack's cards).
+
+    Without ``random()`` draws in between, a kept half-word is always the high half of the
+    word before ``_pos``, so a row's place is one number, ``q = 2 * pos - has_half`` in
+    half-words, and reading the next values is a gather at ``q, q + 1, ...``: a few array
+    operations instead of the general bookkeeping.
+    """
+
+    def doubles(self, rows: np.ndarray | None) -> np.ndarray:
+        """Not available: a double between 32-bit draws breaks the half-word model."""
+        raise TypeError("HalfWordStreams draws 32-bit values only; use RowStreams")
+
+    def _place(self, rows: np.ndarray) -> np.ndarray:
+        return 2 * self._pos[rows] - self._has_half[rows]  # [R] half-words consumed
+
+    def _read(self, rows: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """The 32-bit values at half-word places ``q`` (``[R]`` or ``[R, W]``) of ``rows``."""
+        n = len(self._cols)
+        cols = rows if q.ndim == 1 else rows[:, None]
+        w = self._flat.take((q >> 1) * n + cols)
+        return (w >> ((q & 1) << 5).astype(np.uint64)) & _LOW32
+
+    def _advance(self, rows: np.ndarray, q: np.ndarray) -> None:
+        self._pos[rows] = (q + 1) >> 1
+        self._has_half[rows] = (q & 1).astype(bool)
+
+    def uint32(self, rows: np.ndarray) -> np.ndarray:
+        """The next 32-bit value of each of ``rows``: uint64 ``[R]``."""
+        if self._budget < 1:
+            self._top_up()
+        self._budget -= 1
+        q = self._place(rows)
+        out = self._read(rows, q)
+        self._advance(rows, q + 1)
+        return out
+
+    def _halves(self, rows: np.ndarray, window: int) -> Peek:
+        words = window // 2 + 1
+        if self._budget < words:
+            self._top_up()
+        self._budget -= words
+        q = self._place(rows)
+        values = self._read(rows, q[:, None] + np.arange(window))
+        return Peek(rows, values, q, values)  # `offset` holds each row's place
+
+    def consume(self, peek: Peek, used: np.ndarray) -> None:
+        """Advance each row of ``peek`` past its first ``used`` 32-bit values."""
+        self._advance(peek.rows, peek.offset + used)

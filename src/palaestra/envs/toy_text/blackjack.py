@@ -20,6 +20,7 @@ from palaestra import error
 from palaestra.envs.classic_control._common import check_discrete_action
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.toy_text._common import ToyTextBatch, ToyTextEnv
+from palaestra.envs.toy_text._streams import HalfWordStreams
 from palaestra.spaces import Discrete, Tuple
 
 DECK = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 10, 10, 10)  # ace, 2-10, jack, queen, king
@@ -150,6 +151,8 @@ class BlackjackEnv(ToyTextEnv):
 
 class BlackjackBatch(ToyTextBatch):
     """N Blackjack tables as arrays; the dealer's draws loop over rounds, never over rows."""
+
+    streams_class = HalfWordStreams  # cards, suits and faces: 32-bit draws only
 
     RUN_STATE = (
         *ToyTextBatch.RUN_STATE,
