@@ -137,18 +137,17 @@ class RowStreams:
         span = np.uint64(n)
         threshold = np.uint64((2**32 - n) % n)
         window = count + slack  # rejections: each about once in 2**32 / n draws
-        while True:
-            peek = self._halves(rows, window)
-            prod = peek.values * span  # [R, window]
-            if not threshold:
-                break
+        peek = self._halves(rows, window)
+        prod = peek.values * span  # [R, window]
+        if threshold and ((prod & _LOW32) < threshold).any():
+            # A rejected value in the window (rare): the c-th accepted draw's place in the
+            # sequence, by a stable sort that puts the accepted places first, in order.
             accepted = (prod & _LOW32) >= threshold
-            if (accepted.sum(axis=1) >= count).all():
-                break
-            window *= 2
-        if threshold and not accepted.all():
-            # The c-th accepted draw's place in the sequence: a stable sort puts the accepted
-            # places first, in order.
+            while (accepted.sum(axis=1) < count).any():
+                window *= 2
+                peek = self._halves(rows, window)
+                prod = peek.values * span
+                accepted = (prod & _LOW32) >= threshold
             order = np.argsort(~accepted, axis=1, kind="stable")[:, :count]
             peek.places = order
             prod = np.take_along_axis(prod, order, axis=1)
