@@ -1,9 +1,11 @@
-"""Steps per second of the built-in envs: palaestra vs Gymnasium, single and batched.
+"""Steps per second of the built-in envs (classic control, toy text, Box2D): palaestra vs
+Gymnasium, single and batched.
 
 Run from the repository root::
 
-    .venv/bin/python benchmarks/env_step.py            # full run (~2 minutes)
-    .venv/bin/python benchmarks/env_step.py --quick    # smoke run
+    .venv/bin/python benchmarks/env_step.py              # full run (~2 minutes)
+    .venv/bin/python benchmarks/env_step.py --quick      # smoke run
+    .venv/bin/python benchmarks/env_step.py --toy-text   # only the toy-text envs and batches
     .venv/bin/python benchmarks/env_step.py --ids LunarLander-v3   # some single envs only
 
 The Box2D ids (LunarLander, BipedalWalker) are measured when the ``box2d`` package is
@@ -33,6 +35,7 @@ import numpy as np
 
 import palaestra
 from palaestra.envs.classic_control import CartPoleBatch, MountainCarBatch
+from palaestra.envs.toy_text import BlackjackBatch, CliffWalkingBatch, FrozenLakeBatch, TaxiBatch
 
 IDS = [
     "CartPole-v0",
@@ -49,6 +52,16 @@ BOX2D_IDS = [
     "BipedalWalkerHardcore-v3",
 ]
 FRAME_IDS = ["CarRacing-v3"]  # observations are rendered frames: only with --ids
+TOY_TEXT_IDS = [
+    "FrozenLake-v1",
+    "FrozenLake8x8-v1",
+    "CliffWalking-v1",
+    "CliffWalkingSlippery-v1",
+    "Taxi-v4",
+    "Blackjack-v1",
+]
+CLASSIC_BATCHES = [MountainCarBatch, CartPoleBatch]
+TOY_TEXT_BATCHES = [FrozenLakeBatch, CliffWalkingBatch, TaxiBatch, BlackjackBatch]
 BATCH_SIZES = [1, 64, 1024, 16384]
 
 
@@ -88,7 +101,10 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=20_000)
     parser.add_argument("--quick", action="store_true", help="few steps, for a smoke test")
     parser.add_argument("--ids", nargs="+", help="only these single-env ids (no batched part)")
+    parser.add_argument("--toy-text", action="store_true", help="only the toy-text envs")
     args = parser.parse_args()
+    ids = TOY_TEXT_IDS if args.toy_text else IDS + TOY_TEXT_IDS
+    batches = TOY_TEXT_BATCHES if args.toy_text else CLASSIC_BATCHES + TOY_TEXT_BATCHES
     if args.quick:
         args.repeats, args.steps = 1, 500
     import gymnasium
@@ -97,7 +113,7 @@ def main() -> None:
 
     print(f"numpy {np.__version__}, gymnasium {gymnasium.__version__}, repeats {args.repeats}")
     print(f"{'env id':<26}{'palaestra':>12}{'gymnasium':>12}{'ratio':>8}   (steps/s)")
-    ids = IDS + (BOX2D_IDS if importlib.util.find_spec("Box2D") else [])
+    ids = ids + (BOX2D_IDS if importlib.util.find_spec("Box2D") and not args.toy_text else [])
     for env_id in args.ids or ids:
         space = gymnasium.make(env_id).action_space
         space.seed(0)
@@ -115,7 +131,7 @@ def main() -> None:
         return
 
     print(f"\n{'batched engine':<22}{'N':>7}{'step only':>16}{'with resets':>16}   (env-steps/s)")
-    for cls in (MountainCarBatch, CartPoleBatch):
+    for cls in batches:
         for num_envs in BATCH_SIZES:
             steps = max(20, min(2000, 400_000 // num_envs)) if not args.quick else 10
             rates = {}

@@ -5,8 +5,10 @@ Run from the repository root::
     .venv/bin/python benchmarks/vector_step.py           # full run (a few minutes)
     .venv/bin/python benchmarks/vector_step.py --quick   # smoke run
     .venv/bin/python benchmarks/vector_step.py --env CartPole-v1 --sizes 1024 --no-processes --us
+    .venv/bin/python benchmarks/vector_step.py --toy-text --sizes 1024 --no-processes --us
 
-For MountainCar-v0 and CartPole-v1 at 8, 64, 1024 and 16384 envs, in one process:
+For MountainCar-v0 and CartPole-v1 at 8, 64, 1024 and 16384 envs (the toy-text ids with
+``--toy-text``: FrozenLake-v1, CliffWalking-v1, Taxi-v4, Blackjack-v1), in one process:
 
 * palaestra native: ``palaestra.make_vec(id, n)`` (the native batch, Gymnasium API, copy=True);
 * palaestra native, SB3 API: ``palaestra.vec_env.make_vec_env(id, n)`` (the batch under a
@@ -36,6 +38,7 @@ import numpy as np
 
 SIZES = [8, 64, 1024, 16384]
 IDS = ["MountainCar-v0", "CartPole-v1"]
+TOY_TEXT_IDS = ["FrozenLake-v1", "CliffWalking-v1", "Taxi-v4", "Blackjack-v1"]
 
 
 def _rate(
@@ -156,7 +159,10 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="short runs, sizes 8 and 1024")
     parser.add_argument("--seconds", type=float, default=0.4)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--env", action="append", choices=IDS, help="only this id (repeatable)")
+    parser.add_argument(
+        "--env", action="append", choices=IDS + TOY_TEXT_IDS, help="only this id (repeatable)"
+    )
+    parser.add_argument("--toy-text", action="store_true", help="the toy-text ids instead")
     parser.add_argument("--sizes", help="comma-separated numbers of envs, e.g. 1024")
     parser.add_argument(
         "--no-processes", action="store_true", help="skip the process-based table (8 envs)"
@@ -170,7 +176,7 @@ def main() -> None:
         args.seconds, args.repeats, sizes = 0.05, 1, [8, 1024]
     if args.sizes:
         sizes = [int(n) for n in args.sizes.split(",")]
-    ids = args.env or IDS
+    ids = args.env or (TOY_TEXT_IDS if args.toy_text else IDS)
     warnings.filterwarnings("ignore")
 
     extra = " native µs/step | gymnasium µs/step |" if args.us else ""

@@ -115,8 +115,10 @@ def _bad(tmp_path: Path) -> dict[str, tuple[list[object], int, str | re.Pattern[
         "unknown preset": (["train", "ppo", "CartPole-v1", "--preset", "fast"], 2, re.compile(
             re.escape(e + "no ppo preset named 'fast' for CartPole-v1; choose from [")
             + ".*'default'.*" + re.escape("] (pick another --preset, or drop it)"))),
+        # (Taxi is registered since the toy-text envs: an unknown version of it.)
         "no preset for env": (["train", "ppo", "Taxi-v9", "--preset", "default"], 2,
-                              e + "Environment `Taxi` doesn't exist. "
+                              e + "Environment version `v9` for environment `Taxi` doesn't exist. "
+                              "It provides versioned environments: [ `v4` ]. "
                               "(run `palaestra envs` to list the ids)"),
         "no preset for algo/env": (["train", "dqn", "Pendulum-v1", "--preset", "x"], 2,
             re.compile(re.escape(e + "no dqn preset for env 'Pendulum-v1'; dqn presets exist for [")

@@ -113,3 +113,17 @@ def test_reaching_arm_passes_check_env_and_rewards_reaching() -> None:
     _, reward, terminated, truncated, info = env.step(np.zeros(3, np.float32))
     assert terminated and not truncated and info["is_success"]
     assert reward == pytest.approx(1.0 - 0.02)
+
+
+def test_tabular_q_learning(tmp_path: Path) -> None:
+    from PIL import Image
+
+    out = run_example("tabular_q_learning.py", "--out", tmp_path)
+    for env_id in ("FrozenLake-v1", "Taxi-v4"):
+        head = rf"^{env_id}: trained on [\d,]+ steps \(64 envs\) in {NUMBER} s, [\d,]+ episodes$"
+        assert re.search(head, out, re.M), out
+    # Seeded, so the figures are fixed; the exact expected returns come from the P tables.
+    assert re.search(r"expected 0\.7\d\d \(optimum 0\.744, threshold 0\.7\): solved", out), out
+    assert re.search(r"expected 7\.930 \(optimum 7\.930, threshold 8\): solved", out), out
+    with Image.open(tmp_path / "learning_curves.png") as png:
+        assert png.format == "PNG" and png.size[0] > 500

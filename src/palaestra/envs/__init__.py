@@ -87,6 +87,50 @@ for _id, _kwargs in _BOX2D.items():
     if _id not in registry:
         register(id=_id, **_kwargs)
 
+# Toy text: Gymnasium 1.4's ids, kwargs, limits and thresholds. Older versions (Taxi-v3,
+# CliffWalking-v0, FrozenLake-v0, Blackjack-v0) are not registered, as in Gymnasium: making one
+# raises DeprecatedEnv naming the current version.
+_TT = "palaestra.envs.toy_text"
+_TOY_TEXT: dict[str, dict] = {
+    "Blackjack-v1": dict(
+        vector_entry_point="palaestra.vector.native:blackjack",
+        entry_point=f"{_TT}.blackjack:BlackjackEnv",
+        kwargs={"sab": True, "natural": False},
+    ),
+    "FrozenLake-v1": dict(
+        vector_entry_point="palaestra.vector.native:frozen_lake",
+        entry_point=f"{_TT}.frozen_lake:FrozenLakeEnv",
+        kwargs={"map_name": "4x4"},
+        max_episode_steps=100,
+        reward_threshold=0.70,  # optimum 0.74
+    ),
+    "FrozenLake8x8-v1": dict(
+        vector_entry_point="palaestra.vector.native:frozen_lake",
+        entry_point=f"{_TT}.frozen_lake:FrozenLakeEnv",
+        kwargs={"map_name": "8x8"},
+        max_episode_steps=200,
+        reward_threshold=0.85,  # optimum 0.91
+    ),
+    "CliffWalking-v1": dict(
+        vector_entry_point="palaestra.vector.native:cliff_walking",
+        entry_point=f"{_TT}.cliffwalking:CliffWalkingEnv",
+    ),
+    "CliffWalkingSlippery-v1": dict(
+        vector_entry_point="palaestra.vector.native:cliff_walking",
+        entry_point=f"{_TT}.cliffwalking:CliffWalkingEnv",
+        kwargs={"is_slippery": True},
+    ),
+    "Taxi-v4": dict(
+        vector_entry_point="palaestra.vector.native:taxi",
+        entry_point=f"{_TT}.taxi:TaxiEnv",
+        max_episode_steps=200,
+        reward_threshold=8,  # optimum 8.46
+    ),
+}
+for _id, _kwargs in _TOY_TEXT.items():
+    if _id not in registry:
+        register(id=_id, **_kwargs)
+
 # Atari: every id ale-py registers for v5, plus the NoFrameskip-v4 ids of SB3/RL-Zoo pipelines,
 # from a static game list so that this import does not load ale-py.
 for _id, _kwargs in atari_specs().items():

@@ -24,8 +24,8 @@ from palaestra.vector.native_engine import NativeEngine
 from palaestra.vector.process_engine import ProcessEngine
 from palaestra.vector.vector_env import AutoresetMode
 
-if TYPE_CHECKING:  # the classic-control modules load only when a batch is made
-    from palaestra.envs.classic_control.batched import BatchedEnv
+if TYPE_CHECKING:  # the env modules load only when a batch is made
+    from palaestra.vector.native_engine import NativeBatch
 
 __all__ = ["BatchedVecEnv", "DummyVecEnv", "EngineVecEnv", "SubprocVecEnv"]
 
@@ -195,11 +195,11 @@ class SubprocVecEnv(EngineVecEnv):
 
 class BatchedVecEnv(EngineVecEnv):
     """A built-in env's native batch with SB3's API: what ``make_vec_env`` returns for the
-    classic-control ids (no Python loop over envs per step)."""
+    classic-control and toy-text ids (no Python loop over envs per step)."""
 
     def __init__(
         self,
-        batch: BatchedEnv,
+        batch: NativeBatch,
         max_episode_steps: int | None = None,
         metadata: dict[str, Any] | None = None,
     ) -> None:

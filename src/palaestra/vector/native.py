@@ -4,6 +4,9 @@
 steps all ``n`` envs with one array op each and matches ``n`` single envs row for row: row i
 of ``reset(seed=s)`` is the env ``make(id)`` reset with ``seed=s + i``. Batches do not draw, so
 with a ``render_mode`` the entry points return a ``SyncVectorEnv`` of real envs instead.
+
+The toy-text batches (FrozenLake, CliffWalking, Taxi, Blackjack) plug in the same way; they
+also report infos (``prob``, Taxi's ``action_mask``) as arrays.
 """
 
 from __future__ import annotations
@@ -14,16 +17,20 @@ from palaestra.vector.engine_env import EngineVectorEnv
 from palaestra.vector.native_engine import NativeEngine
 from palaestra.vector.vector_env import AutoresetMode
 
-if TYPE_CHECKING:  # the classic-control modules load only when a batch is made
-    from palaestra.envs.classic_control.batched import BatchedEnv
+if TYPE_CHECKING:  # the env modules load only when a batch is made
+    from palaestra.vector.native_engine import NativeBatch
 
 __all__ = [
     "BatchedVectorEnv",
     "acrobot",
+    "blackjack",
     "cartpole",
+    "cliff_walking",
     "continuous_mountain_car",
+    "frozen_lake",
     "mountain_car",
     "pendulum",
+    "taxi",
 ]
 
 
@@ -41,7 +48,7 @@ class BatchedVectorEnv(EngineVectorEnv):
 
     def __init__(
         self,
-        batch: BatchedEnv,
+        batch: NativeBatch,
         max_episode_steps: int | None = None,
         copy: bool = True,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
@@ -60,6 +67,13 @@ def _make(
     vector_kwargs: dict[str, Any],
     env_kwargs: dict[str, Any],
 ) -> EngineVectorEnv:
+    if kind in _TOY_TEXT:
+        from palaestra.envs import toy_text as tt
+
+        batch_cls, env_cls = (getattr(tt, name) for name in _TOY_TEXT[kind])
+        return _build(
+            batch_cls, env_cls, num_envs, max_episode_steps, render_mode, vector_kwargs, env_kwargs
+        )
     from palaestra.envs import classic_control as cc
 
     classes: dict[str, tuple[Any, Any]] = {
@@ -73,6 +87,29 @@ def _make(
         "acrobot": (cc.AcrobotBatch, cc.AcrobotEnv),
     }
     batch_cls, env_cls = classes[kind]
+    return _build(
+        batch_cls, env_cls, num_envs, max_episode_steps, render_mode, vector_kwargs, env_kwargs
+    )
+
+
+# kind -> (batch class, env class) in palaestra.envs.toy_text
+_TOY_TEXT = {
+    "frozen_lake": ("FrozenLakeBatch", "FrozenLakeEnv"),
+    "cliff_walking": ("CliffWalkingBatch", "CliffWalkingEnv"),
+    "taxi": ("TaxiBatch", "TaxiEnv"),
+    "blackjack": ("BlackjackBatch", "BlackjackEnv"),
+}
+
+
+def _build(
+    batch_cls: Any,
+    env_cls: Any,
+    num_envs: int,
+    max_episode_steps: int | None,
+    render_mode: str | None,
+    vector_kwargs: dict[str, Any],
+    env_kwargs: dict[str, Any],
+) -> EngineVectorEnv:
     if render_mode is not None:
         # Native batches do not draw: envs that must render run as real envs, in a loop.
         return _rendering_envs(
@@ -122,3 +159,7 @@ mountain_car = _entry_point("mountain_car")
 continuous_mountain_car = _entry_point("continuous_mountain_car")
 pendulum = _entry_point("pendulum")
 acrobot = _entry_point("acrobot")
+frozen_lake = _entry_point("frozen_lake")
+cliff_walking = _entry_point("cliff_walking")
+taxi = _entry_point("taxi")
+blackjack = _entry_point("blackjack")

@@ -10,15 +10,36 @@ what a single env seeded ``s + i`` draws).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
+from palaestra.spaces import Space
 from palaestra.spaces.batching import batch_space
 from palaestra.vector.engine import Infos, Rows, StepResult
 
-if TYPE_CHECKING:  # the classic-control modules load only when a batch is made
-    from palaestra.envs.classic_control.batched import BatchedEnv
+
+class NativeBatch(Protocol):
+    """What the engine needs of a batch (classic control's ``BatchedEnv``, toy text's).
+
+    A batch may also have ``last_infos() -> Infos``: the infos of its last reset or step
+    (toy text's ``prob``); without it every info is empty.
+    """
+
+    num_envs: int
+    single_observation_space: Space[Any]
+    single_action_space: Space[Any]
+    seeds: list[int | None]
+    _rngs: list[np.random.Generator | None]
+    _obs: Any
+
+    def reset(self, *, seed: Any = None, options: Any = None, mask: Any = None) -> Any:
+        """Re-sample the masked rows (all if None)."""
+        ...
+
+    def step(self, actions: Any, reset_mask: np.ndarray | None = None) -> tuple[Any, Any, Any]:
+        """Step every row (reset those in ``reset_mask``): ``(obs, reward, terminated)``."""
+        ...
 
 
 class NativeEngine:
@@ -39,7 +60,7 @@ class NativeEngine:
 
     def __init__(
         self,
-        batch: BatchedEnv,
+        batch: NativeBatch,
         max_episode_steps: int | None,
         metadata: dict[str, Any] | None = None,
     ) -> None:
@@ -72,15 +93,17 @@ class NativeEngine:
         # No time limit: truncation never happens, so the array stays all False.
         self._sent: tuple[Any, np.ndarray | None] = (None, None)
         self._limit = max_episode_steps
+        self._infos = getattr(batch, "last_infos", None)  # None: the batch's infos are empty
 
     def reset(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> Infos:
-        """Re-sample the masked rows (all if None); classic-control resets have empty infos."""
+        """Re-sample the masked rows (all if None); infos from the batch (toy text's ``prob``),
+        or None (classic control's are empty)."""
         self.batch.reset(seed=seeds, options=options, mask=mask)
         if mask is None:
             self._reset_at[:] = self._steps
         else:
             self._reset_at[mask] = self._steps
-        return None
+        return None if self._infos is None else self._infos()
 
     def step_send(self, actions: Any, reset_mask: np.ndarray | None) -> None:
         """Remember the actions; the array step runs in :meth:`step_recv`."""
@@ -90,8 +113,9 @@ class NativeEngine:
         """One array step for every row; rows in the reset mask are then re-sampled."""
         actions, reset_mask = self._sent
         self._sent = (None, None)
-        # The masked rows also step: harmless, since a step draws no random numbers and the
-        # reset overwrites the whole row state. The batch does both and writes obs once.
+        # Classic control: the masked rows also step, harmless since a step draws no random
+        # numbers and the reset overwrites the whole row state; toy text skips them (its
+        # steps draw). The batch does both and writes obs once.
         _, reward, terminated = self.batch.step(actions, reset_mask)
         # The batch reuses its reward/terminated arrays (MountainCar's reward is a constant):
         # copy into ours so callers may overwrite entries.
@@ -111,7 +135,8 @@ class NativeEngine:
             self._reset_at[reset_mask] = self._steps
         if compared:
             self._oldest = int(np.minimum.reduce(self._reset_at))
-        return self._rewards, self._terminated, self._truncated, None
+        infos = None if self._infos is None else self._infos()
+        return self._rewards, self._terminated, self._truncated, infos
 
     def call(
         self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any], rows: Rows = None

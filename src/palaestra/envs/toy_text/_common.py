@@ -1,0 +1,205 @@
+"""What every toy-text env shares: render modes (ansi, rgb_array, human) and the batch base.
+
+The batch base owns the rows' generators, their pre-drawn streams (:mod:`._streams`), the
+never-reset check and seeding; a subclass says how rows reset and how the batch steps. Row
+``i`` reset with ``seed=s`` uses ``np.random.default_rng(s + i)``, so it draws exactly what a
+single env reset with ``seed=s + i`` draws.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from palaestra import error, logger
+from palaestra.core import Env
+from palaestra.envs.classic_control._common import check_discrete_batch
+from palaestra.envs.toy_text._streams import RowStreams
+from palaestra.spaces import Discrete, Space
+from palaestra.utils.seeding import np_random
+
+
+class ToyTextEnv(Env[Any, Any]):
+    """Render-mode handling for the single toy-text envs.
+
+    Subclasses implement ``_frame()`` (an ``rgb_array`` picture) and, where Gymnasium has
+    one, ``_text()`` (the ``ansi`` string).
+    """
+
+    _window: Any = None
+
+    def _init_render(self, render_mode: str | None) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise error.UnsupportedMode(
+                f"render_mode={render_mode!r} is not one of {self.metadata['render_modes']}"
+            )
+        self.render_mode = render_mode
+
+    def _frame(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def _text(self) -> str:
+        raise NotImplementedError
+
+    def render(self) -> Any:
+        """The frame (``rgb_array``), the text (``ansi``), or show the frame (``human``)."""
+        if self.render_mode is None:
+            name = self.spec.id if self.spec is not None else type(self).__name__
+            logger.warn(
+                "You are calling render method without specifying any render mode. "
+                "You can specify the render_mode at initialization, "
+                f'e.g. gym.make("{name}", render_mode="rgb_array")'
+            )
+            return None
+        if self.render_mode == "ansi":
+            return self._text()
+        frame = self._frame()
+        if self.render_mode == "rgb_array":
+            return frame
+        if self._window is None:  # created lazily: rgb_array users never need a display
+            from palaestra.rendering.window import HumanWindow
+
+            title = self.spec.id if self.spec is not None else type(self).__name__
+            self._window = HumanWindow(title, self.metadata["render_fps"])
+        self._window.show(frame)
+        return None
+
+    def close(self) -> None:
+        """Close the human-mode window if one was opened."""
+        if self._window is not None:
+            self._window.close()
+            self._window = None
+
+
+class ToyTextBatch:
+    """``num_envs`` toy-text envs of one kind as arrays; subclasses fill in the parts.
+
+    ``_obs`` is the batched observation (rewritten in place); ``last_infos()`` gives the infos
+    of the last reset or step, one array per key (or None when every info is empty).
+    """
+
+    single_observation_space: Space[Any]
+    single_action_space: Discrete
+    streams_class: ClassVar[type[RowStreams]] = RowStreams
+    # Everything a step or reset changes (utils.run_state); subclasses extend it.
+    RUN_STATE: ClassVar[tuple[str, ...]] = (
+        "_rngs",
+        "seeds",
+        "_streams",
+        "_needs_reset",
+        "_all_reset",
+    )
+
+    def __init__(self, num_envs: int) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
+            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        n = self.num_envs = int(num_envs)
+        self._rngs: list[np.random.Generator | None] = [None] * n
+        self.seeds: list[int | None] = [None] * n
+        self._streams = self.streams_class(self._rngs)
+        self._needs_reset = np.ones(n, dtype=bool)  # [N]
+        self._all_reset = False
+        self._all = np.arange(n)  # [N] every row, for the streams' gathers
+        self._infos: Any = None
+
+    def _row_seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
+        if seed is None:
+            return [None] * self.num_envs
+        if isinstance(seed, (int, np.integer)):
+            return [int(seed) + i for i in range(self.num_envs)]
+        seeds = list(seed)
+        if len(seeds) != self.num_envs:
+            raise ValueError(f"Expected {self.num_envs} seeds, got {len(seeds)}")
+        return seeds
+
+    def reset(
+        self,
+        *,
+        seed: int | Sequence[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+        mask: np.ndarray | None = None,
+    ) -> Any:
+        """Re-sample the rows selected by ``mask`` (all by default); return the observations.
+
+        ``seed`` is an int (row i gets ``seed + i``) or one seed per row; rows whose seed is
+        None keep their generator. Toy-text envs take no reset options (Gymnasium ignores
+        them). The returned arrays are reused by the next call: copy them to keep them.
+        """
+        if mask is None:
+            rows = self._all
+        else:
+            mask = np.asarray(mask)
+            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
+                raise ValueError(f"mask must be a bool array of shape ({self.num_envs},)")
+            rows = mask.nonzero()[0]
+        seeds = self._row_seeds(seed)
+        fresh = [
+            i for i in rows.tolist() if seeds[i] is not None or self._rngs[i] is None
+        ]  # rows that get a new generator
+        for i in fresh:
+            self._rngs[i], self.seeds[i] = np_random(seeds[i])
+        if fresh:
+            self._streams.restart(np.array(fresh, dtype=np.intp))
+        self._needs_reset[rows] = False
+        self._all_reset = not self._needs_reset.any()  # only ever turns True
+        self._infos = self._reset_rows(rows, None if mask is None else mask)
+        return self._obs
+
+    def step(self, actions: Any, reset_mask: np.ndarray | None = None) -> tuple[Any, Any, Any]:
+        """Step every row: ``(obs, reward [N] float64, terminated [N] bool)``.
+
+        Rows in ``reset_mask`` are reset instead of stepped (they draw what a reset draws,
+        nothing for a step); their reward is 0 and terminated False. The returned arrays are
+        reused by the next call: copy them to keep them.
+        """
+        if not self._all_reset and self._needs_reset.any():
+            rows = np.flatnonzero(self._needs_reset)[:10].tolist()
+            raise error.ResetNeeded(f"Rows {rows} were never reset; call reset() before step().")
+        act = check_discrete_batch(actions, self.single_action_space, self.num_envs)
+        if reset_mask is None:
+            stepping, resetting = self._all, None
+        else:
+            mask = np.asarray(reset_mask)
+            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
+                raise ValueError(f"reset_mask must be a bool array of shape ({self.num_envs},)")
+            stepping, resetting = (~mask).nonzero()[0], mask
+        reward, terminated = self._step_rows(stepping, act[stepping])
+        step_infos = self._infos = self._step_infos(stepping)
+        if resetting is not None:
+            rows = resetting.nonzero()[0]
+            reward[rows] = 0.0
+            terminated[rows] = False
+            reset_infos = self._reset_rows(rows, resetting)
+            self._infos = self._merge_infos(step_infos, reset_infos, resetting)
+        return self._obs, reward, terminated
+
+    def last_infos(self) -> Any:
+        """The infos of the last reset or step (a ``StackedInfos``), or None if all empty."""
+        return self._infos
+
+    # -- per-env parts ----------------------------------------------------------------------
+    _obs: Any
+
+    def _reset_rows(self, rows: np.ndarray, mask: np.ndarray | None) -> Any:
+        """Draw initial states for ``rows``; write their obs; return the reset infos."""
+        raise NotImplementedError
+
+    def _step_rows(self, rows: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Step ``rows`` with their actions; write their obs; return ``(reward, terminated)``
+        as ``[N]`` arrays (entries of other rows are overwritten by the caller)."""
+        raise NotImplementedError
+
+    def _step_infos(self, rows: np.ndarray) -> Any:
+        """The step infos of ``rows`` (every row, or all but the ones being reset)."""
+        return None
+
+    def _merge_infos(self, step_infos: Any, reset_infos: Any, resetting: np.ndarray) -> Any:
+        """One info per row: reset infos for the rows in ``resetting``, step infos elsewhere."""
+        return None
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(num_envs={self.num_envs})"
