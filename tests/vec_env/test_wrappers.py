@@ -185,6 +185,12 @@ def test_vec_monitor_writes_episodes(tmp_path):
                 assert info["episode"]["r"] == info["episode"]["l"]
     venv.close()
     assert episodes >= 2
-    (path,) = get_monitor_files(str(tmp_path))
-    header, columns = read_monitor_file(path)
-    assert header["env_id"] == "CartPole-v1" and len(columns["r"]) == episodes
+    # One file per env, as SB3's Monitor per env writes (0.monitor.csv, 1.monitor.csv).
+    paths = sorted(get_monitor_files(str(tmp_path)))
+    assert [p.rsplit("/", 1)[1] for p in paths] == ["0.monitor.csv", "1.monitor.csv"]
+    total = 0
+    for path in paths:
+        header, columns = read_monitor_file(path)
+        assert header["env_id"] == "CartPole-v1"
+        total += len(columns["r"])
+    assert total == episodes

@@ -11,6 +11,12 @@ from palaestra.vec_env.env_util import make_atari_env, make_vec_env
 from palaestra.vec_env.image import VecFrameStack, VecTransposeImage
 from palaestra.vec_env.monitor import VecMonitor
 from palaestra.vec_env.normalize import VecNormalize
+from palaestra.vec_env.util import (
+    is_vecenv_wrapped,
+    sync_envs_normalization,
+    unwrap_vec_normalize,
+    unwrap_vec_wrapper,
+)
 
 __all__ = [
     "AtariVecEnv",
@@ -23,6 +29,10 @@ __all__ = [
     "VecMonitor",
     "VecNormalize",
     "VecTransposeImage",
+    "is_vecenv_wrapped",
     "make_atari_env",
     "make_vec_env",
+    "sync_envs_normalization",
+    "unwrap_vec_normalize",
+    "unwrap_vec_wrapper",
 ]

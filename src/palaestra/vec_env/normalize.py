@@ -100,11 +100,13 @@ class VecNormalize(VecEnvWrapper):
         return np.clip(scaled, -self.clip_obs, self.clip_obs).astype(np.float32)
 
     def normalize_reward(self, reward: np.ndarray) -> np.ndarray:
-        """``clip(reward / sqrt(return var + eps), ±clip_reward)`` (if ``norm_reward``)."""
-        if not self.norm_reward:
-            return reward
-        scaled = reward / np.sqrt(self.ret_rms.var + self.epsilon)
-        return np.clip(scaled, -self.clip_reward, self.clip_reward)
+        """``clip(reward / sqrt(return var + eps), ±clip_reward)`` (if ``norm_reward``), as
+        float32 either way: SB3 casts (the statistics are float64, rewards float32)."""
+        if self.norm_reward:
+            reward = np.clip(
+                reward / np.sqrt(self.ret_rms.var + self.epsilon), -self.clip_reward, self.clip_reward
+            )
+        return reward.astype(np.float32)
 
     def unnormalize_obs(self, obs: Any) -> Any:
         """Invert :meth:`normalize_obs` (up to clipping)."""

@@ -239,7 +239,10 @@ class LoopEngine:
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
         for i, env in enumerate(self.envs):
             if mask is None or mask[i]:
-                self._env_obs[i], infos[i] = env.reset(seed=seeds[i], options=options)
+                # `options` only when there are some: SB3 calls reset(seed=...) alone, and
+                # envs written for it may take no `options`.
+                extra = {} if options is None else {"options": options}
+                self._env_obs[i], infos[i] = env.reset(seed=seeds[i], **extra)
         self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
         return infos
 
