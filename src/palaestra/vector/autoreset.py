@@ -68,12 +68,19 @@ def take_rows(space: Any, obs: Any, rows: np.ndarray) -> list[Any]:
     ]
 
 
+def copy_obs(item: Any) -> Any:
+    """A copy of one observation that keeps its types (arrays, dicts, tuples, NamedTuples)."""
+    return _copy_obs(item)
+
+
 def _copy_obs(item: Any) -> Any:
     if isinstance(item, np.ndarray):
         return item.copy()
     if isinstance(item, dict):
         return {k: _copy_obs(v) for k, v in item.items()}
     if isinstance(item, tuple):
+        if hasattr(item, "_fields"):  # a NamedTuple such as GraphInstance keeps its type
+            return type(item)(*(_copy_obs(v) for v in item))
         return tuple(_copy_obs(v) for v in item)
     return item
 
@@ -174,7 +181,12 @@ class Autoresetter:
         if not done.any():
             return Transition(engine.obs, rewards, terminated, truncated, infos, None, None, None)
         final_rows = np.flatnonzero(done)
-        final_obs = take_rows(engine.observation_space, engine.obs, final_rows)
+        # The env's own objects where the engine kept them (as Gymnasium hands on what the
+        # sub-env returned: a GraphInstance, a Python int), rows of the batch otherwise.
+        own: Any = getattr(engine, "final_observations", None)
+        final_obs = own(final_rows) if own is not None else None
+        if final_obs is None:
+            final_obs = take_rows(engine.observation_space, engine.obs, final_rows)
         final_infos = (
             [{} for _ in final_rows] if infos is None else [infos[i] for i in final_rows.tolist()]
         )

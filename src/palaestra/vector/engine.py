@@ -272,6 +272,13 @@ class LoopEngine:
         self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
         return self._rewards, self._terminated, self._truncated, infos
 
+    def final_observations(self, rows: np.ndarray) -> list[Any]:
+        """Copies of the observations the sub-envs in ``rows`` returned from their last step
+        (read before autoreset replaces them)."""
+        from palaestra.vector.autoreset import copy_obs  # autoreset imports this module
+
+        return [copy_obs(self._env_obs[i]) for i in rows.tolist()]
+
     def _targets(self, rows: Rows) -> list[Env[Any, Any]]:
         return self.envs if rows is None else [self.envs[i] for i in rows]
 

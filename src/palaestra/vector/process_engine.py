@@ -373,6 +373,13 @@ class ProcessEngine:
             self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
         return self._rewards, self._terminated, self._truncated, infos
 
+    def final_observations(self, rows: np.ndarray) -> list[Any] | None:
+        """The observations the workers in ``rows`` sent from their last step (unpickled, so
+        already copies); None with shared memory, where only the batch holds them."""
+        if self.shared:
+            return None
+        return [self._env_obs[i] for i in rows.tolist()]
+
     def call(
         self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any], rows: Rows = None
     ) -> tuple[Any, ...]:
