@@ -233,3 +233,40 @@ def test_sync_envs_normalization_copies_statistics():
     assert evaluation.ret_rms.var == train.ret_rms.var
     with pytest.raises(AssertionError, match="expected the eval env to be a VecNormalize"):
         sync_envs_normalization(train, VecMonitor(DummyVecEnv([lambda: gym.make("CartPole-v1")])))
+
+
+def test_render_with_another_mode_warns_and_returns_none_as_sb3():
+    ours = DummyVecEnv([lambda: gym.make("CartPole-v1", render_mode="rgb_array")])
+    theirs = sb3.DummyVecEnv([lambda: gymnasium.make("CartPole-v1", render_mode="rgb_array")])
+    ours.reset(), theirs.reset()
+    for venv in (ours, theirs):
+        with pytest.warns(UserWarning, match=r"the mode \(depth\)\s+has to be the same"):
+            assert venv.render(mode="depth") is None
+    assert ours.render().shape == theirs.render().shape == (400, 600, 3)
+    plain = DummyVecEnv([lambda: gym.make("CartPole-v1")])
+    with pytest.warns(UserWarning, match="mode='human' but the render mode"):
+        assert plain.render(mode="human") is None
+    with pytest.warns(UserWarning, match="no `render_mode` was passed"):
+        assert plain.render() is None
+
+
+def test_vec_monitor_over_monitored_envs_warns_as_sb3():
+    with pytest.warns(UserWarning, match="already wrapped with a `Monitor` wrapper"):
+        sb3.VecMonitor(sb3_util.make_vec_env("CartPole-v1", n_envs=1))
+    with pytest.warns(UserWarning, match="already wrapped with a `Monitor` wrapper"):
+        VecMonitor(make_vec_env("CartPole-v1", n_envs=1, wrapper_class=lambda env: env))
+
+
+def test_vec_monitor_over_a_native_batch_does_not_warn(recwarn):
+    VecMonitor(make_vec_env("CartPole-v1", n_envs=2).venv)
+    assert not [w for w in recwarn if "Monitor" in str(w.message)]
+
+
+def test_loading_an_sb3_vec_normalize_pickle_says_what_palaestra_reads(tmp_path):
+    from palaestra.algos.model_io import ModelFileError
+
+    path = tmp_path / "vecnormalize.pkl"
+    sb3.VecNormalize(sb3.DummyVecEnv([lambda: gymnasium.make("CartPole-v1")])).save(str(path))
+    with pytest.raises(ModelFileError, match="is a pickle .*reads only the .npz file") as info:
+        VecNormalize.load(str(path), make_vec_env("CartPole-v1"))
+    assert "allow_pickle" not in str(info.value)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -30,6 +31,21 @@ class VecMonitor(VecEnvWrapper):
         self, venv: VecEnv, filename: str | None = None, info_keywords: tuple[str, ...] = ()
     ) -> None:
         super().__init__(venv)
+        from palaestra.wrappers.monitor import Monitor
+
+        try:
+            monitored = venv.env_is_wrapped(Monitor)[0]
+        except (AttributeError, NotImplementedError):
+            monitored = False
+        if monitored:
+            # SB3's warning: each episode would be counted (and logged) twice.
+            warnings.warn(
+                "The environment is already wrapped with a `Monitor` wrapper but you are "
+                "wrapping it with a `VecMonitor` wrapper, the `Monitor` statistics will be "
+                "overwritten by the `VecMonitor` ones.",
+                UserWarning,
+                stacklevel=2,
+            )
         self.t_start = time.time()
         self.info_keywords = info_keywords
         self.episode_count = 0
