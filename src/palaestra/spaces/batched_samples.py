@@ -27,6 +27,7 @@ from palaestra.spaces.sequence import Sequence
 from palaestra.spaces.space import Space
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
+from palaestra.spaces.space import foreign_space_hint
 
 __all__ = ["concatenate", "create_empty_array", "iterate"]
 
@@ -46,7 +47,7 @@ def iterate(space: Space[Any], items: Any) -> Iterator[Any]:
         )
     raise TypeError(
         "The space provided to `iterate` is not a palaestra Space instance, "
-        f"type: {type(space)}, {space}"
+        f"type: {type(space)}, {space}" + foreign_space_hint(space)
     )
 
 
@@ -100,7 +101,7 @@ def concatenate(space: Space[Any], items: Iterable[Any], out: Any) -> Any:
     """
     raise TypeError(
         "The space provided to `concatenate` is not a palaestra Space instance, "
-        f"type: {type(space)}, {space}"
+        f"type: {type(space)}, {space}" + foreign_space_hint(space)
     )
 
 
@@ -145,7 +146,7 @@ def create_empty_array(space: Space[Any], n: int = 1, fn: Callable[..., Any] = n
     """
     raise TypeError(
         "The space provided to `create_empty_array` is not a palaestra Space instance, "
-        f"type: {type(space)}, {space}"
+        f"type: {type(space)}, {space}" + foreign_space_hint(space)
     )
 
 

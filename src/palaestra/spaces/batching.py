@@ -29,6 +29,7 @@ from palaestra.spaces.sequence import Sequence
 from palaestra.spaces.space import Space
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
+from palaestra.spaces.space import foreign_space_hint
 
 __all__ = ["batch_differing_spaces", "batch_space", "concatenate", "create_empty_array", "iterate"]
 
@@ -44,7 +45,7 @@ def batch_space(space: Space[Any], n: int = 1) -> Space[Any]:
     """
     raise TypeError(
         "The space provided to `batch_space` is not a palaestra Space instance, "
-        f"type: {type(space)}, {space}"
+        f"type: {type(space)}, {space}" + foreign_space_hint(space)
     )
 
 

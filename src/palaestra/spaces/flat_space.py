@@ -19,6 +19,7 @@ from palaestra.spaces.sequence import Sequence
 from palaestra.spaces.space import Space
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
+from palaestra.spaces.space import foreign_space_hint
 
 _NOT_FLATTENABLE = (
     "{} cannot be flattened to a numpy array, probably because it contains a `Graph` or "
@@ -73,7 +74,7 @@ def flatdim(space: Space[Any]) -> int:
     """
     if space.is_np_flattenable is False:
         raise ValueError(_NOT_FLATTENABLE.format(space))
-    raise NotImplementedError(f"Unknown space: `{space}`")
+    raise NotImplementedError(f"Unknown space: `{space}`" + foreign_space_hint(space))
 
 
 @flatdim.register(Box)
@@ -128,7 +129,7 @@ def flatten_space(space: Space[Any]) -> Space[Any]:
     >>> flatten_space(Tuple([Discrete(3), Box(-1, 1, (2,))]))
     Box([ 0.  0.  0. -1. -1.], 1.0, (5,), float64)
     """
-    raise NotImplementedError(f"Unknown space: `{space}`")
+    raise NotImplementedError(f"Unknown space: `{space}`" + foreign_space_hint(space))
 
 
 @flatten_space.register(Box)

@@ -216,7 +216,8 @@ class LoopEngine:
             if not isinstance(env, Env):
                 raise TypeError(
                     f"{who}: env_fns[{i}] returned {type(env)}, not a palaestra.Env (wrap a "
-                    "Gymnasium env with palaestra's adapter first)"
+                    "Gymnasium env with palaestra's adapter first: "
+                    "`palaestra.compat.from_gymnasium(env)`)"
                 )
         self.num_envs = len(self.envs)
         first = self.envs[0]
