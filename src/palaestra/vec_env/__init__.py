@@ -6,11 +6,15 @@ engines of :mod:`palaestra.vector`; ``make_vec_env`` picks the native batch for 
 
 from palaestra.vec_env.atari_vec_env import AtariVecEnv
 from palaestra.vec_env.base import VecEnv, VecEnvWrapper
+from palaestra.vec_env.check_nan import VecCheckNan
 from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
 from palaestra.vec_env.env_util import make_atari_env, make_vec_env
+from palaestra.vec_env.extract_dict_obs import VecExtractDictObs
 from palaestra.vec_env.image import VecFrameStack, VecTransposeImage
 from palaestra.vec_env.monitor import VecMonitor
 from palaestra.vec_env.normalize import VecNormalize
+from palaestra.vec_env.stacked_observations import StackedObservations
+from palaestra.vec_env.video_recorder import VecVideoRecorder
 from palaestra.vec_env.util import (
     is_vecenv_wrapped,
     sync_envs_normalization,
@@ -22,13 +26,17 @@ __all__ = [
     "AtariVecEnv",
     "BatchedVecEnv",
     "DummyVecEnv",
+    "StackedObservations",
     "SubprocVecEnv",
     "VecEnv",
+    "VecCheckNan",
     "VecEnvWrapper",
+    "VecExtractDictObs",
     "VecFrameStack",
     "VecMonitor",
     "VecNormalize",
     "VecTransposeImage",
+    "VecVideoRecorder",
     "is_vecenv_wrapped",
     "make_atari_env",
     "make_vec_env",
