@@ -200,3 +200,28 @@ def test_checkpoint_callback_saves_vec_normalize(tmp_path):
     ]
     loaded = VecNormalize.load(str(tmp_path / "m_vecnormalize_32_steps.npz"), make_vec_env("CartPole-v1", 2))
     np.testing.assert_array_equal(loaded.obs_rms.mean, env.obs_rms.mean)
+
+
+def test_event_callback_triggers_its_child_as_sb3():
+    from stable_baselines3.common.callbacks import EventCallback as SB3EventCallback
+
+    from palaestra.algos.callbacks import EventCallback
+
+    class Fire(EventCallback):
+        def _on_step(self) -> bool:
+            return self._on_event()
+
+    class SB3Fire(SB3EventCallback):
+        def _on_step(self) -> bool:
+            return self._on_event()
+
+    for outer_cls, inner in ((Fire, _Count()), (SB3Fire, _sb3_count())):
+        outer = outer_cls(inner)
+        assert inner.parent is outer
+        outer.model = inner.model = SimpleNamespace(num_timesteps=0)
+        assert outer.on_step() and outer.on_step()
+        assert inner.n_calls == 2
+
+
+def _sb3_count():
+    return type("C", (sb3_callbacks.BaseCallback,), {"_on_step": lambda self: True})()

@@ -24,6 +24,7 @@ __all__ = [
     "CheckpointCallback",
     "ConvertCallback",
     "EvalCallback",
+    "EventCallback",
     "EveryNTimesteps",
     "ProgressBarCallback",
     "StopTrainingOnMaxEpisodes",
@@ -163,6 +164,32 @@ def convert_callback(callback: Any) -> BaseCallback:
     if callable(callback):
         return ConvertCallback(callback)
     raise TypeError(f"callback must be a BaseCallback, a function or a list, got {callback!r}")
+
+
+class EventCallback(BaseCallback):
+    """Base of callbacks that trigger ``callback`` on an event: call :meth:`_on_event` from
+    ``_on_step`` when it happens (SB3's ``EventCallback``)."""
+
+    def __init__(self, callback: BaseCallback | None = None, verbose: int = 0) -> None:
+        super().__init__(verbose)
+        self.callback = callback
+        if callback is not None:
+            callback.parent = self
+
+    def _init_callback(self) -> None:
+        if self.callback is not None:
+            self.callback.init_callback(self.model)
+
+    def _on_training_start(self) -> None:
+        if self.callback is not None:
+            self.callback.on_training_start(self.locals, self.globals)
+
+    def _on_event(self) -> bool:
+        return self.callback.on_step() if self.callback is not None else True
+
+    def update_child_locals(self, locals_: dict[str, Any]) -> None:
+        if self.callback is not None:
+            self.callback.update_locals(locals_)
 
 
 class EveryNTimesteps(BaseCallback):

@@ -15,6 +15,7 @@ from palaestra.vec_env.monitor import VecMonitor
 from palaestra.vec_env.normalize import VecNormalize
 from palaestra.vec_env.stacked_observations import StackedObservations
 from palaestra.vec_env.video_recorder import VecVideoRecorder
+from palaestra.vector.worker import Payload as CloudpickleWrapper
 from palaestra.vec_env.util import (
     is_vecenv_wrapped,
     sync_envs_normalization,
@@ -24,6 +25,7 @@ from palaestra.vec_env.util import (
 
 __all__ = [
     "AtariVecEnv",
+    "CloudpickleWrapper",
     "BatchedVecEnv",
     "DummyVecEnv",
     "StackedObservations",
