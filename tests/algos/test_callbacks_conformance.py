@@ -41,9 +41,7 @@ def _drive(callback, parent_rewards):
     return results
 
 
-@pytest.mark.parametrize(
-    ("max_no_improvement", "min_evals"), [(0, 0), (1, 0), (2, 3), (3, 1)]
-)
+@pytest.mark.parametrize(("max_no_improvement", "min_evals"), [(0, 0), (1, 0), (2, 3), (3, 1)])
 def test_stop_on_no_model_improvement_matches_sb3(max_no_improvement, min_evals):
     rewards = [1, 2, 2, 2, 3, 3, 3, 3, 3, 4, 4, 4, 4, 4, 4]
     ours = StopTrainingOnNoModelImprovement(max_no_improvement, min_evals=min_evals)
@@ -79,7 +77,9 @@ def test_stop_on_max_episodes_matches_sb3():
     outcomes = []
     for cls in (StopTrainingOnMaxEpisodes, sb3_callbacks.StopTrainingOnMaxEpisodes):
         callback = cls(max_episodes=2)
-        callback.model = SimpleNamespace(num_timesteps=0, get_env=lambda: SimpleNamespace(num_envs=2))
+        callback.model = SimpleNamespace(
+            num_timesteps=0, get_env=lambda: SimpleNamespace(num_envs=2)
+        )
         callback.init_callback(callback.model)
         got = []
         for step in dones:
@@ -98,7 +98,10 @@ def test_every_n_timesteps_matches_sb3():
     fired = []
     for cls, inner_cls in (
         (EveryNTimesteps, _Count),
-        (sb3_callbacks.EveryNTimesteps, type("C", (sb3_callbacks.BaseCallback,), {"_on_step": lambda s: True})),
+        (
+            sb3_callbacks.EveryNTimesteps,
+            type("C", (sb3_callbacks.BaseCallback,), {"_on_step": lambda s: True}),
+        ),
     ):
         inner = inner_cls()
         callback = cls(n_steps=5, callback=inner)
@@ -198,7 +201,9 @@ def test_checkpoint_callback_saves_vec_normalize(tmp_path):
         "m_32_steps.zip",
         "m_vecnormalize_32_steps.npz",
     ]
-    loaded = VecNormalize.load(str(tmp_path / "m_vecnormalize_32_steps.npz"), make_vec_env("CartPole-v1", 2))
+    loaded = VecNormalize.load(
+        str(tmp_path / "m_vecnormalize_32_steps.npz"), make_vec_env("CartPole-v1", 2)
+    )
     np.testing.assert_array_equal(loaded.obs_rms.mean, env.obs_rms.mean)
 
 

@@ -81,7 +81,11 @@ CASES = {
         lambda m: m.Discrete(2),
         {"obs_fn": lambda s: np.zeros(2, np.float32)},
     ),
-    "obs not an array": (_box(-1, 1, (2,)), lambda m: m.Discrete(2), {"obs_fn": lambda s: [0.0, 0.0]}),
+    "obs not an array": (
+        _box(-1, 1, (2,)),
+        lambda m: m.Discrete(2),
+        {"obs_fn": lambda s: [0.0, 0.0]},
+    ),
     "nan obs": (
         _box(-np.inf, np.inf, (2,)),
         lambda m: m.Discrete(2),
@@ -128,7 +132,7 @@ def test_sb3_check_env_matches_sb3(case):
 
 
 def test_a_gymnasium_env_is_refused_with_the_adapter_named():
-    with pytest.raises(AssertionError, match="palaestra.compat.from_gymnasium"):
+    with pytest.raises(AssertionError, match=r"palaestra\.compat\.from_gymnasium"):
         check_env(gymnasium.make("CartPole-v1"))
 
 

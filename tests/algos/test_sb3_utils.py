@@ -20,7 +20,7 @@ pytestmark = pytest.mark.filterwarnings("ignore:.* is deprecated, please use:Use
 
 
 def _draws():
-    return random.random(), float(np.random.rand()), float(torch.rand(1))
+    return random.random(), float(np.random.rand())  # noqa: NPY002, float(torch.rand(1))
 
 
 def test_set_random_seed_seeds_what_sb3_seeds():
@@ -73,10 +73,10 @@ def test_device_parameters_zip_and_system_info(capsys):
     assert text.startswith("- OS: ")
 
 
-def _monitor_logs(tmp_path, lengths):
-    """Two monitors in one folder; returns every finished episode's (r, l)."""
+def _monitor_logs(tmp_path, ranks):
+    """One monitor per rank in one folder; returns every finished episode's (r, l)."""
     episodes = []
-    for rank, length in enumerate(lengths):
+    for rank in ranks:
         env = Monitor(gym.make("CartPole-v1"), str(tmp_path / str(rank)))
         env.reset(seed=rank)
         for _ in range(3):
@@ -93,7 +93,7 @@ def _monitor_logs(tmp_path, lengths):
 def test_load_columns_and_ts2xy(tmp_path):
     episodes = _monitor_logs(tmp_path, [0, 1])
     data = results_plotter.load_columns(str(tmp_path))
-    assert sorted(data["l"].tolist()) == sorted(l for _, l in episodes)
+    assert sorted(data["l"].tolist()) == sorted(length for _, length in episodes)
     assert np.all(np.diff(data["t"]) >= 0) and data["t"][0] >= 0
     x, y = results_plotter.ts2xy(data, results_plotter.X_TIMESTEPS)
     np.testing.assert_array_equal(x, np.cumsum(data["l"]))

@@ -24,7 +24,7 @@ from palaestra.compat import to_gymnasium_space
 
 def _run(lib, buffer_space, steps=800, seed=1):
     random.seed(seed)
-    np.random.seed(seed)
+    np.random.seed(seed)  # noqa: NPY002 - SB3's ReplayBuffer samples from it
     torch.manual_seed(seed)
 
     def make_env():
@@ -32,9 +32,7 @@ def _run(lib, buffer_space, steps=800, seed=1):
 
     envs = lib.vector.SyncVectorEnv([make_env])
     envs.single_action_space.seed(seed)
-    q_network = torch.nn.Sequential(
-        torch.nn.Linear(4, 32), torch.nn.ReLU(), torch.nn.Linear(32, 2)
-    )
+    q_network = torch.nn.Sequential(torch.nn.Linear(4, 32), torch.nn.ReLU(), torch.nn.Linear(32, 2))
     optimizer = torch.optim.Adam(q_network.parameters(), lr=2.5e-3)
     rb = ReplayBuffer(
         1000,
@@ -51,7 +49,7 @@ def _run(lib, buffer_space, steps=800, seed=1):
             actions = np.array([envs.single_action_space.sample() for _ in range(envs.num_envs)])
         else:
             actions = torch.argmax(q_network(torch.Tensor(obs)), dim=1).numpy()
-        next_obs, rewards, terminations, truncations, infos = envs.step(actions)
+        next_obs, rewards, terminations, _truncations, infos = envs.step(actions)
         if "episode" in infos:
             returns.extend(infos["episode"]["r"][infos["_episode"]].tolist())
         rb.add(obs, next_obs.copy(), actions, rewards, terminations, [{}])

@@ -49,7 +49,11 @@ def test_readme_import_map_path_resolves(path):
 NOT_YET = {
     "stable_baselines3.common.vec_env": {"VecEnvWrapperT"},
     "gymnasium.wrappers.vector": {
-        "HumanRendering", "RecordVideo", "ArrayConversion", "JaxToNumpy", "JaxToTorch",
+        "HumanRendering",
+        "RecordVideo",
+        "ArrayConversion",
+        "JaxToNumpy",
+        "JaxToTorch",
         "NumpyToTorch",
     },
     "stable_baselines3.common.callbacks": {"LogEveryNTimesteps"},

@@ -10,8 +10,12 @@ from palaestra import error
 
 @pytest.mark.parametrize(
     ("env_id", "bridged"),
-    [("Taxi-v3", "gymnasium:Taxi-v4"), ("FrozenLake-v1", "gymnasium:FrozenLake-v1"),
-     ("LunarLander-v3", "gymnasium:LunarLander-v3"), ("Hopper", "gymnasium:Hopper-v5")],
+    [
+        ("Taxi-v3", "gymnasium:Taxi-v4"),
+        ("FrozenLake-v1", "gymnasium:FrozenLake-v1"),
+        ("LunarLander-v3", "gymnasium:LunarLander-v3"),
+        ("Hopper", "gymnasium:Hopper-v5"),
+    ],
 )
 def test_gymnasium_only_id_names_the_bridge(env_id, bridged):
     with pytest.raises(error.NameNotFound, match=f'make\\("{bridged}"\\)'):
@@ -26,5 +30,8 @@ def test_the_suggested_bridge_id_makes_the_env():
 
 
 def test_other_unknown_names_keep_gymnasiums_message():
-    with pytest.raises(error.NameNotFound, match=r"^Environment `Cartpole` doesn't exist\. Did you mean: `CartPole`\?$"):
+    with pytest.raises(
+        error.NameNotFound,
+        match=r"^Environment `Cartpole` doesn't exist\. Did you mean: `CartPole`\?$",
+    ):
         gym.make("Cartpole-v1")

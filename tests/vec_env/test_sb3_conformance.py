@@ -120,7 +120,7 @@ class NoOptionsEnv(gym.Env):
     observation_space = spaces.Discrete(2)
     action_space = spaces.Discrete(2)
 
-    def reset(self, seed=None):  # noqa: D102 - no options on purpose
+    def reset(self, seed=None):
         return 0, {}
 
     def step(self, action):
@@ -211,10 +211,14 @@ def test_vec_normalize_rewards_are_float32_as_in_sb3(norm_reward):
 
 def test_unwrap_helpers_match_sb3():
     ours = VecNormalize(VecMonitor(DummyVecEnv([lambda: gym.make("CartPole-v1")])))
-    theirs = sb3.VecNormalize(sb3.VecMonitor(sb3.DummyVecEnv([lambda: gymnasium.make("CartPole-v1")])))
+    theirs = sb3.VecNormalize(
+        sb3.VecMonitor(sb3.DummyVecEnv([lambda: gymnasium.make("CartPole-v1")]))
+    )
     assert unwrap_vec_normalize(ours) is ours
     assert unwrap_vec_wrapper(ours, VecMonitor) is ours.venv
-    assert (unwrap_vec_normalize(ours.venv) is None) == (sb3.unwrap_vec_normalize(theirs.venv) is None)
+    assert (unwrap_vec_normalize(ours.venv) is None) == (
+        sb3.unwrap_vec_normalize(theirs.venv) is None
+    )
     assert is_vecenv_wrapped(ours, VecMonitor) == sb3.is_vecenv_wrapped(theirs, sb3.VecMonitor)
     assert is_vecenv_wrapped(ours.venv, VecNormalize) == sb3.is_vecenv_wrapped(
         theirs.venv, sb3.VecNormalize
@@ -267,6 +271,6 @@ def test_loading_an_sb3_vec_normalize_pickle_says_what_palaestra_reads(tmp_path)
 
     path = tmp_path / "vecnormalize.pkl"
     sb3.VecNormalize(sb3.DummyVecEnv([lambda: gymnasium.make("CartPole-v1")])).save(str(path))
-    with pytest.raises(ModelFileError, match="is a pickle .*reads only the .npz file") as info:
+    with pytest.raises(ModelFileError, match=r"is a pickle .*reads only the \.npz file") as info:
         VecNormalize.load(str(path), make_vec_env("CartPole-v1"))
     assert "allow_pickle" not in str(info.value)

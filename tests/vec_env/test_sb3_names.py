@@ -74,7 +74,9 @@ def test_vec_check_nan_raises_on_request():
     venv.reset()
     venv.step(np.zeros((1, 1), np.float32))
     venv.step(np.zeros((1, 1), np.float32))
-    with pytest.raises(ValueError, match=r"found nan in observations\.\r\nOriginated from the environment"):
+    with pytest.raises(
+        ValueError, match=r"found nan in observations\.\r\nOriginated from the environment"
+    ):
         venv.step(np.zeros((1, 1), np.float32))
 
 
@@ -107,8 +109,8 @@ def test_vec_extract_dict_obs_matches_sb3():
     assert ours.observation_space.shape == theirs.observation_space.shape == (2,)
     np.testing.assert_array_equal(ours.reset(), theirs.reset())
     for _ in range(3):
-        o1, _, d1, i1 = ours.step(np.array([0, 1]))
-        o2, _, d2, i2 = theirs.step(np.array([0, 1]))
+        o1, _, _, i1 = ours.step(np.array([0, 1]))
+        o2, _, _, i2 = theirs.step(np.array([0, 1]))
         np.testing.assert_array_equal(o1, o2)
         for a, b in zip(i1, i2):
             if "terminal_observation" in b:
@@ -119,8 +121,12 @@ def test_vec_extract_dict_obs_matches_sb3():
 
 @pytest.mark.parametrize(
     ("shape", "dtype", "order"),
-    [((3,), np.float32, None), ((2, 8, 8), np.uint8, None), ((8, 8, 1), np.uint8, None),
-     ((4, 6), np.float32, "first")],
+    [
+        ((3,), np.float32, None),
+        ((2, 8, 8), np.uint8, None),
+        ((8, 8, 1), np.uint8, None),
+        ((4, 6), np.float32, "first"),
+    ],
 )
 def test_stacked_observations_match_sb3(shape, dtype, order):
     high = 255 if dtype == np.uint8 else 1.0
@@ -145,16 +151,29 @@ def test_stacked_observations_match_sb3(shape, dtype, order):
 
 
 def test_stacked_observations_on_dict_spaces_match_sb3():
-    ours_space = spaces.Dict({"x": spaces.Box(0, 1, (2,)), "img": spaces.Box(0, 255, (1, 6, 6), np.uint8)})
-    theirs_space = gymnasium.spaces.Dict(
-        {"x": gymnasium.spaces.Box(0, 1, (2,)), "img": gymnasium.spaces.Box(0, 255, (1, 6, 6), np.uint8)}
+    ours_space = spaces.Dict(
+        {"x": spaces.Box(0, 1, (2,)), "img": spaces.Box(0, 255, (1, 6, 6), np.uint8)}
     )
-    ours, theirs = StackedObservations(2, 3, ours_space), sb3.StackedObservations(2, 3, theirs_space)
-    assert ours.stacked_observation_space["img"].shape == theirs.stacked_observation_space["img"].shape
+    theirs_space = gymnasium.spaces.Dict(
+        {
+            "x": gymnasium.spaces.Box(0, 1, (2,)),
+            "img": gymnasium.spaces.Box(0, 255, (1, 6, 6), np.uint8),
+        }
+    )
+    ours, theirs = (
+        StackedObservations(2, 3, ours_space),
+        sb3.StackedObservations(2, 3, theirs_space),
+    )
+    assert (
+        ours.stacked_observation_space["img"].shape == theirs.stacked_observation_space["img"].shape
+    )
     rng = np.random.default_rng(1)
 
     def batch():
-        return {"x": rng.random((2, 2)).astype(np.float32), "img": rng.integers(0, 255, (2, 1, 6, 6)).astype(np.uint8)}
+        return {
+            "x": rng.random((2, 2)).astype(np.float32),
+            "img": rng.integers(0, 255, (2, 1, 6, 6)).astype(np.uint8),
+        }
 
     first = batch()
     for key, value in ours.reset(first).items():
@@ -181,7 +200,10 @@ def test_stacked_observations_refuse_other_spaces():
 def test_vec_video_recorder_names_and_writes_as_sb3(tmp_path):
     venv = DummyVecEnv([lambda: gym.make("CartPole-v1", render_mode="rgb_array")] * 2)
     recorder = VecVideoRecorder(
-        venv, str(tmp_path), record_video_trigger=lambda step: step == 0, video_length=5,
+        venv,
+        str(tmp_path),
+        record_video_trigger=lambda step: step == 0,
+        video_length=5,
         video_suffix=".gif",
     )
     recorder.reset()

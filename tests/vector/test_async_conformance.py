@@ -150,7 +150,10 @@ def test_wrong_number_of_actions_is_a_value_error():
 @pytest.mark.parametrize(
     ("ours", "theirs"),
     [
-        (spaces.Sequence(spaces.Discrete(2)), gymnasium.spaces.Sequence(gymnasium.spaces.Discrete(2))),
+        (
+            spaces.Sequence(spaces.Discrete(2)),
+            gymnasium.spaces.Sequence(gymnasium.spaces.Discrete(2)),
+        ),
         (
             spaces.Graph(spaces.Box(0, 1, (2,)), spaces.Discrete(2)),
             gymnasium.spaces.Graph(gymnasium.spaces.Box(0, 1, (2,)), gymnasium.spaces.Discrete(2)),

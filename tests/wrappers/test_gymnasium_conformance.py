@@ -29,8 +29,11 @@ def test_every_vector_wrapper_imports_from_the_gymnasium_path(name):
 def test_vector_wrapper_names_are_gymnasiums():
     ours = set(palaestra.wrappers.vector.__all__)
     theirs = set(gymnasium.wrappers.vector.__all__)
-    assert ours <= theirs | {"VectorizeTransformAction", "VectorizeTransformObservation",
-                             "VectorizeTransformReward"}, ours - theirs
+    assert ours <= theirs | {
+        "VectorizeTransformAction",
+        "VectorizeTransformObservation",
+        "VectorizeTransformReward",
+    }, ours - theirs
 
 
 @pytest.mark.parametrize(

@@ -258,7 +258,9 @@ def _check_returned_values(env: Env[Any, Any], observation_space: Any, action_sp
     if not isinstance(result, tuple):
         raise AssertionError("`reset()` must return a tuple (obs, info)")
     if len(result) != 2:
-        raise AssertionError(f"`reset()` must return a tuple of size 2 (obs, info), not {len(result)}")
+        raise AssertionError(
+            f"`reset()` must return a tuple of size 2 (obs, info), not {len(result)}"
+        )
     obs, info = result
     if not isinstance(info, dict):
         raise AssertionError(

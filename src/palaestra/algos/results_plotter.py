@@ -93,9 +93,7 @@ def load_columns(path: str) -> dict[str, np.ndarray]:
         starts.append(float(header["t_start"]))
         parts.append((float(header["t_start"]), columns))
     origin = min(starts)
-    merged = {
-        key: np.concatenate([cols[key] for _, cols in parts]) for key in ("r", "l", "t")
-    }
+    merged = {key: np.concatenate([cols[key] for _, cols in parts]) for key in ("r", "l", "t")}
     merged["t"] = merged["t"] + np.concatenate(
         [np.full(len(cols["t"]), start) for start, cols in parts]
     )

@@ -46,7 +46,7 @@ def set_random_seed(seed: int, using_cuda: bool = False) -> None:
     """Seed Python's ``random``, numpy's global generator and torch (CUDA: deterministic
     cuDNN too)."""
     random.seed(seed)
-    np.random.seed(seed)
+    np.random.seed(seed)  # noqa: NPY002 - the legacy global generator is what SB3 seeds
     torch.manual_seed(seed)
     if using_cuda:  # cuDNN's fast kernels are not deterministic
         torch.backends.cudnn.deterministic = True

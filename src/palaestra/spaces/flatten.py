@@ -17,10 +17,9 @@ from palaestra.spaces.multi_binary import MultiBinary
 from palaestra.spaces.multi_discrete import MultiDiscrete
 from palaestra.spaces.oneof import OneOf
 from palaestra.spaces.sequence import Sequence
-from palaestra.spaces.space import Space
+from palaestra.spaces.space import Space, foreign_space_hint
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
-from palaestra.spaces.space import foreign_space_hint
 
 
 class UnflattenTypeError(TypeError, AssertionError):

@@ -14,24 +14,24 @@ from palaestra.vec_env.image import VecFrameStack, VecTransposeImage
 from palaestra.vec_env.monitor import VecMonitor
 from palaestra.vec_env.normalize import VecNormalize
 from palaestra.vec_env.stacked_observations import StackedObservations
-from palaestra.vec_env.video_recorder import VecVideoRecorder
-from palaestra.vector.worker import Payload as CloudpickleWrapper
 from palaestra.vec_env.util import (
     is_vecenv_wrapped,
     sync_envs_normalization,
     unwrap_vec_normalize,
     unwrap_vec_wrapper,
 )
+from palaestra.vec_env.video_recorder import VecVideoRecorder
+from palaestra.vector.worker import Payload as CloudpickleWrapper
 
 __all__ = [
     "AtariVecEnv",
-    "CloudpickleWrapper",
     "BatchedVecEnv",
+    "CloudpickleWrapper",
     "DummyVecEnv",
     "StackedObservations",
     "SubprocVecEnv",
-    "VecEnv",
     "VecCheckNan",
+    "VecEnv",
     "VecEnvWrapper",
     "VecExtractDictObs",
     "VecFrameStack",

@@ -104,7 +104,9 @@ class VecNormalize(VecEnvWrapper):
         float32 either way: SB3 casts (the statistics are float64, rewards float32)."""
         if self.norm_reward:
             reward = np.clip(
-                reward / np.sqrt(self.ret_rms.var + self.epsilon), -self.clip_reward, self.clip_reward
+                reward / np.sqrt(self.ret_rms.var + self.epsilon),
+                -self.clip_reward,
+                self.clip_reward,
             )
         return reward.astype(np.float32)
 

@@ -31,12 +31,15 @@ def _channels_first(space: Box, channels_order: str | None) -> bool:
         )
         return image and int(np.argmin(space.shape)) == 0
     if channels_order not in _ORDERS:
-        raise ValueError(f"`channels_order` must be one of {_ORDERS} or None, got {channels_order!r}")
+        raise ValueError(
+            f"`channels_order` must be one of {_ORDERS} or None, got {channels_order!r}"
+        )
     return channels_order == "first"
 
 
 class StackedObservations:
-    """Stacks of observations for ``num_envs`` envs; ``stacked_observation_space`` is their space."""
+    """Stacks of observations for ``num_envs`` envs (``stacked_observation_space``: their
+    space)."""
 
     def __init__(
         self,
@@ -78,7 +81,7 @@ class StackedObservations:
         self.stacked_observation_space = Box(
             low=np.repeat(observation_space.low, n_stack, axis=self.repeat_axis),
             high=np.repeat(observation_space.high, n_stack, axis=self.repeat_axis),
-            dtype=observation_space.dtype,  # type: ignore[arg-type]
+            dtype=observation_space.dtype,
         )
         # [num_envs, *stacked_shape]
         self.stacked_obs = np.zeros((num_envs, *self.stacked_shape), dtype=observation_space.dtype)

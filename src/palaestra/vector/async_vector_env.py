@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
 import multiprocessing as mp
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
 from palaestra import logger
-
 from palaestra.core import Env
 from palaestra.error import AlreadyPendingCallError, NoAsyncCallError
 from palaestra.vector.engine_env import EngineVectorEnv

@@ -340,10 +340,11 @@ class ProcessEngine:
         """Send each worker its action (through shared memory for array action spaces)."""
         check_actions_batch(self.action_space, actions, self.num_envs)
         per_row: Any = None
-        array = None if self._actions is None else np.asarray(actions)
-        if array is not None and array.dtype == self._actions.dtype:  # type: ignore[union-attr]
+        shared = self._actions
+        array = None if shared is None else np.asarray(actions)
+        if shared is not None and array is not None and array.dtype == shared.dtype:
             # One vectorised copy into shared memory; the pipe carries only "step".
-            np.copyto(self._actions, array)
+            np.copyto(shared, array)
         else:
             # Other dtypes go by pipe, unconverted: the env sees what SyncVectorEnv's would
             # (a float64 action stays float64 under a float32 space, as in Gymnasium).
