@@ -116,8 +116,10 @@ def _bad(tmp_path: Path) -> dict[str, tuple[list[object], int, str | re.Pattern[
             re.escape(e + "no ppo preset named 'fast' for CartPole-v1; choose from [")
             + ".*'default'.*" + re.escape("] (pick another --preset, or drop it)"))),
         "no preset for env": (["train", "ppo", "Taxi-v9", "--preset", "default"], 2,
-                              e + "Environment `Taxi` doesn't exist. "
-                              "(run `palaestra envs` to list the ids)"),
+                              e + "Environment `Taxi` doesn't exist. Gymnasium has it: make it "
+                              'through the bridge with `make("gymnasium:Taxi-v4")` (needs `pip '
+                              "install gymnasium`; Box2D and MuJoCo envs need Gymnasium's extras "
+                              "too). (run `palaestra envs` to list the ids)"),
         "no preset for algo/env": (["train", "dqn", "Pendulum-v1", "--preset", "x"], 2,
             re.compile(re.escape(e + "no dqn preset for env 'Pendulum-v1'; dqn presets exist for [")
                        + ".*" + re.escape("] (pick another --preset, or drop it)"))),

@@ -76,7 +76,10 @@ def test_vec_normalize_save_load_without_pickle(tmp_path):
 
 def test_vec_normalize_refuses_bad_files(tmp_path):
     bad = tmp_path / "x.npz"
-    bad.write_bytes(b"\x80\x04not a numpy file")
+    bad.write_bytes(b"\x80\x04not a numpy file")  # starts like a pickle (SB3's format)
+    with pytest.raises(ValueError, match="is a pickle"):
+        VecNormalize.load(bad, make_vec_env("MountainCar-v0", n_envs=1))
+    bad.write_bytes(b"neither a zip nor a pickle")
     with pytest.raises(ValueError, match="not a palaestra VecNormalize file"):
         VecNormalize.load(bad, make_vec_env("MountainCar-v0", n_envs=1))
     other = tmp_path / "y.npz"
