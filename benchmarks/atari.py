@@ -230,8 +230,10 @@ def bench_sb3_wrapper(args: argparse.Namespace) -> None:
         ours_us.append(stack_overhead_micros(AtariWrapper(palaestra.make(SB3_ID))))
         ref_us.append(stack_overhead_micros(SB3AtariWrapper(gymnasium.make(SB3_ID))))
     o, r = statistics.median(ours_us), statistics.median(ref_us)
-    print(f"{'':<34}stack without emulation: palaestra {o:.0f} us, SB3 {r:.0f} us per agent step "
-          f"(ratio {r / o:.2f}x)")
+    print(
+        f"{'':<34}stack without emulation: palaestra {o:.0f} us, SB3 {r:.0f} us per agent step "
+        f"(ratio {r / o:.2f}x)"
+    )
     frame = palaestra.make(ENV_ID).unwrapped.ale.getScreenRGB()
     warp = WarpFrame(palaestra.make(SB3_ID))
     ours_us = resize_micros(warp.observation, frame)
@@ -241,8 +243,10 @@ def bench_sb3_wrapper(args: argparse.Namespace) -> None:
         return cv2.resize(gray, (84, 84), interpolation=cv2.INTER_AREA)[:, :, None]
 
     ref_us = resize_micros(sb3_warp, frame)
-    print(f"{'':<34}WarpFrame 210x160 RGB -> 84x84 gray: palaestra {ours_us:.0f} us, "
-          f"SB3 + OpenCV {cv2.__version__} {ref_us:.0f} us")
+    print(
+        f"{'':<34}WarpFrame 210x160 RGB -> 84x84 gray: palaestra {ours_us:.0f} us, "
+        f"SB3 + OpenCV {cv2.__version__} {ref_us:.0f} us"
+    )
 
 
 CASES: dict[str, Callable[[argparse.Namespace], None] | None] = {
