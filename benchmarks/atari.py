@@ -18,6 +18,11 @@ Cases:
   ``cv2.resize(INTER_AREA)``; where OpenCV is not installed its ``cv2`` is a stand-in whose
   ``resize`` is Pillow's ``Image.resize(BOX)`` (the line says which was measured, and the
   resize alone is timed too). Target: palaestra faster (ratio > 1).
+- ``sb3-wrapper``: SB3's ``AtariWrapper`` (no-ops, frame skip 4 with max-pool, episodic life,
+  FIRE reset, ``WarpFrame`` 84x84 grayscale, reward clipping) around
+  ``make("BreakoutNoFrameskip-v4")``: palaestra's numpy ``WarpFrame`` vs SB3's with OpenCV;
+  agent steps/s, the same stacks with emulation stubbed out (their own cost, which is what
+  differs; steadier under load), and the warp alone. Target: ratio >= 1.
 - ``vector``: ``make_vec("ALE/Breakout-v5", num_envs=n)`` for n = 2 and 4 in both libraries
   (both ale-py's ``ALEVectorInterface``); env-steps/s (``atari_vector.py``). Target: ratio
   >= 0.90.
@@ -165,9 +170,89 @@ def bench_preprocessed(args: argparse.Namespace) -> None:
     drop_cv2_stand_in()
 
 
+SB3_ID = "BreakoutNoFrameskip-v4"
+
+
+def sb3_wrapper_rate(lib: Any, wrapper: Any, actions: np.ndarray) -> float:
+    """Agent steps/s of ``wrapper(lib.make(SB3_ID))``: SB3's AtariWrapper stack."""
+    return steps_per_cpu_second(wrapper(lib.make(SB3_ID)), actions)
+
+
+class _NoEmulation:
+    """An ``ale`` whose ``act`` emulates nothing (the screen stays as it is): what is left of a
+    step is the Python and numpy around the emulator, the part the libraries differ in."""
+
+    def __init__(self, ale: Any) -> None:
+        self._ale = ale
+
+    def __getattr__(self, name: str) -> Any:  # a benchmark stand-in, not library code
+        return getattr(self._ale, name)
+
+    def act(self, *args: Any, **kwargs: Any) -> float:
+        return 0.0
+
+
+def stack_overhead_micros(env: Any, n: int = 1000) -> float:
+    """CPU microseconds per agent step of ``env`` with emulation stubbed out; closes ``env``.
+    Much steadier on a busy machine than the full rate, since emulation is ~60% of a step."""
+    env.reset(seed=0)
+    base = env.unwrapped
+    base.ale = _NoEmulation(base.ale)
+    start = time.process_time()
+    for _ in range(n):
+        env.step(0)
+    elapsed = time.process_time() - start
+    env.close()
+    return elapsed / n * 1e6
+
+
+def bench_sb3_wrapper(args: argparse.Namespace) -> None:
+    """palaestra's ``AtariWrapper`` vs SB3's (with OpenCV) on BreakoutNoFrameskip-v4."""
+    gymnasium = gymnasium_module()
+    import cv2
+    from stable_baselines3.common.atari_wrappers import AtariWrapper as SB3AtariWrapper
+
+    from palaestra.wrappers import AtariWrapper
+    from palaestra.wrappers.atari import WarpFrame
+
+    actions = np.random.default_rng(0).integers(0, 4, max(1, args.steps // 4))
+    ours, ref = [], []
+    for _ in range(args.repeats):
+        ours.append(sb3_wrapper_rate(palaestra, AtariWrapper, actions))
+        ref.append(sb3_wrapper_rate(gymnasium, SB3AtariWrapper, actions))
+    p, g = statistics.median(ours), statistics.median(ref)
+    name = "SB3 AtariWrapper (agent steps)"
+    print(f"{name:<34}{p:>12,.0f}{g:>12,.0f}{p / g:>7.2f}x   (target >= 1x, vs OpenCV)")
+    runs = f"palaestra {[round(r) for r in ours]}, sb3 {[round(r) for r in ref]}"
+    print(f"{'':<34}runs: {runs}")
+    ours_us, ref_us = [], []
+    for _ in range(args.repeats):
+        ours_us.append(stack_overhead_micros(AtariWrapper(palaestra.make(SB3_ID))))
+        ref_us.append(stack_overhead_micros(SB3AtariWrapper(gymnasium.make(SB3_ID))))
+    o, r = statistics.median(ours_us), statistics.median(ref_us)
+    print(
+        f"{'':<34}stack without emulation: palaestra {o:.0f} us, SB3 {r:.0f} us per agent step "
+        f"(ratio {r / o:.2f}x)"
+    )
+    frame = palaestra.make(ENV_ID).unwrapped.ale.getScreenRGB()
+    warp = WarpFrame(palaestra.make(SB3_ID))
+    ours_us = resize_micros(warp.observation, frame)
+
+    def sb3_warp(f: np.ndarray) -> np.ndarray:
+        gray = cv2.cvtColor(f, cv2.COLOR_RGB2GRAY)
+        return cv2.resize(gray, (84, 84), interpolation=cv2.INTER_AREA)[:, :, None]
+
+    ref_us = resize_micros(sb3_warp, frame)
+    print(
+        f"{'':<34}WarpFrame 210x160 RGB -> 84x84 gray: palaestra {ours_us:.0f} us, "
+        f"SB3 + OpenCV {cv2.__version__} {ref_us:.0f} us"
+    )
+
+
 CASES: dict[str, Callable[[argparse.Namespace], None] | None] = {
     "single": bench_single,
     "preprocessed": bench_preprocessed,
+    "sb3-wrapper": bench_sb3_wrapper,
     "vector": bench_vector,
     "memory": bench_memory,
 }

@@ -53,8 +53,12 @@ class ResetNeeded(Error):
     """``step`` or ``render`` was called before ``reset``."""
 
 
-class InvalidAction(Error):
-    """An action outside the action space was given."""
+class InvalidAction(Error, ValueError):
+    """An action outside the action space was given.
+
+    Also a ``ValueError``: Gymnasium's vector envs raise ValueError for a batch of the wrong
+    size, and code written for them catches that.
+    """
 
 
 class MissingArgument(Error):
@@ -97,6 +101,21 @@ class ClosedEnvironmentError(Exception):
 
 class CustomSpaceError(Exception):
     """A custom space cannot be placed in shared memory."""
+
+
+class DynamicShapeSpaceError(CustomSpaceError, TypeError):
+    """A space of dynamic shape (Graph, Sequence) cannot be placed in static shared memory.
+
+    Also a ``TypeError``, which is what Gymnasium's ``create_shared_memory`` raises for them.
+    """
+
+
+class SharedMemoryError(CustomSpaceError, ValueError):
+    """``AsyncVectorEnv(shared_memory=True)`` cannot hold the observation space.
+
+    Also a ``ValueError``, which is what Gymnasium's ``AsyncVectorEnv`` raises (callers catch it
+    to retry with ``shared_memory=False``).
+    """
 
 
 def dependency_not_installed(package: str, extra: str, purpose: str) -> DependencyNotInstalled:

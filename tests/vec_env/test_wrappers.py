@@ -76,7 +76,10 @@ def test_vec_normalize_save_load_without_pickle(tmp_path):
 
 def test_vec_normalize_refuses_bad_files(tmp_path):
     bad = tmp_path / "x.npz"
-    bad.write_bytes(b"\x80\x04not a numpy file")
+    bad.write_bytes(b"\x80\x04not a numpy file")  # starts like a pickle (SB3's format)
+    with pytest.raises(ValueError, match="is a pickle"):
+        VecNormalize.load(bad, make_vec_env("MountainCar-v0", n_envs=1))
+    bad.write_bytes(b"neither a zip nor a pickle")
     with pytest.raises(ValueError, match="not a palaestra VecNormalize file"):
         VecNormalize.load(bad, make_vec_env("MountainCar-v0", n_envs=1))
     other = tmp_path / "y.npz"
@@ -185,6 +188,12 @@ def test_vec_monitor_writes_episodes(tmp_path):
                 assert info["episode"]["r"] == info["episode"]["l"]
     venv.close()
     assert episodes >= 2
-    (path,) = get_monitor_files(str(tmp_path))
-    header, columns = read_monitor_file(path)
-    assert header["env_id"] == "CartPole-v1" and len(columns["r"]) == episodes
+    # One file per env, as SB3's Monitor per env writes (0.monitor.csv, 1.monitor.csv).
+    paths = sorted(get_monitor_files(str(tmp_path)))
+    assert [p.rsplit("/", 1)[1] for p in paths] == ["0.monitor.csv", "1.monitor.csv"]
+    total = 0
+    for path in paths:
+        header, columns = read_monitor_file(path)
+        assert header["env_id"] == "CartPole-v1"
+        total += len(columns["r"])
+    assert total == episodes

@@ -70,7 +70,7 @@ CASES: list[tuple[str, Any, type[Exception], str]] = [
     ("FilterObservation-int-keys-dict", lambda: W.FilterObservation(dict_env(), [0]), TypeError, "must be strings for a Dict"),
     ("FilterObservation-tuple-range", lambda: W.FilterObservation(tuple_env(), [0, 3]), ValueError, r"missing indexes: \[3\]"),
     ("FilterObservation-tuple-dup", lambda: W.FilterObservation(tuple_env(), [1, 1]), ValueError, "Duplicate keys"),
-    ("FilterObservation-str", lambda: W.FilterObservation(dict_env(), "pos"), TypeError, "sequence of keys, got <class 'str'>"),
+    ("FilterObservation-str", lambda: W.FilterObservation(dict_env(), "pos"), ValueError, r"got the string 'pos'; pass \['pos'\]"),
     ("FilterObservation-box", lambda: W.FilterObservation(cont(), ["x"]), ValueError, "only usable with `Dict` and `Tuple`"),
     ("ReshapeObservation-size", lambda: W.ReshapeObservation(cont(), (2, 2)), ValueError, r"new shape \(2, 2\) to match the original shape \(3,\)"),
     ("ReshapeObservation-list", lambda: W.ReshapeObservation(cont(), [3, 1]), TypeError, "tuple, got <class 'list'>"),

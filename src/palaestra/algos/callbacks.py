@@ -24,9 +24,11 @@ __all__ = [
     "CheckpointCallback",
     "ConvertCallback",
     "EvalCallback",
+    "EventCallback",
     "EveryNTimesteps",
     "ProgressBarCallback",
     "StopTrainingOnMaxEpisodes",
+    "StopTrainingOnNoModelImprovement",
     "StopTrainingOnRewardThreshold",
     "convert_callback",
 ]
@@ -111,6 +113,9 @@ class CallbackList(BaseCallback):
     def _init_callback(self) -> None:
         for cb in self.callbacks:
             cb.init_callback(self.model)
+            # The list's parent is its children's parent (SB3 #1791): a CallbackList passed as
+            # EvalCallback(callback_on_new_best=...) gives each child the EvalCallback.
+            cb.parent = self.parent
 
     def _on_training_start(self) -> None:
         for cb in self.callbacks:
@@ -161,12 +166,38 @@ def convert_callback(callback: Any) -> BaseCallback:
     raise TypeError(f"callback must be a BaseCallback, a function or a list, got {callback!r}")
 
 
+class EventCallback(BaseCallback):
+    """Base of callbacks that trigger ``callback`` on an event: call :meth:`_on_event` from
+    ``_on_step`` when it happens (SB3's ``EventCallback``)."""
+
+    def __init__(self, callback: BaseCallback | None = None, verbose: int = 0) -> None:
+        super().__init__(verbose)
+        self.callback = callback
+        if callback is not None:
+            callback.parent = self
+
+    def _init_callback(self) -> None:
+        if self.callback is not None:
+            self.callback.init_callback(self.model)
+
+    def _on_training_start(self) -> None:
+        if self.callback is not None:
+            self.callback.on_training_start(self.locals, self.globals)
+
+    def _on_event(self) -> bool:
+        return self.callback.on_step() if self.callback is not None else True
+
+    def update_child_locals(self, locals_: dict[str, Any]) -> None:
+        if self.callback is not None:
+            self.callback.update_locals(locals_)
+
+
 class EveryNTimesteps(BaseCallback):
     """Trigger ``callback`` every ``n_steps`` env steps."""
 
     def __init__(self, n_steps: int, callback: BaseCallback) -> None:
         super().__init__()
-        self.n_steps, self.callback, self.last_trigger = n_steps, callback, 0
+        self.n_steps, self.callback, self.last_time_trigger = n_steps, callback, 0
         callback.parent = self
 
     def _init_callback(self) -> None:
@@ -176,8 +207,8 @@ class EveryNTimesteps(BaseCallback):
         self.callback.on_training_start(self.locals, self.globals)
 
     def _on_step(self) -> bool:
-        if self.num_timesteps - self.last_trigger >= self.n_steps:
-            self.last_trigger = self.num_timesteps
+        if self.num_timesteps - self.last_time_trigger >= self.n_steps:
+            self.last_time_trigger = self.num_timesteps
             return self.callback.on_step()
         return True
 
@@ -220,9 +251,42 @@ class StopTrainingOnRewardThreshold(BaseCallback):
         return keep
 
 
+class StopTrainingOnNoModelImprovement(BaseCallback):
+    """Used as ``EvalCallback(callback_after_eval=...)``: stop when more than
+    ``max_no_improvement_evals`` evaluations in a row brought no new best mean reward, counting
+    only after the first ``min_evals`` evaluations (SB3's rule)."""
+
+    def __init__(self, max_no_improvement_evals: int, min_evals: int = 0, verbose: int = 0):
+        super().__init__(verbose)
+        self.max_no_improvement_evals = max_no_improvement_evals
+        self.min_evals = min_evals
+        self.last_best_mean_reward = -np.inf
+        self.no_improvement_evals = 0
+
+    def _on_step(self) -> bool:
+        if not isinstance(self.parent, EvalCallback):
+            raise TypeError("StopTrainingOnNoModelImprovement must be used with an EvalCallback")
+        keep = True
+        if self.n_calls > self.min_evals:
+            if self.parent.best_mean_reward > self.last_best_mean_reward:
+                self.no_improvement_evals = 0
+            else:
+                self.no_improvement_evals += 1
+                keep = self.no_improvement_evals <= self.max_no_improvement_evals
+        self.last_best_mean_reward = self.parent.best_mean_reward
+        if not keep and self.verbose >= 1:
+            print(
+                "Stopping training because there was no new best model in the last "
+                f"{self.no_improvement_evals:d} evaluations"
+            )
+        return keep
+
+
 class CheckpointCallback(BaseCallback):
     """Save ``{name_prefix}_{steps}_steps.zip`` every ``save_freq`` calls (steps of the vec env);
-    optionally the replay buffer as ``{name_prefix}_replay_buffer_{steps}_steps.zip``."""
+    optionally the replay buffer as ``{name_prefix}_replay_buffer_{steps}_steps.zip`` and the
+    ``VecNormalize`` statistics as ``{name_prefix}_vecnormalize_{steps}_steps.npz`` (SB3
+    pickles both to ``.pkl``; palaestra's files are not pickles, so they are not named so)."""
 
     def __init__(
         self,
@@ -230,18 +294,20 @@ class CheckpointCallback(BaseCallback):
         save_path: str,
         name_prefix: str = "rl_model",
         save_replay_buffer: bool = False,
+        save_vecnormalize: bool = False,
         verbose: int = 0,
     ) -> None:
         super().__init__(verbose)
         self.save_freq, self.save_path, self.name_prefix = save_freq, save_path, name_prefix
         self.save_replay_buffer = save_replay_buffer
+        self.save_vecnormalize = save_vecnormalize
 
     def _init_callback(self) -> None:
         os.makedirs(self.save_path, exist_ok=True)
 
-    def _checkpoint_path(self, kind: str = "") -> str:
+    def _checkpoint_path(self, kind: str = "", extension: str = "zip") -> str:
         return os.path.join(
-            self.save_path, f"{self.name_prefix}_{kind}{self.num_timesteps}_steps.zip"
+            self.save_path, f"{self.name_prefix}_{kind}{self.num_timesteps}_steps.{extension}"
         )
 
     def _on_step(self) -> bool:
@@ -252,6 +318,12 @@ class CheckpointCallback(BaseCallback):
                 print(f"Saving model checkpoint to {path}")
             if self.save_replay_buffer and getattr(self.model, "replay_buffer", None) is not None:
                 self.model.save_replay_buffer(self._checkpoint_path("replay_buffer_"))
+            normalize = _vec_normalize(self.model)
+            if self.save_vecnormalize and normalize is not None:
+                path = self._checkpoint_path("vecnormalize_", "npz")
+                normalize.save(path)
+                if self.verbose >= 2:
+                    print(f"Saving model VecNormalize to {path}")
         return True
 
 
@@ -288,6 +360,15 @@ class EvalCallback(BaseCallback):
         self.evaluations_timesteps: list[int] = []
         self.evaluations_results: list[list[float]] = []
         self.evaluations_length: list[list[int]] = []
+        self._is_success_buffer: list[bool] = []  # info["is_success"] of this evaluation
+        self.evaluations_successes: list[list[bool]] = []
+
+    def _log_success_callback(self, locals_: dict[str, Any], globals_: dict[str, Any]) -> None:
+        """Collect ``info["is_success"]`` at each episode end (SB3's success rate)."""
+        if locals_["done"]:
+            success = locals_["info"].get("is_success")
+            if success is not None:
+                self._is_success_buffer.append(success)
 
     def _init_callback(self) -> None:
         for path in (self.best_model_save_path, self.log_path and os.path.dirname(self.log_path)):
@@ -302,6 +383,20 @@ class EvalCallback(BaseCallback):
             return True
         from palaestra.algos.evaluation import evaluate_policy
 
+        if _vec_normalize(self.model) is not None:
+            # SB3 evaluates with the training env's normalisation statistics: without this the
+            # eval env's VecNormalize keeps its own (never updated) ones, and eval rewards,
+            # best_model and threshold stopping are wrong.
+            from palaestra.vec_env.util import sync_envs_normalization
+
+            try:
+                sync_envs_normalization(self.training_env, self.eval_env)
+            except AttributeError as e:
+                raise AssertionError(
+                    "Training and eval env are not wrapped the same way (both need the same "
+                    "VecEnvWrapper layers, VecNormalize included)"
+                ) from e
+        self._is_success_buffer = []
         result: Any = evaluate_policy(
             self.model,
             self.eval_env,
@@ -310,6 +405,7 @@ class EvalCallback(BaseCallback):
             render=self.render,
             return_episode_rewards=True,
             warn=self.warn,
+            callback=self._log_success_callback,
         )
         rewards, lengths = result
         self.evaluations_timesteps.append(self.num_timesteps)
@@ -318,12 +414,17 @@ class EvalCallback(BaseCallback):
         if self.log_path is not None:
             # np.savez's own naming (".npz" added), written atomically.
             path = self.log_path if self.log_path.endswith(".npz") else self.log_path + ".npz"
+            successes: dict[str, Any] = {}
+            if self._is_success_buffer:
+                self.evaluations_successes.append(self._is_success_buffer)
+                successes["successes"] = self.evaluations_successes
             with atomic_write(path, "wb") as file:
                 np.savez(
                     file,
                     timesteps=self.evaluations_timesteps,
                     results=self.evaluations_results,
                     ep_lengths=self.evaluations_length,
+                    **successes,
                 )
         mean_reward, std_reward = float(np.mean(rewards)), float(np.std(rewards))
         mean_length, std_length = float(np.mean(lengths)), float(np.std(lengths))
@@ -336,6 +437,11 @@ class EvalCallback(BaseCallback):
             print(f"Episode length: {mean_length:.2f} +/- {std_length:.2f}")
         self.logger.record("eval/mean_reward", mean_reward)
         self.logger.record("eval/mean_ep_length", mean_length)
+        if self._is_success_buffer:
+            success_rate = float(np.mean(self._is_success_buffer))
+            if self.verbose >= 1:
+                print(f"Success rate: {100 * success_rate:.2f}%")
+            self.logger.record("eval/success_rate", success_rate)
         self.logger.record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
         self.logger.dump(self.num_timesteps)
         keep = True
@@ -355,6 +461,19 @@ class EvalCallback(BaseCallback):
         for cb in (self.callback_on_new_best, self.callback_after_eval):
             if cb is not None:
                 cb.update_locals(locals_)
+
+
+def _vec_normalize(model: Any) -> Any:
+    """The ``VecNormalize`` layer of the model's env, or None (SB3's
+    ``model.get_vec_normalize_env()``)."""
+    getter = getattr(model, "get_vec_normalize_env", None)
+    if getter is not None:
+        return getter()
+    from palaestra.vec_env.base import VecEnv
+    from palaestra.vec_env.util import unwrap_vec_normalize
+
+    env = model.get_env()
+    return unwrap_vec_normalize(env) if isinstance(env, VecEnv) else None
 
 
 class ProgressBarCallback(BaseCallback):

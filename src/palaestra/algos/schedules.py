@@ -22,6 +22,7 @@ Schedule = Callable[[float], float]
 
 __all__ = [
     "ConstantSchedule",
+    "FloatSchedule",
     "LinearSchedule",
     "Schedule",
     "TabulatedSchedule",
@@ -69,14 +70,30 @@ class TabulatedSchedule:
         return float(np.interp(progress_remaining, grid, self.values))
 
 
+@dataclass(frozen=True)
+class FloatSchedule:
+    """A user's schedule whose values are returned as Python floats (SB3's ``FloatSchedule``):
+    a callable returning numpy scalars or ints still gives ``float``."""
+
+    value_schedule: Schedule
+
+    def __call__(self, progress_remaining: float) -> float:
+        return float(self.value_schedule(progress_remaining))
+
+
 def as_schedule(value: float | Schedule) -> Schedule:
-    """A number becomes a ``ConstantSchedule``; a callable is returned as is.
+    """A number becomes a ``ConstantSchedule``; a callable returns Python floats (SB3's
+    ``get_schedule_fn``: other callables are wrapped in ``FloatSchedule``).
 
     >>> as_schedule(3e-4)(0.5)
     0.0003
+    >>> type(as_schedule(lambda p: np.float32(p))(0.5)).__name__
+    'float'
     """
+    if isinstance(value, (ConstantSchedule, LinearSchedule, TabulatedSchedule, FloatSchedule)):
+        return value  # these return floats already (and save exactly)
     if callable(value):
-        return value
+        return FloatSchedule(value)
     if isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool):
         return ConstantSchedule(float(value))
     raise TypeError(f"expected a number or a callable of progress_remaining, got {value!r}")

@@ -65,6 +65,29 @@ def _check_namespace_exists(ns: str | None) -> None:
     raise error.NamespaceNotFound(f"Namespace {ns} not found. {hint}")
 
 
+# Gymnasium 1.x's own envs that palaestra does not implement (name -> latest version): an id
+# naming one of them gets the `gymnasium:` bridge in its error instead of a bare "not found".
+GYMNASIUM_ONLY: dict[str, int] = {
+    "Taxi": 4,
+    "FrozenLake": 1,
+    "FrozenLake8x8": 1,
+    "CliffWalking": 1,
+    "CliffWalkingSlippery": 1,
+    "Blackjack": 1,
+    "LunarLander": 3,
+    "LunarLanderContinuous": 3,
+    "BipedalWalker": 3,
+    "BipedalWalkerHardcore": 3,
+    "CarRacing": 3,
+    **dict.fromkeys(
+        "Ant HalfCheetah Hopper Humanoid HumanoidStandup Pusher Reacher Swimmer Walker2d".split(),
+        5,
+    ),
+    "InvertedPendulum": 5,
+    "InvertedDoublePendulum": 5,
+}
+
+
 def _check_name_exists(ns: str | None, name: str) -> None:
     _check_namespace_exists(ns)
     names = {s.name for s in registry.values() if s.namespace == ns}
@@ -73,6 +96,14 @@ def _check_name_exists(ns: str | None, name: str) -> None:
     suggestion = difflib.get_close_matches(name, names, n=1)
     namespace_msg = f" in namespace {ns}" if ns else ""
     suggestion_msg = f" Did you mean: `{suggestion[0]}`?" if suggestion else ""
+    if ns is None and name in GYMNASIUM_ONLY:
+        # Gymnasium's latest version: an older one is refused by Gymnasium as deprecated.
+        env_id = get_env_id(None, name, GYMNASIUM_ONLY[name])
+        suggestion_msg = (
+            f" Gymnasium has it: make it through the bridge with "
+            f'`make("gymnasium:{env_id}")` (needs `pip install gymnasium`; '
+            f"Box2D and MuJoCo envs need Gymnasium's extras too)."
+        )
     raise error.NameNotFound(f"Environment `{name}` doesn't exist{namespace_msg}.{suggestion_msg}")
 
 

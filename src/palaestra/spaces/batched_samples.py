@@ -24,7 +24,7 @@ from palaestra.spaces.multi_binary import MultiBinary
 from palaestra.spaces.multi_discrete import MultiDiscrete
 from palaestra.spaces.oneof import OneOf
 from palaestra.spaces.sequence import Sequence
-from palaestra.spaces.space import Space
+from palaestra.spaces.space import Space, foreign_space_hint
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
 
@@ -46,7 +46,7 @@ def iterate(space: Space[Any], items: Any) -> Iterator[Any]:
         )
     raise TypeError(
         "The space provided to `iterate` is not a palaestra Space instance, "
-        f"type: {type(space)}, {space}"
+        f"type: {type(space)}, {space}" + foreign_space_hint(space)
     )
 
 
@@ -100,7 +100,7 @@ def concatenate(space: Space[Any], items: Iterable[Any], out: Any) -> Any:
     """
     raise TypeError(
         "The space provided to `concatenate` is not a palaestra Space instance, "
-        f"type: {type(space)}, {space}"
+        f"type: {type(space)}, {space}" + foreign_space_hint(space)
     )
 
 
@@ -145,7 +145,7 @@ def create_empty_array(space: Space[Any], n: int = 1, fn: Callable[..., Any] = n
     """
     raise TypeError(
         "The space provided to `create_empty_array` is not a palaestra Space instance, "
-        f"type: {type(space)}, {space}"
+        f"type: {type(space)}, {space}" + foreign_space_hint(space)
     )
 
 

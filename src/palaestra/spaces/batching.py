@@ -26,7 +26,7 @@ from palaestra.spaces.multi_binary import MultiBinary
 from palaestra.spaces.multi_discrete import MultiDiscrete
 from palaestra.spaces.oneof import OneOf
 from palaestra.spaces.sequence import Sequence
-from palaestra.spaces.space import Space
+from palaestra.spaces.space import Space, foreign_space_hint
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
 
@@ -44,7 +44,7 @@ def batch_space(space: Space[Any], n: int = 1) -> Space[Any]:
     """
     raise TypeError(
         "The space provided to `batch_space` is not a palaestra Space instance, "
-        f"type: {type(space)}, {space}"
+        f"type: {type(space)}, {space}" + foreign_space_hint(space)
     )
 
 

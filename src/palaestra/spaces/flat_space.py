@@ -16,7 +16,7 @@ from palaestra.spaces.multi_binary import MultiBinary
 from palaestra.spaces.multi_discrete import MultiDiscrete
 from palaestra.spaces.oneof import OneOf
 from palaestra.spaces.sequence import Sequence
-from palaestra.spaces.space import Space
+from palaestra.spaces.space import Space, foreign_space_hint
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
 
@@ -73,7 +73,7 @@ def flatdim(space: Space[Any]) -> int:
     """
     if space.is_np_flattenable is False:
         raise ValueError(_NOT_FLATTENABLE.format(space))
-    raise NotImplementedError(f"Unknown space: `{space}`")
+    raise NotImplementedError(f"Unknown space: `{space}`" + foreign_space_hint(space))
 
 
 @flatdim.register(Box)
@@ -128,7 +128,7 @@ def flatten_space(space: Space[Any]) -> Space[Any]:
     >>> flatten_space(Tuple([Discrete(3), Box(-1, 1, (2,))]))
     Box([ 0.  0.  0. -1. -1.], 1.0, (5,), float64)
     """
-    raise NotImplementedError(f"Unknown space: `{space}`")
+    raise NotImplementedError(f"Unknown space: `{space}`" + foreign_space_hint(space))
 
 
 @flatten_space.register(Box)

@@ -17,7 +17,7 @@ from palaestra.spaces.multi_binary import MultiBinary
 from palaestra.spaces.multi_discrete import MultiDiscrete
 from palaestra.spaces.oneof import OneOf
 from palaestra.spaces.sequence import Sequence
-from palaestra.spaces.space import Space
+from palaestra.spaces.space import Space, foreign_space_hint
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
 
@@ -39,7 +39,7 @@ def flatten(space: Space[Any], x: Any) -> Any:
     >>> flatten(Tuple([Discrete(3), Box(-1, 1, (2,))]), (1, np.array([0.5, -0.5], np.float32)))
     array([ 0. ,  1. ,  0. ,  0.5, -0.5])
     """
-    raise NotImplementedError(f"Unknown space: `{space}`")
+    raise NotImplementedError(f"Unknown space: `{space}`" + foreign_space_hint(space))
 
 
 @flatten.register(Box)
@@ -148,7 +148,7 @@ def unflatten(space: Space[Any], x: Any) -> Any:
     >>> unflatten(Discrete(3, start=-1), np.array([0, 0, 1]))
     np.int64(1)
     """
-    raise NotImplementedError(f"Unknown space: `{space}`")
+    raise NotImplementedError(f"Unknown space: `{space}`" + foreign_space_hint(space))
 
 
 @unflatten.register(Box)

@@ -131,3 +131,19 @@ class InvalidMask(error.Error, AssertionError):
 
 class InvalidProbabilityMask(error.InvalidProbability, AssertionError):
     """A ``sample(probability=...)`` argument is not a valid distribution for the space."""
+
+
+def foreign_space_hint(space: Any) -> str:
+    """A sentence naming the adapter when ``space`` is another library's space, else "".
+
+    Gymnasium's spaces look like ours but are other classes: the helpers dispatching on
+    palaestra's types cannot take them, and the fix is one call.
+    """
+    module = type(space).__module__ or ""
+    if module.split(".")[0] in ("gymnasium", "gym"):
+        return (
+            " It is a Gymnasium space: convert it with "
+            "`palaestra.compat.from_gymnasium_space(space)` (or wrap the env with "
+            "`palaestra.compat.from_gymnasium(env)`)."
+        )
+    return ""

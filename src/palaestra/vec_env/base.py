@@ -8,6 +8,7 @@ set with :meth:`VecEnv.seed` / :meth:`VecEnv.set_options` apply at the next ``re
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterable, Sequence
 from copy import deepcopy
 from typing import Any
@@ -117,14 +118,39 @@ class VecEnv:
         return self.env_method("render")
 
     def render(self, mode: str | None = None) -> np.ndarray | None:
-        """The envs' frames tiled into one image (``rgb_array``), or None."""
+        """The envs' frames tiled into one image (``rgb_array``), or None.
+
+        As SB3: ``mode`` is only for backward compatibility; one other than the envs'
+        ``render_mode`` warns and returns None (``"human"`` over ``rgb_array`` envs is allowed
+        and returns the tiled frame).
+        """
+        if mode == "human" and self.render_mode != mode:
+            if self.render_mode != "rgb_array":
+                warnings.warn(
+                    f"You tried to render a VecEnv with mode='{mode}' but the render mode "
+                    "defined when initializing the environment must be 'human' or "
+                    f"'rgb_array', not '{self.render_mode}'.",
+                    stacklevel=2,
+                )
+                return None
+        elif mode and self.render_mode != mode:
+            warnings.warn(
+                "Starting from gymnasium v0.26, render modes are determined during the "
+                "initialization of the environment. We allow to pass a mode argument to "
+                f"maintain a backwards compatible VecEnv API, but the mode ({mode}) has to be "
+                f"the same as the environment render mode ({self.render_mode}) which is not the "
+                "case.",
+                stacklevel=2,
+            )
+            return None
         mode = mode or self.render_mode
         if mode is None:
-            return None
-        if self.render_mode != "rgb_array" and mode != self.render_mode:
-            raise ValueError(
-                f"render(mode={mode!r}) differs from the envs' render_mode {self.render_mode!r}"
+            warnings.warn(
+                "You tried to call render() but no `render_mode` was passed to the env "
+                "constructor.",
+                stacklevel=2,
             )
+            return None
         if self.render_mode != "rgb_array":
             self.env_method("render")
             return None

@@ -16,6 +16,8 @@ import numpy as np
 
 from palaestra import error
 from palaestra.core import Env
+from palaestra.spaces import Box, Discrete, MultiBinary, MultiDiscrete
+from palaestra.spaces.batched_samples import concatenate, create_empty_array
 from palaestra.utils.run_state import State, supports_run_state
 from palaestra.vec_env.base import Indices, StepReturn, VecEnv
 from palaestra.vector.autoreset import Autoresetter, Transition
@@ -28,6 +30,10 @@ if TYPE_CHECKING:  # the env modules load only when a batch is made
     from palaestra.vector.native_engine import NativeBatch
 
 __all__ = ["BatchedVecEnv", "DummyVecEnv", "EngineVecEnv", "SubprocVecEnv"]
+
+# Single action spaces whose batch is an array indexed by row (SB3's and the engines' views
+# of a batch agree); every other space batches into a tuple or dict of per-component arrays.
+_ROW_SPACES = (Box, Discrete, MultiBinary, MultiDiscrete)
 
 
 class EngineVecEnv(VecEnv):
@@ -75,9 +81,27 @@ class EngineVecEnv(VecEnv):
         return self._copy(obs)
 
     def step_async(self, actions: np.ndarray) -> None:
-        """Send one action per env."""
+        """Send one action per env: ``actions[i]`` goes to env ``i``, as in SB3."""
         self._check_open()
-        self._driver.begin_step(actions)
+        self._driver.begin_step(self._batched_actions(actions))
+
+    def _batched_actions(self, actions: Any) -> Any:
+        """SB3 indexes ``actions[i]`` for env i; the engines take an element of the batched
+        action space. The two differ for composite spaces: a list of per-env Tuple or Dict
+        actions becomes the batched tuple/dict here (passing it on unchanged would transpose
+        Tuple actions between envs and leave envs unstepped, with no error)."""
+        if isinstance(self.action_space, _ROW_SPACES) or not isinstance(actions, (list, tuple)):
+            return actions  # array spaces index by row already; a dict is a batched Dict
+        if len(actions) != self.num_envs:
+            raise error.InvalidAction(
+                f"Expected {self.num_envs} actions (one per env) for action space "
+                f"{self.action_space}, got {len(actions)}: {actions!r}"
+            )
+        return concatenate(
+            self.engine.single_action_space,
+            actions,
+            create_empty_array(self.engine.single_action_space, n=self.num_envs),
+        )
 
     def step_wait(self) -> StepReturn:
         """``(obs, rewards, dones, infos)``; finished envs are already reset."""
@@ -166,6 +190,16 @@ class DummyVecEnv(EngineVecEnv):
 
     def __init__(self, env_fns: Sequence[Callable[[], Env[Any, Any]]]) -> None:
         engine = LoopEngine(env_fns, "same", "DummyVecEnv")
+        if len({id(env.unwrapped) for env in engine.envs}) != len(engine.envs):
+            # SB3's check (DLR-RM/stable-baselines3#1151): N views of one env step it N times.
+            raise ValueError(
+                "You tried to create multiple environments, but the function to create them "
+                "returned the same instance instead of creating different objects. You are "
+                "probably using `make_vec_env(lambda: env)` or `DummyVecEnv([lambda: env] * "
+                "n_envs)`. You should replace `lambda: env` by a `make_env` function that "
+                "creates a new instance of the environment at every call (using `gym.make()` "
+                "for instance)."
+            )
         self.envs = engine.envs
         super().__init__(engine, np.float32)
 
@@ -189,7 +223,14 @@ class SubprocVecEnv(EngineVecEnv):
 
             methods = mp.get_all_start_methods()
             start_method = "forkserver" if "forkserver" in methods else "spawn"
-        engine = ProcessEngine(env_fns, context=start_method, who="SubprocVecEnv")
+        try:
+            engine = ProcessEngine(env_fns, context=start_method, who="SubprocVecEnv")
+        except error.SharedMemoryError:
+            # SB3 pickles every observation; shared memory is palaestra's speed-up, so spaces
+            # it cannot hold (Text, Graph, Sequence, custom) fall back to SB3's way.
+            engine = ProcessEngine(
+                env_fns, shared_memory=False, context=start_method, who="SubprocVecEnv"
+            )
         super().__init__(engine, np.float64)  # SB3 stacks Python floats: float64
 
 

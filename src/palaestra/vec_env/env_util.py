@@ -72,14 +72,19 @@ def make_vec_env(
     monitor_kwargs = monitor_kwargs or {}
     wrapper_kwargs = wrapper_kwargs or {}
 
-    if vec_env_cls is None and wrapper_class is None:
+    # The native batch stands in for SB3's DummyVecEnv of Monitors only where it behaves the
+    # same: not for vec_env_kwargs (DummyVecEnv takes none: SB3 raises TypeError, and so does
+    # the loop below) nor for Monitor settings other than override_existing.
+    native_ok = not vec_env_kwargs and set(monitor_kwargs) <= {"override_existing"}
+    if vec_env_cls is None and wrapper_class is None and native_ok:
         native = _native_batch(env_id, env_kwargs, n_envs)
         if native is not None:
-            filename = None
+            monitor = VecMonitor(native)
             if monitor_dir is not None:
                 os.makedirs(monitor_dir, exist_ok=True)
-                filename = os.path.join(monitor_dir, str(start_index))
-            vec_env: VecEnv = VecMonitor(native, filename=filename, **monitor_kwargs)
+                names = [os.path.join(monitor_dir, str(start_index + i)) for i in range(n_envs)]
+                monitor.log_per_env(names, **monitor_kwargs)
+            vec_env: VecEnv = monitor
             if seed is not None:
                 native.action_space.seed(seed + start_index)
             vec_env.seed(seed)  # SB3: env i gets seed + i (start_index only shifts ranks)

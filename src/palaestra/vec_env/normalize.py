@@ -100,11 +100,15 @@ class VecNormalize(VecEnvWrapper):
         return np.clip(scaled, -self.clip_obs, self.clip_obs).astype(np.float32)
 
     def normalize_reward(self, reward: np.ndarray) -> np.ndarray:
-        """``clip(reward / sqrt(return var + eps), ±clip_reward)`` (if ``norm_reward``)."""
-        if not self.norm_reward:
-            return reward
-        scaled = reward / np.sqrt(self.ret_rms.var + self.epsilon)
-        return np.clip(scaled, -self.clip_reward, self.clip_reward)
+        """``clip(reward / sqrt(return var + eps), ±clip_reward)`` (if ``norm_reward``), as
+        float32 either way: SB3 casts (the statistics are float64, rewards float32)."""
+        if self.norm_reward:
+            reward = np.clip(
+                reward / np.sqrt(self.ret_rms.var + self.epsilon),
+                -self.clip_reward,
+                self.clip_reward,
+            )
+        return reward.astype(np.float32)
 
     def unnormalize_obs(self, obs: Any) -> Any:
         """Invert :meth:`normalize_obs` (up to clipping)."""
@@ -173,7 +177,18 @@ class VecNormalize(VecEnvWrapper):
                 }
                 arrays = {key: _read_stat(zf, members, key, shapes[key], name) for key in _STATS}
         except zipfile.BadZipFile as e:
-            raise ModelFileError(f"{name} is not a palaestra VecNormalize file ({e})") from e
+            if _is_pickle(load_path):
+                raise ModelFileError(
+                    f"{name} is a pickle (what Stable-Baselines3's VecNormalize.save writes); "
+                    "palaestra never unpickles (a pickle can run code) and reads only the .npz "
+                    "file its own VecNormalize.save writes. To carry SB3 statistics over, load "
+                    "them with SB3 where you trust the file and set obs_rms/ret_rms (mean, var, "
+                    "count) on a palaestra VecNormalize, then save that."
+                ) from None
+            raise ModelFileError(
+                f"{name} is not a palaestra VecNormalize file (palaestra reads the .npz file "
+                f"VecNormalize.save writes: {e})"
+            ) from e
         except (EOFError, zlib.error) as e:
             raise ModelFileError(f"{name} is truncated or corrupt ({short(e)})") from e
         norm.obs_rms.mean, norm.obs_rms.var = arrays["obs_mean"], arrays["obs_var"]
@@ -181,6 +196,16 @@ class VecNormalize(VecEnvWrapper):
         norm.ret_rms.mean, norm.ret_rms.var = arrays["ret_mean"][()], arrays["ret_var"][()]
         norm.ret_rms.count = float(settings["ret_count"])
         return norm
+
+
+def _is_pickle(path: str | os.PathLike[str]) -> bool:
+    """Whether the file starts like a pickle of protocol 2 or later (``0x80``, version)."""
+    try:
+        with open(path, "rb") as file:
+            head = file.read(2)
+    except OSError:
+        return False
+    return len(head) == 2 and head[0] == 0x80 and 2 <= head[1] <= 5
 
 
 def _read_settings(

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import multiprocessing as mp
 from collections.abc import Callable, Sequence
 from typing import Any
 
+import numpy as np
+
+from palaestra import logger
 from palaestra.core import Env
 from palaestra.error import AlreadyPendingCallError, NoAsyncCallError
 from palaestra.vector.engine_env import EngineVectorEnv
@@ -25,6 +29,8 @@ class AsyncVectorEnv(EngineVectorEnv):
     worker that raises re-raises here with its class and traceback; one that dies raises
     ``WorkerDiedError`` at once.
     """
+
+    engine: ProcessEngine
 
     def __init__(
         self,
@@ -47,8 +53,7 @@ class AsyncVectorEnv(EngineVectorEnv):
         self.observation_mode = observation_mode
         engine = ProcessEngine(env_fns, shared_memory, context, daemon, observation_mode)
         self._state = "default"  # or the name of the call in flight
-        self._call: tuple[str, tuple[Any, ...], dict[str, Any]] | None = None
-        self._reset_args: tuple[Any, Any] | None = None
+        self._reset_mask: np.ndarray | None = None  # of the reset in flight
         super().__init__(engine, copy=copy, autoreset_mode=autoreset_mode)
 
     def _start(self, name: str) -> None:
@@ -79,15 +84,19 @@ class AsyncVectorEnv(EngineVectorEnv):
     def reset_async(
         self, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> None:
-        """Start a reset (it runs in :meth:`reset_wait`)."""
+        """Send the reset: the workers reset while the caller does something else."""
         self._start("reset")
-        self._reset_args = (seed, options)
+        try:
+            self._reset_mask = self._driver.begin_reset(seed, options)
+        except BaseException:
+            self._state = "default"  # bad seeds or mask: nothing was sent
+            raise
 
     def reset_wait(self, timeout: float | None = None) -> tuple[Any, dict[str, Any]]:
-        """Finish the reset started by :meth:`reset_async`."""
+        """Collect the reset sent by :meth:`reset_async` (``multiprocessing.TimeoutError``
+        after ``timeout`` seconds; the workers are then stopped)."""
         self._finish("reset")
-        assert self._reset_args is not None
-        obs, raw = self._driver.reset(*self._reset_args)
+        obs, raw = self._driver.finish_reset(self._reset_mask, timeout)
         return self._out(obs), stack_infos(raw, self.num_envs)
 
     def step(self, actions: Any) -> StepReturn:
@@ -120,14 +129,12 @@ class AsyncVectorEnv(EngineVectorEnv):
     def call_async(self, name: str, *args: Any, **kwargs: Any) -> None:
         """Start calling ``name`` in every worker."""
         self._start("call")
-        self._call = (name, args, kwargs)
+        self.engine.call_send(name, args, kwargs)
 
     def call_wait(self, timeout: float | None = None) -> tuple[Any, ...]:
         """The results of the call started by :meth:`call_async`."""
         self._finish("call")
-        assert self._call is not None
-        name, args, kwargs = self._call
-        return self.engine.call(name, args, kwargs)
+        return self.engine.call_recv(timeout)
 
     def close_extras(
         self, timeout: float | None = None, terminate: bool = False, **kwargs: Any
@@ -135,5 +142,20 @@ class AsyncVectorEnv(EngineVectorEnv):
         """Stop the workers: politely (waiting up to ``timeout`` s), or at once with
         ``terminate``; no child process outlives this call."""
         engine = getattr(self, "engine", None)
-        if isinstance(engine, ProcessEngine):
+        if not isinstance(engine, ProcessEngine):
+            return
+        pending = getattr(self, "_state", "default")
+        if pending != "default" and not engine.closed:
+            # Gymnasium's order: warn, then collect the pending answers so that the workers'
+            # pipes are empty for "close"; a timeout means stopping them instead.
+            logger.warn(
+                f"Calling `close` while waiting for a pending call to `{pending}` to complete."
+            )
+            try:
+                getattr(self, f"{pending}_wait")(0 if terminate else timeout)
+            except mp.TimeoutError:
+                terminate = True
+            except Exception:  # the pending call failed: its answer has been read anyway
+                pass
+        if not engine.closed:
             engine.close(terminate=terminate, timeout=5.0 if timeout is None else timeout)

@@ -68,12 +68,19 @@ def take_rows(space: Any, obs: Any, rows: np.ndarray) -> list[Any]:
     ]
 
 
+def copy_obs(item: Any) -> Any:
+    """A copy of one observation that keeps its types (arrays, dicts, tuples, NamedTuples)."""
+    return _copy_obs(item)
+
+
 def _copy_obs(item: Any) -> Any:
     if isinstance(item, np.ndarray):
         return item.copy()
     if isinstance(item, dict):
         return {k: _copy_obs(v) for k, v in item.items()}
     if isinstance(item, tuple):
+        if hasattr(item, "_fields"):  # a NamedTuple such as GraphInstance keeps its type
+            return type(item)(*(_copy_obs(v) for v in item))
         return tuple(_copy_obs(v) for v in item)
     return item
 
@@ -94,18 +101,40 @@ class Autoresetter:
 
     def reset(self, seed: Any, options: dict[str, Any] | None) -> tuple[Any, Infos]:
         """Reset all rows, or those in ``options["reset_mask"]``; ``seed`` is int/list/None."""
+        mask, seeds, options = self._reset_args(seed, options)
+        infos = self.engine.reset(mask, seeds, options)
+        self._reset_done(mask)
+        return self.engine.obs, infos
+
+    def begin_reset(self, seed: Any, options: dict[str, Any] | None) -> np.ndarray | None:
+        """Start a reset on an engine that splits it (``reset_send``/``reset_recv``: the
+        process engine); finish with :meth:`finish_reset` and the mask returned here."""
+        mask, seeds, options = self._reset_args(seed, options)
+        self.engine.reset_send(mask, seeds, options)  # type: ignore[attr-defined]
+        return mask
+
+    def finish_reset(self, mask: np.ndarray | None, timeout: float | None) -> tuple[Any, Infos]:
+        """Collect the reset started by :meth:`begin_reset`."""
+        infos = self.engine.reset_recv(timeout)  # type: ignore[attr-defined]
+        self._reset_done(mask)
+        return self.engine.obs, infos
+
+    def _reset_args(
+        self, seed: Any, options: dict[str, Any] | None
+    ) -> tuple[np.ndarray | None, list[int | None], dict[str, Any] | None]:
         n = self.engine.num_envs
         seeds = row_seeds(seed, n)
         mask = parse_reset_mask(options, n)
         if mask is not None:
             # The sub-envs never see the mask (Gymnasium pops it; we leave the caller's dict).
             options = {k: v for k, v in options.items() if k != "reset_mask"}  # type: ignore[union-attr]
-        infos = self.engine.reset(mask, seeds, options)
+        return mask, seeds, options
+
+    def _reset_done(self, mask: np.ndarray | None) -> None:
         if mask is None:
             self._ended[:] = False
         else:
             self._ended[mask] = False
-        return self.engine.obs, infos
 
     def step(self, actions: Any) -> Transition:
         """One vector step in this mode."""
@@ -152,7 +181,12 @@ class Autoresetter:
         if not done.any():
             return Transition(engine.obs, rewards, terminated, truncated, infos, None, None, None)
         final_rows = np.flatnonzero(done)
-        final_obs = take_rows(engine.observation_space, engine.obs, final_rows)
+        # The env's own objects where the engine kept them (as Gymnasium hands on what the
+        # sub-env returned: a GraphInstance, a Python int), rows of the batch otherwise.
+        own: Any = getattr(engine, "final_observations", None)
+        final_obs = own(final_rows) if own is not None else None
+        if final_obs is None:
+            final_obs = take_rows(engine.observation_space, engine.obs, final_rows)
         final_infos = (
             [{} for _ in final_rows] if infos is None else [infos[i] for i in final_rows.tolist()]
         )

@@ -216,7 +216,8 @@ class LoopEngine:
             if not isinstance(env, Env):
                 raise TypeError(
                     f"{who}: env_fns[{i}] returned {type(env)}, not a palaestra.Env (wrap a "
-                    "Gymnasium env with palaestra's adapter first)"
+                    "Gymnasium env with palaestra's adapter first: "
+                    "`palaestra.compat.from_gymnasium(env)`)"
                 )
         self.num_envs = len(self.envs)
         first = self.envs[0]
@@ -239,7 +240,10 @@ class LoopEngine:
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
         for i, env in enumerate(self.envs):
             if mask is None or mask[i]:
-                self._env_obs[i], infos[i] = env.reset(seed=seeds[i], options=options)
+                # `options` only when there are some: SB3 calls reset(seed=...) alone, and
+                # envs written for it may take no `options`.
+                extra = {} if options is None else {"options": options}
+                self._env_obs[i], infos[i] = env.reset(seed=seeds[i], **extra)
         self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
         return infos
 
@@ -268,6 +272,13 @@ class LoopEngine:
             ) = env.step(action)
         self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
         return self._rewards, self._terminated, self._truncated, infos
+
+    def final_observations(self, rows: np.ndarray) -> list[Any]:
+        """Copies of the observations the sub-envs in ``rows`` returned from their last step
+        (read before autoreset replaces them)."""
+        from palaestra.vector.autoreset import copy_obs  # autoreset imports this module
+
+        return [copy_obs(self._env_obs[i]) for i in rows.tolist()]
 
     def _targets(self, rows: Rows) -> list[Env[Any, Any]]:
         return self.envs if rows is None else [self.envs[i] for i in rows]

@@ -9,6 +9,7 @@ what a single env seeded ``s + i`` draws).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from typing import Any, Protocol
 
@@ -149,6 +150,11 @@ class NativeEngine:
             return tuple(self.batch._rngs[i] for i in rows)
         if name == "render_mode":
             return tuple(None for _ in rows)
+        if _is_param(self.batch, name):
+            # What a single env exposes as `env.unwrapped.goal_velocity` lives in the batch's
+            # params (made from make_vec_env's env_kwargs): SB3's get_attr reads it there.
+            value = getattr(self.batch.params, name)
+            return tuple(value for _ in rows)
         attr = getattr(self.batch, name)
         result = attr(*args, **kwargs) if callable(attr) else attr
         return tuple(result for _ in rows)
@@ -165,7 +171,10 @@ class NativeEngine:
                 f"The rows of a native batch share their attributes; got different values "
                 f"for {name!r}. Use vectorization_mode='sync' for per-env attributes."
             )
-        setattr(self.batch, name, first)
+        if _is_param(self.batch, name):  # as the single env's setter: a new params object
+            self.batch.params = dataclasses.replace(self.batch.params, **{name: first})
+        else:
+            setattr(self.batch, name, first)
 
     def render(self) -> tuple[Any, ...]:
         """Native batches do not render (use a single env or vectorization_mode='sync')."""
@@ -173,3 +182,11 @@ class NativeEngine:
 
     def close(self) -> None:
         """Nothing to release."""
+
+
+def _is_param(batch: Any, name: str) -> bool:
+    """Whether ``name`` is a field of the batch's physics params (and not a batch attribute)."""
+    params = getattr(batch, "params", None)
+    if not dataclasses.is_dataclass(params) or name in vars(batch):
+        return False
+    return name in {field.name for field in dataclasses.fields(params)}

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.core import Env
+from palaestra.error import CustomSpaceError, SharedMemoryError
 from palaestra.spaces import Box, Discrete, MultiBinary, MultiDiscrete
 from palaestra.spaces.batched_samples import concatenate, create_empty_array, iterate
 from palaestra.spaces.batching import batch_space
@@ -159,8 +160,15 @@ class ProcessEngine:
         self.shared = shared_memory
         buffers: dict[str, Any] | None = None
         if shared_memory:
+            try:
+                obs_memory = create_shared_memory(self.single_observation_space, n, ctx)
+            except CustomSpaceError as e:
+                raise SharedMemoryError(
+                    f"Using `{who}(..., shared_memory=True)` caused an error ({e}); you can "
+                    "disable this feature with `shared_memory=False` however this is slower."
+                ) from e
             buffers = {
-                "obs": create_shared_memory(self.single_observation_space, n, ctx),
+                "obs": obs_memory,
                 "actions": (
                     create_shared_memory(single_act, n, ctx)
                     if isinstance(single_act, _ARRAY_SPACES)
@@ -215,13 +223,19 @@ class ProcessEngine:
             self.close(terminate=True)
             raise
         self._step_rows: list[int] = []
-        self._reset_rows: list[int] = []
+        self._reset_rows: list[int] = []  # rows a step resets instead (NEXT_STEP)
+        self._resetting: list[int] = []  # rows of the reset in flight (reset_send)
 
     def _check_spaces(self) -> None:
         answers = self.call_rows(range(self.num_envs), "spaces", None)
         obs_spaces = [a[0] for a in answers]
         if not isinstance(self._observation_mode, tuple):
-            batch_spaces(obs_spaces, self._observation_mode, self.who)
+            # "different": the batched space holds each worker's own bounds (read from the
+            # workers, so no env is built twice here); shared memory was sized from env 0's,
+            # which has the same shape and dtype as every other (batch_spaces checks).
+            _, batched = batch_spaces(obs_spaces, self._observation_mode, self.who)
+            if self._observation_mode == "different":
+                self.observation_space = batched
         check_action_spaces([self.single_action_space] + [a[1] for a in answers], self.who)
 
     # -- talking to workers -------------------------------------------------------------------
@@ -296,10 +310,22 @@ class ProcessEngine:
     # -- the engine protocol ------------------------------------------------------------------
     def reset(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> Infos:
         """Reset the masked workers' envs (all if None), each with its seed."""
-        rows = range(self.num_envs) if mask is None else np.flatnonzero(mask).tolist()
-        for i in rows:
+        self.reset_send(mask, seeds, options)
+        return self.reset_recv()
+
+    def reset_send(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> None:
+        """Start the reset of the masked workers' envs (they reset while the caller goes on)."""
+        self._resetting = (
+            list(range(self.num_envs)) if mask is None else np.flatnonzero(mask).tolist()
+        )
+        for i in self._resetting:
             self._send(i, "reset", (seeds[i], options))
-        answers = self._gather(rows, "reset")
+
+    def reset_recv(self, timeout: float | None = None) -> Infos:
+        """Gather the reset started by :meth:`reset_send` (``multiprocessing.TimeoutError``
+        after ``timeout`` seconds, the workers then stopped)."""
+        rows = self._resetting
+        answers = self._gather(rows, "reset", timeout)
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
         for i, answer in zip(rows, answers):
             if self.shared:
@@ -313,11 +339,15 @@ class ProcessEngine:
     def step_send(self, actions: Any, reset_mask: np.ndarray | None) -> None:
         """Send each worker its action (through shared memory for array action spaces)."""
         check_actions_batch(self.action_space, actions, self.num_envs)
-        if self._actions is not None:
+        per_row: Any = None
+        shared = self._actions
+        array = None if shared is None else np.asarray(actions)
+        if shared is not None and array is not None and array.dtype == shared.dtype:
             # One vectorised copy into shared memory; the pipe carries only "step".
-            np.copyto(self._actions, np.asarray(actions), casting="same_kind")
-            per_row: Any = None
+            np.copyto(shared, array)
         else:
+            # Other dtypes go by pipe, unconverted: the env sees what SyncVectorEnv's would
+            # (a float64 action stays float64 under a float32 space, as in Gymnasium).
             per_row = list(iterate(self.action_space, actions))
         self._reset_rows = [] if reset_mask is None else np.flatnonzero(reset_mask).tolist()
         for i in range(self.num_envs):
@@ -344,12 +374,28 @@ class ProcessEngine:
             self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
         return self._rewards, self._terminated, self._truncated, infos
 
+    def final_observations(self, rows: np.ndarray) -> list[Any] | None:
+        """The observations the workers in ``rows`` sent from their last step (unpickled, so
+        already copies); None with shared memory, where only the batch holds them."""
+        if self.shared:
+            return None
+        return [self._env_obs[i] for i in rows.tolist()]
+
     def call(
         self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any], rows: Rows = None
     ) -> tuple[Any, ...]:
         """Call ``name`` in each worker of ``rows``."""
         rows = range(self.num_envs) if rows is None else rows
         return tuple(self.call_rows(rows, "call", (name, args, kwargs)))
+
+    def call_send(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> None:
+        """Start calling ``name`` in every worker."""
+        for i in range(self.num_envs):
+            self._send(i, "call", (name, args, kwargs))
+
+    def call_recv(self, timeout: float | None = None) -> tuple[Any, ...]:
+        """Gather the results of :meth:`call_send`."""
+        return tuple(self._gather(range(self.num_envs), "call", timeout))
 
     def set_attr(self, name: str, values: Sequence[Any], rows: Rows = None) -> None:
         """Set ``name`` in each worker of ``rows``."""

@@ -2,7 +2,8 @@
 
 Workers write their row in place; the parent reads the whole batch as numpy views, so no
 observation is pickled. Array spaces (Box, Discrete, MultiDiscrete, MultiBinary) and Tuple/Dict
-of them are supported; other spaces raise ``CustomSpaceError`` (use ``shared_memory=False``).
+of them are supported; Graph and Sequence (dynamic shapes) raise ``DynamicShapeSpaceError`` (a
+``TypeError``, as in Gymnasium), other spaces ``CustomSpaceError`` (use ``shared_memory=False``).
 """
 
 from __future__ import annotations
@@ -13,8 +14,18 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.error import CustomSpaceError
-from palaestra.spaces import Box, Dict, Discrete, MultiBinary, MultiDiscrete, Space, Tuple
+from palaestra.error import CustomSpaceError, DynamicShapeSpaceError
+from palaestra.spaces import (
+    Box,
+    Dict,
+    Discrete,
+    Graph,
+    MultiBinary,
+    MultiDiscrete,
+    Sequence,
+    Space,
+    Tuple,
+)
 
 __all__ = ["create_shared_memory", "read_from_shared_memory", "write_to_shared_memory"]
 
@@ -36,6 +47,15 @@ def _shared_array(space: Space[Any], n: int = 1, ctx: Any = mp) -> Any:
     assert space.dtype is not None and space.shape is not None
     nbytes = n * int(np.prod(space.shape, dtype=np.int64)) * space.dtype.itemsize
     return ctx.Array("b", max(nbytes, 1), lock=False)
+
+
+@create_shared_memory.register(Graph)
+@create_shared_memory.register(Sequence)
+def _shared_dynamic(space: Space[Any], n: int = 1, ctx: Any = mp) -> Any:
+    raise DynamicShapeSpaceError(
+        f"As {space} has a dynamic shape so its not possible to make a static shared memory. "
+        "For `AsyncVectorEnv`, disable `shared_memory`."
+    )
 
 
 @create_shared_memory.register(Tuple)

@@ -119,7 +119,8 @@ def _serve(env: Any, command: str, data: Any, index: int, shared: _Shared | None
         return info
     if command == "reset":
         seed, options = data
-        obs, info = env.reset(seed=seed, options=options)
+        extra = {} if options is None else {"options": options}  # as LoopEngine.reset
+        obs, info = env.reset(seed=seed, **extra)
         if shared is None:
             return obs, info
         write_row(shared.obs_space, shared.obs, index, obs)

@@ -9,6 +9,8 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from palaestra.error import DeprecatedWrapper
+
 # name -> submodule of palaestra.wrappers that defines it
 _LAZY: dict[str, str] = {
     # applied by make()
@@ -53,15 +55,28 @@ _LAZY: dict[str, str] = {
     "HumanRendering": "rendering",
 }
 
+# Names that Gymnasium 0.x had, and what Gymnasium 1.x (and palaestra) call them.
+_RENAMED: dict[str, str] = {
+    "AutoResetWrapper": "Autoreset",
+    "FrameStack": "FrameStackObservation",
+    "PixelObservationWrapper": "AddRenderObservation",
+    "VectorListInfo": "vector.DictInfoToList",
+}
+
 __all__ = sorted(_LAZY)
 
 
 def __getattr__(name: str) -> Any:  # PEP 562 module attribute, not wrapper forwarding
-    if name == "vector":  # gymnasium.wrappers.vector -> palaestra.vector.wrappers
-        value = importlib.import_module("palaestra.vector.wrappers")
+    if name == "vector":  # gymnasium.wrappers.vector: the submodule re-exporting them
+        value = importlib.import_module("palaestra.wrappers.vector")
         globals()[name] = value
         return value
     module = _LAZY.get(name)
+    if name in _RENAMED:
+        # Gymnasium's words. An ImportError (DeprecatedWrapper), not an AttributeError, so that
+        # `from palaestra.wrappers import FrameStack` shows them too: Python replaces an
+        # AttributeError there with a bare "cannot import name".
+        raise DeprecatedWrapper(f"{name!r} has been renamed with `wrappers.{_RENAMED[name]}`")
     if module is None:
         raise AttributeError(f"module 'palaestra.wrappers' has no attribute {name!r}")
     value = getattr(importlib.import_module(f"palaestra.wrappers.{module}"), name)

@@ -113,12 +113,15 @@ class Monitor(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstructorArgs
             )
         self.rewards = []
         self.needs_reset = False
+        given = {"seed": seed, "options": options, **kwargs}  # any of them may be logged
         for key in self.reset_keywords:
-            value = kwargs.get(key)
+            value = given.get(key)
             if value is None:
                 raise ValueError(f"Expected you to pass keyword argument {key} into reset")
             self.current_reset_info[key] = value
-        return self.env.reset(seed=seed, options=options, **kwargs)
+        if options is not None:  # SB3 forwards only what it was given: envs may lack `options`
+            kwargs["options"] = options
+        return self.env.reset(seed=seed, **kwargs)
 
     def step(self, action: ActType) -> tuple[ObsType, SupportsFloat, bool, bool, dict[str, Any]]:
         """Step the inner env; at episode end add ``info["episode"]`` and write a CSV row."""

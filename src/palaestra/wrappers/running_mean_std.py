@@ -48,6 +48,17 @@ class RunningMeanStd:
         # epsilon is a pseudo-count for the initial (mean 0, var 1) prior, as in Gymnasium.
         self.count: Any = epsilon
 
+    def copy(self) -> RunningMeanStd:
+        """An independent copy (SB3's ``RunningMeanStd.copy``)."""
+        new = RunningMeanStd(shape=self.mean.shape, dtype=self.mean.dtype)
+        new.mean, new.var, new.count = self.mean.copy(), self.var.copy(), float(self.count)
+        return new
+
+    def combine(self, other: RunningMeanStd) -> None:
+        """Fold in the statistics of ``other`` (SB3's ``RunningMeanStd.combine``): the result is
+        what one object updated with both streams would hold."""
+        self.update_from_moments(other.mean, other.var, other.count)
+
     def update(self, x: np.ndarray) -> None:
         """Fold in a batch of samples stacked along axis 0."""
         self.update_from_moments(np.mean(x, axis=0), np.var(x, axis=0), x.shape[0])

@@ -36,7 +36,7 @@ class StickyAction(ActionWrapper[ObsType, ActType, ActType], RecordConstructorAr
             )
         if isinstance(repeat_action_duration, (int, np.integer)):
             duration = (int(repeat_action_duration), int(repeat_action_duration))
-        elif isinstance(repeat_action_duration, (tuple, list)):
+        elif isinstance(repeat_action_duration, tuple):  # not a list: Gymnasium refuses one
             if len(repeat_action_duration) != 2:
                 raise ValueError(
                     "`repeat_action_duration` should be a tuple or a list of two integers. "

@@ -62,7 +62,13 @@ class FilterObservation(
     """Keep only ``filter_keys`` of a ``Dict`` (str keys) or ``Tuple`` (int indices) observation."""
 
     def __init__(self, env: Env[ObsType, ActType], filter_keys: Sequence[str | int]) -> None:
-        if not isinstance(filter_keys, Sequence) or isinstance(filter_keys, str):
+        if isinstance(filter_keys, str):
+            # A ValueError, as Gymnasium's (which reads "key" as the keys "k", "e", "y").
+            raise ValueError(
+                f"Expected `filter_keys` to be a sequence of keys, got the string {filter_keys!r}; "
+                f"pass [{filter_keys!r}] to keep that one key"
+            )
+        if not isinstance(filter_keys, Sequence):
             raise TypeError(
                 f"Expected `filter_keys` to be a sequence of keys, got {type(filter_keys)}: "
                 f"{filter_keys!r}"

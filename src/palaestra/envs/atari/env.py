@@ -130,6 +130,7 @@ class AtariEnv(Env[Any, Any]):
         else:
             self.observation_space = image_space
         self._window: Any = None
+        self._image_shape = shape
         self._blank: np.ndarray | None = None  # set by skip_screen_observations()
 
     # --- seeding and loading (ale-py's public methods, same names) -------------------------
@@ -210,10 +211,17 @@ class AtariEnv(Env[Any, Any]):
         observation (``AtariPreprocessing`` does, at ``frameskip=1``): an RGB screen read
         costs about a quarter of an emulated frame, and would be paid on every frame.
         """
-        self._blank = np.zeros_like(self._observe()) if skip else None
+        # The frame's shape is the image space's: no screen read needed to build the blank,
+        # so a frame-skip wrapper can switch reads off and on around each skipped frame.
+        self._blank = np.zeros(self._image_shape, np.uint8) if skip else None
+
+    @property
+    def screen_observations_skipped(self) -> bool:
+        """Whether :meth:`skip_screen_observations` is in effect."""
+        return self._blank is not None
 
     def _obs(self) -> Any:
-        image = self._observe() if self._blank is None else np.zeros_like(self._blank)
+        image = self._observe() if self._blank is None else np.zeros(self._image_shape, np.uint8)
         if self.sound_obs:
             return {"image": image, "sound": self.ale.getAudio()}
         return image

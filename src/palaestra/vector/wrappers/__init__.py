@@ -11,13 +11,33 @@ from palaestra.vector.wrappers.transforms import (
     VectorizeTransformObservation,
     VectorizeTransformReward,
 )
+from palaestra.vector.wrappers.vectorize import (
+    ClipAction,
+    DtypeObservation,
+    FilterObservation,
+    FlattenObservation,
+    GrayscaleObservation,
+    RescaleAction,
+    RescaleObservation,
+    ReshapeObservation,
+    ResizeObservation,
+)
 
 __all__ = [
+    "ClipAction",
     "ClipReward",
     "DictInfoToList",
+    "DtypeObservation",
+    "FilterObservation",
+    "FlattenObservation",
+    "GrayscaleObservation",
     "NormalizeObservation",
     "NormalizeReward",
     "RecordEpisodeStatistics",
+    "RescaleAction",
+    "RescaleObservation",
+    "ReshapeObservation",
+    "ResizeObservation",
     "TransformAction",
     "TransformObservation",
     "TransformReward",
