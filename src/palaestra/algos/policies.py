@@ -193,6 +193,19 @@ class ActorCritic(nn.Module):
         )
         return self.pi_net(features), self.vf_net(vf_features)
 
+    def evaluate_actions(
+        self, obs: Any, actions: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """SB3's ``(values [B], log_prob [B], entropy [B])`` of env actions (torch, autograd):
+        the head's ``evaluate`` on the torch namespace."""
+        from palaestra.algos.learners.xp import torch_ops
+
+        pi, vf = self.pi_and_vf(obs)
+        log_std = getattr(self.action_head, "log_std", None)
+        idx = torch.as_tensor(self.action_head.index(actions.cpu().numpy()), device=pi.device)
+        log_prob, entropy, _ = self.action_head.evaluate(torch_ops, pi, log_std, idx)
+        return vf.squeeze(1), log_prob, entropy.expand(pi.shape[0])
+
     def predict_values(self, obs: Any) -> torch.Tensor:
         """``V(obs)`` ``[B]``."""
         return self.value_head(self._latents(obs)[1]).squeeze(1)

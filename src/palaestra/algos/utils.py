@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from palaestra.algos.ppo_math import explained_variance
+from palaestra.algos.learners.losses import explained_variance, polyak
 from palaestra.algos.schedules import (
     ConstantSchedule,
     FloatSchedule,
@@ -87,11 +87,10 @@ def get_device(device: torch.device | str = "auto") -> torch.device:
 def polyak_update(
     params: Iterable[torch.Tensor], target_params: Iterable[torch.Tensor], tau: float
 ) -> None:
-    """``target = (1 - tau) * target + tau * param`` in place, without a graph (tau=1 copies)."""
+    """``target = (1 - tau) * target + tau * param`` in place, without a graph (tau=1 copies):
+    the learners' ``polyak``, for torch tensors."""
     with torch.no_grad():
-        for param, target in zip(params, target_params, strict=True):
-            target.mul_(1 - tau)
-            target.add_(param, alpha=tau)
+        polyak(list(params), list(target_params), tau)
 
 
 def get_parameters_by_name(model: torch.nn.Module, included_names: Iterable[str]) -> list[Any]:

@@ -153,7 +153,7 @@ class NativeEngine:
         if _is_param(self.batch, name):
             # What a single env exposes as `env.unwrapped.goal_velocity` lives in the batch's
             # params (made from make_vec_env's env_kwargs): SB3's get_attr reads it there.
-            value = getattr(self.batch.params, name)
+            value = getattr(getattr(self.batch, "params"), name)  # noqa: B009 (not in the protocol)
             return tuple(value for _ in rows)
         attr = getattr(self.batch, name)
         result = attr(*args, **kwargs) if callable(attr) else attr
@@ -172,7 +172,8 @@ class NativeEngine:
                 f"for {name!r}. Use vectorization_mode='sync' for per-env attributes."
             )
         if _is_param(self.batch, name):  # as the single env's setter: a new params object
-            self.batch.params = dataclasses.replace(self.batch.params, **{name: first})
+            batch: Any = self.batch  # a classic-control batch: its physics lives in params
+            batch.params = dataclasses.replace(batch.params, **{name: first})
         else:
             setattr(self.batch, name, first)
 
