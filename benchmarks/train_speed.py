@@ -14,7 +14,10 @@ Cases (one torch thread, ``torch.set_num_threads(1)``, both libraries in this pr
 * ``ppo-mountaincar``: PPO on MountainCar-v0, one env, ``learning_rate=1e-3, n_steps=2048,
   batch_size=64, n_epochs=10``;
 * ``ppo-cartpole-8``: PPO on CartPole-v1, 8 envs x 128 steps, 4 epochs, 4 minibatches
-  (``batch_size=256``).
+  (``batch_size=256``);
+* ``sac-pendulum``, ``td3-pendulum``: SAC and TD3 on Pendulum-v1, one env, SB3's defaults
+  (256x256 nets for SAC, 400x300 for TD3, batch 256, one gradient step per env step) with
+  ``learning_rate=1e-3``; 3,000 steps timed after 1,000 (past ``learning_starts``).
 
 Acting latency (``--acting``, also after the cases of a full run): microseconds per
 ``model.predict`` of one vector step's observations (stochastic, as in collection) on each
@@ -62,6 +65,8 @@ CASES = [
     Case("dqn-mountaincar", "dqn", "MountainCar-v0", 0, DQN_KWARGS, 2_000, 20_000, 2.5),
     Case("ppo-mountaincar", "ppo", "MountainCar-v0", 0, PPO_MC_KWARGS, 2_048, 20_480, 3.0),
     Case("ppo-cartpole-8", "ppo", "CartPole-v1", 8, PPO_CP_KWARGS, 1_024, 30_720, 5.0),
+    Case("sac-pendulum", "sac", "Pendulum-v1", 0, {"learning_rate": 1e-3}, 1_000, 3_000, 2.0),
+    Case("td3-pendulum", "td3", "Pendulum-v1", 0, {"learning_rate": 1e-3}, 1_000, 3_000, 2.0),
 ]
 
 
@@ -83,10 +88,10 @@ def make_env(lib: str, case: Case) -> Any:
 
 def make_model(lib: str, case: Case) -> Any:
     if lib == "sb3":
-        from stable_baselines3 import DQN, PPO
+        import stable_baselines3 as algos
     else:
-        from palaestra.algos import DQN, PPO
-    cls = DQN if case.algo == "dqn" else PPO
+        import palaestra.algos as algos
+    cls = getattr(algos, case.algo.upper())
     return cls("MlpPolicy", make_env(lib, case), seed=0, **case.kwargs)
 
 
