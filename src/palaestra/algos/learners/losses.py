@@ -1,4 +1,4 @@
-"""The losses of DQN and PPO written once over an array namespace ``xp``, each with its
+"""The losses of DQN, PPO and A2C written once over an array namespace ``xp``, each with its
 vector-Jacobian product beside it, and GAE and explained variance (not differentiated).
 
 Each loss returns ``(loss, metrics, tape)``: ``loss`` is what autograd differentiates on the
@@ -6,9 +6,10 @@ torch learner, ``metrics`` the logged values (numbers the caller turns into floa
 what the VJP needs on the numpy learner. Conventions are SB3's: Huber (smooth L1, delta 1) TD
 loss against a target net, truncated episodes bootstrapped by the buffer; PPO's clipped
 surrogate with per-minibatch advantage normalisation (unbiased std, +1e-8), optional value
-clipping, and the entropy bonus (``-log_prob`` where a head has no entropy).
+clipping, and the entropy bonus (``-log_prob`` where a head has no entropy); A2C's plain
+policy gradient over the whole rollout with the same value and entropy terms.
 
-References: Mnih et al. 2015 (DQN), Schulman et al. 2016 (GAE) and 2017 (PPO).
+References: Mnih et al. 2015 (DQN), 2016 (A2C/A3C), Schulman et al. 2016 (GAE) and 2017 (PPO).
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "a2c_loss",
+    "a2c_loss_vjp",
     "dqn_loss",
     "dqn_loss_vjp",
     "explained_variance",
@@ -133,6 +136,59 @@ def ppo_loss_vjp(tape: Any) -> tuple[np.ndarray, np.ndarray, float]:
     if no_entropy:  # entropy_loss = mean(log_prob)
         return g_log_prob + np.float32(ent_coef / n), g_values, 0.0
     return g_log_prob, g_values, -ent_coef
+
+
+def a2c_loss(
+    xp: Any,
+    log_prob: Any,
+    advantages: Any,
+    values: Any,
+    returns: Any,
+    entropy: Any,
+    ent_coef: float = 0.0,
+    vf_coef: float = 0.5,
+    normalize_advantage: bool = False,
+) -> tuple[Any, dict[str, Any], Any]:
+    """Policy gradient + value loss - entropy bonus over one rollout (inputs ``[B]``;
+    ``entropy`` ``[B]`` or None for ``-log_prob``), as SB3's ``A2C.train``:
+    ``-mean(adv * log_prob) + ent_coef * entropy_loss + vf_coef * mean((returns - V)^2)``.
+
+    >>> from palaestra.algos.learners.xp import numpy_ops as xp
+    >>> one = np.array([1.0, 1.0])
+    >>> loss, m, _ = a2c_loss(xp, np.log([0.5, 0.25]), np.array([2.0, 1.0]), 0 * one, one, None)
+    >>> round(float(loss), 4), round(m["policy_loss"], 4), m["value_loss"]
+    (1.8863, 1.3863, 1.0)
+    """
+    n = log_prob.shape[0]
+    adv = xp.standardize(advantages) if normalize_advantage and n > 1 else advantages
+    policy_loss = -xp.mean(adv * log_prob)
+    v_err = values - returns
+    value_loss = xp.mean(v_err * v_err)
+    entropy_loss = xp.mean(log_prob) if entropy is None else -xp.mean(entropy)
+    loss = policy_loss + ent_coef * entropy_loss + vf_coef * value_loss
+    metrics = {
+        "loss": loss,
+        "policy_loss": policy_loss,
+        "value_loss": value_loss,
+        "entropy_loss": entropy_loss,
+    }
+    return loss, metrics, (adv, v_err, ent_coef, vf_coef, entropy is None)
+
+
+def a2c_loss_vjp(tape: Any) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(d/d log_prob [B], d/d values [B], d/d mean(entropy))``; the advantages are
+    constants (computed before the update), so normalising them adds no gradient path."""
+    adv, v_err, ent_coef, vf_coef, no_entropy = tape
+    n = adv.shape[0]
+    g_log_prob = (-1.0 / n) * adv
+    if no_entropy:  # entropy_loss = mean(log_prob)
+        g_log_prob = g_log_prob + ent_coef / n
+    g_values = (2.0 * vf_coef / n) * v_err
+    return (
+        g_log_prob.astype(np.float32, copy=False),
+        g_values.astype(np.float32, copy=False),
+        0.0 if no_entropy else -ent_coef,
+    )
 
 
 def polyak(params: list[Any], target_params: list[Any], tau: float) -> None:
