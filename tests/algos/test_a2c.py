@@ -142,7 +142,7 @@ def test_save_load(tmp_path: Path) -> None:
     for index, state in params["policy.optimizer"]["state"].items():
         assert set(state) == {"step", "square_avg"}
         assert torch.equal(state["square_avg"], opt_state[index]["square_avg"])
-    with pytest.raises(ModelFileError, match="load it with A2C.load"):
+    with pytest.raises(ModelFileError, match=r"load it with A2C\.load"):
         PPO.load(tmp_path / "a2c.zip")
 
 

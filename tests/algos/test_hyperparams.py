@@ -132,7 +132,7 @@ OUT_OF_RANGE = [
      "schedules name 'tensorboard_log', which a model file may not set"),
     ("DQN", "n_envs", 10**9, f"n_envs=1000000000 {INT} 1 to 65536"),
     ("A2C", H + "n_steps", 0, f"n_steps=0 {INT} 1 to 1000000"),
-    ("A2C", H + "rms_prop_eps", 0.0, "rms_prop_eps=0.0 is refused: expected a number in (0.0, 1.0]"),
+    ("A2C", H + "rms_prop_eps", 0.0, "rms_prop_eps=0.0 is refused: expected a number in (0.0"),
     ("A2C", H + "use_rms_prop", "yes", "use_rms_prop='yes' is refused: expected true or false"),
     ("A2C", P + "ortho_init", 2, "policy_kwargs ortho_init=2 is refused: expected true or false"),
     ("A2C", S + "clip_range", {"type": "constant", "value": 0.2},
