@@ -244,8 +244,18 @@ def gae(
 def explained_variance(y_pred: np.ndarray, y_true: np.ndarray) -> float:
     """``1 - Var[y_true - y_pred] / Var[y_true]``; NaN when ``y_true`` is constant (as SB3).
 
+    In float64 with dot products: logged once per update (every 5 steps for A2C), where
+    ``np.var``'s Python layers cost more than the arithmetic.
+
     >>> explained_variance(np.array([1.0, 2.0, 3.0]), np.array([1.0, 2.0, 3.0]))
     1.0
     """
-    var_y = float(np.var(y_true))
-    return float("nan") if var_y == 0 else float(1.0 - np.var(y_true - y_pred) / var_y)
+    true = np.asarray(y_true, dtype=np.float64).ravel()
+    resid = true - np.asarray(y_pred, dtype=np.float64).ravel()
+    n = true.size
+    centred = true - np.add.reduce(true) / n
+    var_y = float(np.dot(centred, centred)) / n
+    if var_y == 0:
+        return float("nan")
+    resid -= np.add.reduce(resid) / n
+    return 1.0 - float(np.dot(resid, resid)) / n / var_y
