@@ -24,8 +24,8 @@ SB3 gets ``gymnasium.make`` (single env) or SB3's ``make_vec_env``; palaestra ge
 ``num_timesteps`` first reaches ``warmup`` and at the end, so the timed part is ``steps`` env
 steps of steady-state training (DQN's warm-up passes ``learning_starts``; PPO's is one rollout
 + update; A2C's, 50 rollouts). Model construction is not timed. Repeats interleave the
-libraries (the starting one alternates); the figure is the median env-steps per CPU second, and the ratio is
-palaestra / SB3 of the medians.
+libraries (the starting one alternates); the figure is the median env-steps per CPU second,
+and the ratio is palaestra / SB3 of the medians.
 """
 
 from __future__ import annotations
