@@ -32,8 +32,8 @@ surprising, palaestra differs on purpose:
   keeps it four times) and returns exact terminal observations, so it combines with
   ``handle_timeout_termination`` (SB3 refuses the pair).
 
-Not supported yet: ``use_sde``, DQN's ``n_steps``, custom buffer
-classes, recurrent policies, VecNormalize-aware replay (observations are stored as the env
+Not supported yet: ``use_sde`` (gSDE; PPO and A2C raise ``NotImplementedError``), DQN's
+``n_steps``, custom buffer classes, recurrent policies, VecNormalize-aware replay (observations are stored as the env
 returns them).
 """
 
