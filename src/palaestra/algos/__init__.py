@@ -33,8 +33,8 @@ surprising, palaestra differs on purpose:
   ``handle_timeout_termination`` (SB3 refuses the pair).
 
 Not supported yet: ``use_sde`` (gSDE; PPO and A2C raise ``NotImplementedError``), DQN's
-``n_steps``, custom buffer classes, recurrent policies, VecNormalize-aware replay (observations are stored as the env
-returns them).
+``n_steps``, custom buffer classes, recurrent policies, VecNormalize-aware replay
+(observations are stored as the env returns them).
 """
 
 from palaestra.error import dependency_not_installed
