@@ -57,12 +57,13 @@ def test_train_and_eval_a2c(
     assert r.code == 0, r.err
 
 
+@pytest.mark.slow  # four training runs and two plots: ~6 s on an idle 2-core machine
 def test_compare_algos_trains_each_preset_then_reuses(
     cli: Callable[..., Result], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.chdir(tmp_path)
     args = ("compare", "algos", "--env", "CartPole-v1", "--algos", "a2c", "PPO",
-            "--seeds", 0, 1, "--timesteps", 600, "--out", "cmp.png")  # fmt: skip
+            "--seeds", 0, 1, "--timesteps", 320, "--out", "cmp.png")  # fmt: skip
     r = cli(*args)
     assert r.code == 0, r.err
     root = Path("runs") / "compare-algos-CartPole-v1"
