@@ -51,6 +51,9 @@ def test_optimizer_is_sb3s() -> None:
     assert type(ours) is type(theirs) is torch.optim.RMSprop
     for key in ("lr", "alpha", "eps", "weight_decay", "momentum", "centered"):
         assert ours.param_groups[0][key] == theirs.param_groups[0][key], key
+    replaced = A2C("MlpPolicy", "CartPole-v1", policy_kwargs={"optimizer_kwargs": {"eps": 0.1}})
+    assert replaced.optimizer.param_groups[0]["eps"] == 1e-5
+    assert replaced.policy_kwargs == {"optimizer_kwargs": {"eps": 0.1}}  # saved as given
     adam = A2C("MlpPolicy", "CartPole-v1", use_rms_prop=False)
     assert (
         type(adam.optimizer) is torch.optim.Adam and adam.optimizer.param_groups[0]["eps"] == 1e-5
