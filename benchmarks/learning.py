@@ -1,10 +1,11 @@
-"""Does training learn? palaestra's DQN and PPO against Stable-Baselines3's, seed by seed.
+"""Does training learn? palaestra's DQN, PPO and A2C against Stable-Baselines3's, seed by seed.
 
 Run from the repository root::
 
     .venv/bin/python benchmarks/learning.py                          # everything (long)
     .venv/bin/python benchmarks/learning.py --algo ppo --lib palaestra
     .venv/bin/python benchmarks/learning.py --algo dqn --lib sb3 --seeds 0 1 --jobs 2
+    .venv/bin/python benchmarks/learning.py --algo a2c
 
 * ``dqn``: MountainCar-v0, the tutorial settings (``learning_rate=1e-3, buffer_size=50000,
   learning_starts=1000, batch_size=128, tau=1.0, gamma=0.99, train_freq=4,
@@ -16,6 +17,10 @@ Run from the repository root::
   n_epochs=20, ent_coef=0.0``, learning rate and clip range decayed linearly from 1e-3 / 0.2 to
   0, ``--ppo-steps`` env steps (default 100k). Reported: mean return over 100 deterministic
   episodes.
+* ``a2c``: CartPole-v1, 8 envs, SB3's A2C defaults (``n_steps=5``, RMSprop with
+  ``learning_rate=7e-4``, ``gae_lambda=1``, ``ent_coef=0``; RL-Zoo's CartPole setting but for
+  its budget), ``--a2c-steps`` env steps (default 200k). Reported: mean return over 100
+  deterministic episodes.
 
 Both libraries run with ``torch.set_num_threads(1)`` and the same env construction: SB3 gets
 ``gymnasium.make`` / SB3's ``make_vec_env``, palaestra gets ``palaestra.make`` /
@@ -36,6 +41,7 @@ from typing import Any
 from tutorial_settings import DQN_KWARGS  # benchmarks/ is on sys.path when run as a script
 
 PPO_N_ENVS = 8
+A2C_N_ENVS = 8
 EVAL_EPISODES = 100
 
 
@@ -45,7 +51,7 @@ class Result:
     lib: str
     seed: int
     steps: int
-    success: float  # DQN: fraction of episodes reaching the goal; PPO: nan
+    success: float  # DQN: fraction of episodes reaching the goal; PPO/A2C: nan
     mean_length: float
     mean_return: float
     train_wall_s: float
@@ -88,12 +94,12 @@ def make_vec(lib: str, env_id: str, n_envs: int, seed: int) -> Any:
     return make_vec_env(env_id, n_envs=n_envs, seed=seed)
 
 
-def algo_classes(lib: str) -> tuple[Any, Any]:
+def algo_class(lib: str, algo: str) -> Any:
     if lib == "sb3":
-        from stable_baselines3 import DQN, PPO
+        import stable_baselines3 as algos
     else:
-        from palaestra.algos import DQN, PPO
-    return DQN, PPO
+        import palaestra.algos as algos  # type: ignore[no-redef]
+    return getattr(algos, algo.upper())
 
 
 def evaluate(model: Any, env: Any, seed: int, episodes: int) -> tuple[float, float, float]:
@@ -116,13 +122,15 @@ def evaluate(model: Any, env: Any, seed: int, episodes: int) -> tuple[float, flo
 
 
 def build(algo: str, lib: str, seed: int) -> tuple[Any, str]:
-    dqn_cls, ppo_cls = algo_classes(lib)
+    cls = algo_class(lib, algo)
     if algo == "dqn":
         env_id = "MountainCar-v0"
-        model = dqn_cls("MlpPolicy", make_env(lib, env_id), seed=seed, **DQN_KWARGS)
+        model = cls("MlpPolicy", make_env(lib, env_id), seed=seed, **DQN_KWARGS)
         return model, env_id
     env_id = "CartPole-v1"
-    model = ppo_cls(
+    if algo == "a2c":
+        return cls("MlpPolicy", make_vec(lib, env_id, A2C_N_ENVS, seed), seed=seed), env_id
+    model = cls(
         "MlpPolicy",
         make_vec(lib, env_id, PPO_N_ENVS, seed),
         n_steps=32,
@@ -156,7 +164,7 @@ def _run_task(task: tuple[str, str, int, int]) -> Result:
 
 def summarise(results: list[Result]) -> None:
     print("\nsummary (median over seeds)")
-    for algo in ("dqn", "ppo"):
+    for algo in ("dqn", "ppo", "a2c"):
         for lib in ("palaestra", "sb3"):
             rows = [r for r in results if r.algo == algo and r.lib == lib]
             if not rows:
@@ -180,7 +188,13 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     parser.add_argument("--steps", type=int, default=200_000, help="DQN env steps")
     parser.add_argument("--ppo-steps", type=int, default=100_000, help="PPO env steps")
-    parser.add_argument("--algo", choices=["dqn", "ppo", "both"], default="both")
+    parser.add_argument("--a2c-steps", type=int, default=200_000, help="A2C env steps")
+    parser.add_argument(
+        "--algo",
+        choices=["dqn", "ppo", "a2c", "both", "all"],
+        default="both",
+        help="both: dqn and ppo; all: dqn, ppo and a2c",
+    )
     parser.add_argument("--lib", choices=["palaestra", "sb3", "both"], default="both")
     parser.add_argument("--jobs", type=int, default=1, help="processes (seeds in parallel)")
     return parser.parse_args()
@@ -188,13 +202,11 @@ def parse_args() -> argparse.Namespace:
 
 def main() -> None:
     args = parse_args()
-    algos = ["dqn", "ppo"] if args.algo == "both" else [args.algo]
+    algos = {"both": ["dqn", "ppo"], "all": ["dqn", "ppo", "a2c"]}.get(args.algo, [args.algo])
     libs = ["palaestra", "sb3"] if args.lib == "both" else [args.lib]
+    budget = {"dqn": args.steps, "ppo": args.ppo_steps, "a2c": args.a2c_steps}
     tasks = [
-        (algo, lib, seed, args.steps if algo == "dqn" else args.ppo_steps)
-        for algo in algos
-        for seed in args.seeds
-        for lib in libs
+        (algo, lib, seed, budget[algo]) for algo in algos for seed in args.seeds for lib in libs
     ]
     results: list[Result] = []
     if args.jobs > 1:

@@ -39,6 +39,7 @@ import numpy as np
 import palaestra
 from palaestra import presets
 from palaestra.cli.common import is_goal_env, parse_value
+from palaestra.cli.settings import ALGOS
 
 PRESETS_JSON = Path(__file__).resolve().parents[1] / "src/palaestra/presets/presets.json"
 EVAL_EPISODES = 100
@@ -102,11 +103,12 @@ def run_one(algo: str, env_id: str, name: str, preset: dict[str, Any], seed: int
     """Train ``preset`` with ``seed`` the way the CLI does, then evaluate it."""
     import torch
 
-    from palaestra.algos import DQN, PPO, evaluate_policy
+    from palaestra.algos import evaluate_policy
+    from palaestra.cli.settings import algo_class
 
     torch.set_num_threads(1)
     venv = make_training_env(env_id, preset, seed)
-    cls = {"dqn": DQN, "ppo": PPO}[algo]
+    cls = algo_class(algo)
     model = cls(
         preset["policy"], venv, seed=seed, verbose=0, **presets.resolve(preset["hyperparams"])
     )
@@ -241,7 +243,7 @@ def overridden(preset: dict[str, Any], assignments: list[str]) -> dict[str, Any]
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--algo", choices=["dqn", "ppo"])
+    parser.add_argument("--algo", choices=list(ALGOS))
     parser.add_argument("--env", metavar="ID")
     parser.add_argument("--preset", metavar="NAME", help="preset name (default: all)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])

@@ -1,4 +1,4 @@
-"""Training speed: env-steps/s of palaestra's DQN and PPO against Stable-Baselines3's.
+"""Training speed: env-steps/s of palaestra's DQN, PPO and A2C against Stable-Baselines3's.
 
 Run from the repository root::
 
@@ -15,6 +15,8 @@ Cases (one torch thread, ``torch.set_num_threads(1)``, both libraries in this pr
   batch_size=64, n_epochs=10``;
 * ``ppo-cartpole-8``: PPO on CartPole-v1, 8 envs x 128 steps, 4 epochs, 4 minibatches
   (``batch_size=256``);
+* ``a2c-cartpole-8``: A2C on CartPole-v1, 8 envs, SB3's defaults (``n_steps=5``, RMSprop, one
+  update per 40 env steps);
 * ``sac-pendulum``, ``td3-pendulum``: SAC and TD3 on Pendulum-v1, one env, SB3's defaults
   (256x256 nets for SAC, 400x300 for TD3, batch 256, one gradient step per env step) with
   ``learning_rate=1e-3``; 3,000 steps timed after 1,000 (past ``learning_starts``).
@@ -28,9 +30,9 @@ SB3 gets ``gymnasium.make`` (single env) or SB3's ``make_vec_env``; palaestra ge
 ``learn(warmup + steps)`` call: a callback notes the process CPU time (and wall time) when
 ``num_timesteps`` first reaches ``warmup`` and at the end, so the timed part is ``steps`` env
 steps of steady-state training (DQN's warm-up passes ``learning_starts``; PPO's is one rollout
-+ update). Model construction is not timed. Repeats interleave the libraries (the starting one
-alternates); the figure is the median env-steps per CPU second, and the ratio is
-palaestra / SB3 of the medians.
++ update; A2C's, 50 rollouts). Model construction is not timed. Repeats interleave the
+libraries (the starting one alternates); the figure is the median env-steps per CPU second,
+and the ratio is palaestra / SB3 of the medians.
 """
 
 from __future__ import annotations
@@ -65,6 +67,7 @@ CASES = [
     Case("dqn-mountaincar", "dqn", "MountainCar-v0", 0, DQN_KWARGS, 2_000, 20_000, 2.5),
     Case("ppo-mountaincar", "ppo", "MountainCar-v0", 0, PPO_MC_KWARGS, 2_048, 20_480, 3.0),
     Case("ppo-cartpole-8", "ppo", "CartPole-v1", 8, PPO_CP_KWARGS, 1_024, 30_720, 5.0),
+    Case("a2c-cartpole-8", "a2c", "CartPole-v1", 8, {}, 2_000, 40_000, 5.0),
     Case("sac-pendulum", "sac", "Pendulum-v1", 0, {"learning_rate": 1e-3}, 1_000, 3_000, 2.0),
     Case("td3-pendulum", "td3", "Pendulum-v1", 0, {"learning_rate": 1e-3}, 1_000, 3_000, 2.0),
 ]
@@ -90,7 +93,7 @@ def make_model(lib: str, case: Case) -> Any:
     if lib == "sb3":
         import stable_baselines3 as algos
     else:
-        import palaestra.algos as algos
+        import palaestra.algos as algos  # type: ignore[no-redef]
     cls = getattr(algos, case.algo.upper())
     return cls("MlpPolicy", make_env(lib, case), seed=0, **case.kwargs)
 

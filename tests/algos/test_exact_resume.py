@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import torch
 
-from palaestra.algos import DQN, PPO, SAC, TD3, NormalActionNoise
+from palaestra.algos import A2C, DQN, PPO, SAC, TD3, NormalActionNoise
 from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 from palaestra.vec_env import make_vec_env
 
@@ -29,6 +29,10 @@ CASES: dict[str, tuple[Any, dict[str, Any], str, int]] = {
     # n_steps * n_envs = 256: stops fall inside rollouts and on their last step (512, 768).
     "ppo": (PPO, dict(n_steps=64, batch_size=64, n_epochs=2), "CartPole-v1", 1300),
     "ppo-box": (PPO, dict(n_steps=32, batch_size=64, n_epochs=2), "Pendulum-v1", 1000),
+    # Rollouts of 5 * 4 = 20 steps: stops inside rollouts (4, 512, 768) and on their last
+    # step (257 stops at 260, and 600).
+    "a2c": (A2C, dict(ent_coef=0.01), "CartPole-v1", 900),
+    "a2c-box": (A2C, dict(n_steps=8, normalize_advantage=True), "Pendulum-v1", 800),
     "dqn": (
         DQN,
         dict(learning_starts=100, train_freq=4, target_update_interval=200, buffer_size=5000),

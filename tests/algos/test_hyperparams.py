@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from palaestra.algos import DDPG, DQN, PPO, SAC, TD3, ModelFileError
+from palaestra.algos import A2C, DDPG, DQN, PPO, SAC, TD3, ModelFileError
 from palaestra.algos import hyperparams as hp
 from palaestra.algos.model_io import read_archive, write_archive
 from palaestra.algos.policies import ActorCritic, QNetwork
@@ -19,11 +19,12 @@ from palaestra.algos.policies import ActorCritic, QNetwork
 
 @pytest.fixture(scope="module")
 def saved(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """A small DQN and PPO model file (untrained: only the metadata matters here)."""
+    """A small DQN, PPO and A2C model file (untrained: only the metadata matters here)."""
     root = tmp_path_factory.mktemp("models")
     DQN("MlpPolicy", "CartPole-v1", buffer_size=1000, seed=0).save(root / "dqn.zip")
     PPO("MlpPolicy", "CartPole-v1", n_steps=32, batch_size=16, seed=0).save(root / "ppo.zip")
-    return {"DQN": root / "dqn.zip", "PPO": root / "ppo.zip"}
+    A2C("MlpPolicy", "CartPole-v1", seed=0).save(root / "a2c.zip")
+    return {"DQN": root / "dqn.zip", "PPO": root / "ppo.zip", "A2C": root / "a2c.zip"}
 
 
 def _tamper(source: Path, target: Path, **changes: Any) -> Path:
@@ -60,7 +61,7 @@ def test_every_saved_value_of_the_actor_critics_has_a_rule(cls: Any) -> None:
     assert takes == set(hp.POLICY_KWARGS[name])
 
 
-@pytest.mark.parametrize("cls", [DQN, PPO])
+@pytest.mark.parametrize("cls", [DQN, PPO, A2C])
 def test_every_saved_value_has_a_rule(cls: Any) -> None:
     """The rules list exactly what the algorithm saves and what its policy takes: a new saved
     hyperparameter or policy keyword needs its rule, or loading its own files fails."""
@@ -151,6 +152,12 @@ OUT_OF_RANGE = [
     ("PPO", S + "tensorboard_log", {"type": "constant", "value": 1.0},
      "schedules name 'tensorboard_log', which a model file may not set"),
     ("DQN", "n_envs", 10**9, f"n_envs=1000000000 {INT} 1 to 65536"),
+    ("A2C", H + "n_steps", 0, f"n_steps=0 {INT} 1 to 1000000"),
+    ("A2C", H + "rms_prop_eps", 0.0, "rms_prop_eps=0.0 is refused: expected a number in (0.0"),
+    ("A2C", H + "use_rms_prop", "yes", "use_rms_prop='yes' is refused: expected true or false"),
+    ("A2C", P + "ortho_init", 2, "policy_kwargs ortho_init=2 is refused: expected true or false"),
+    ("A2C", S + "clip_range", {"type": "constant", "value": 0.2},
+     "schedules name 'clip_range', which a model file may not set"),
 ]  # fmt: skip
 
 
@@ -159,7 +166,7 @@ def test_out_of_range_values_are_refused(
     saved: dict[str, Path], tmp_path: Path, algo: str, key: str, value: Any, expected: str
 ) -> None:
     path = _tamper(saved[algo], tmp_path / "m.zip", **{key: value})
-    cls = DQN if algo == "DQN" else PPO
+    cls = {"DQN": DQN, "PPO": PPO, "A2C": A2C}[algo]
     with pytest.raises(ModelFileError) as info:
         cls.load(path)
     assert str(info.value).startswith(f"{path}: ")

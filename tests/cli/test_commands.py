@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from palaestra.cli import COMMANDS, build_parser
+from palaestra.cli.settings import ALGOS
 
 from .conftest import run_cli
 
@@ -106,8 +107,8 @@ def _bad(tmp_path: Path) -> dict[str, tuple[list[object], int, str | re.Pattern[
     (tmp_path / "list.json").write_text("[1, 2]")
     e = "palaestra: error: "
     return {
-        "unknown algo": (["train", "a2c", "CartPole-v1"], 2,
-                         e + "unknown algorithm 'a2c' (choose one of: dqn, ppo)"),
+        "unknown algo": (["train", "a3c", "CartPole-v1"], 2,
+                         e + f"unknown algorithm 'a3c' (choose one of: {', '.join(ALGOS)})"),
         "unknown env": (["train", "ppo", "CartPol-v1"], 2,
                         e + "Environment `CartPol` doesn't exist. Did you mean: `CartPole`? "
                         "(run `palaestra envs` to list the ids)"),

@@ -77,7 +77,7 @@ def _table(out: str) -> dict[str, list[str]]:
     rows = {}
     for line in out.splitlines():
         match = re.fullmatch(
-            r"(\S+)\s+(\d+)\s+(-?[\d.]+)\s+\[(-?[\d.]+), (-?[\d.]+)\]\s+(\S+)", line
+            r"(\S+)\s+(\d+)\s+(-?[\d.]+)\s+\[(-?[\d.]+), (-?[\d.]+)\]\s+(\S+)\s+(-|[\d.]+ s)", line
         )
         if match:
             rows[match[1]] = list(match.groups()[1:])
@@ -90,9 +90,9 @@ def test_compare_table_and_plot(tmp_path: Path, four_runs: list[Path]) -> None:
     assert result.code == 0, result.err
     rows = _table(result.out)
     # gamma=0.9: finals 20 and 40 -> 30 ± 127.062; success (1/3 + 2/3) / 2 = 50%
-    assert rows["gamma=0.9"] == ["2", "30.00", "-97.06", "157.06", "50.0%"]
+    assert rows["gamma=0.9"] == ["2", "30.00", "-97.06", "157.06", "50.0%", "-"]  # no status
     # gamma=0.99: finals 100 and 110 -> 105 ± 12.7062 * 5 = 63.531
-    assert rows["gamma=0.99"] == ["2", "105.00", "41.47", "168.53", "0.0%"]
+    assert rows["gamma=0.99"] == ["2", "105.00", "41.47", "168.53", "0.0%", "-"]
     assert f"  gamma=0.9: {four_runs[0]}, {four_runs[2]}" in result.out
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert result.out.strip().endswith(f"wrote {plot}")
@@ -117,7 +117,7 @@ def test_compare_last_n_and_labels(tmp_path: Path, four_runs: list[Path]) -> Non
 def test_one_seed_has_no_interval(tmp_path: Path, four_runs: list[Path]) -> None:
     result = run_cli("compare", four_runs[0], four_runs[1], "--out", tmp_path / "c.png")
     assert result.code == 0, result.err
-    assert re.search(r"gamma=0\.9\s+1\s+20\.00\s+n/a \(one seed\)\s+33\.3%", result.out)
+    assert re.search(r"gamma=0\.9\s+1\s+20\.00\s+n/a \(one seed\)\s+33\.3%\s+-", result.out)
 
 
 def test_read_episodes_fallbacks(tmp_path: Path) -> None:

@@ -12,18 +12,20 @@ from palaestra.cli.progress import AppendingCSV, EpisodeLog
 def test_episode_log_header_then_resume_after_a_torn_row(tmp_path: Path) -> None:
     path = tmp_path / "episodes.csv"
     log = EpisodeLog(path)
-    assert path.read_bytes() == b"steps,return,length,terminated\r\n"  # on disk at once
-    log.writer.writerow([200, -200.0, 200, 0])
+    assert path.read_bytes() == b"steps,return,length,terminated,time_s\r\n"  # on disk at once
+    log.writer.writerow([200, -200.0, 200, 0, 1.5])
     log.close()
     with open(path, "ab") as file:
         file.write(b"350,-15")  # the process died here
     log = EpisodeLog(path)
-    log.writer.writerow([400, -100.0, 200, 1])
+    log.writer.writerow([400, -100.0, 200, 1, 2.5])
     log.close()
     assert path.read_bytes() == (
-        b"steps,return,length,terminated\r\n200,-200.0,200,0\r\n400,-100.0,200,1\r\n"
+        b"steps,return,length,terminated,time_s\r\n200,-200.0,200,0,1.5\r\n400,-100.0,200,1,2.5\r\n"
     )
-    assert read_episodes(tmp_path).steps.tolist() == [200, 400]
+    episodes = read_episodes(tmp_path)
+    assert episodes.steps.tolist() == [200, 400]
+    assert episodes.times is not None and episodes.times.tolist() == [1.5, 2.5]
 
 
 def test_progress_csv_resume_after_a_torn_row(tmp_path: Path) -> None:

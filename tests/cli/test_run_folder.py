@@ -13,6 +13,8 @@ from typing import Any
 
 import pytest
 
+from palaestra.cli.settings import ALGOS
+
 from .conftest import Result, run_cli
 
 # A wrapper module that leaves a marker file when it is imported: proof that code ran.
@@ -182,7 +184,7 @@ def test_allow_import_is_for_run_folders_only(workdir: Path) -> None:
         ({"hyperparams": {"policy_kwargs": {"net_arch": [10**9]}}},
          "hyperparams policy_kwargs.net_arch=[1000000000] is refused: expected null or a list "
          "of at most 64 layer widths from 1 to 65536"),
-        ({"algo": "a2c"}, "algo must be one of dqn, ppo, got 'a2c'"),
+        ({"algo": "a3c"}, f"algo must be one of {', '.join(ALGOS)}, got 'a3c'"),
     ],
 )  # fmt: skip
 def test_bad_config_values_are_one_line(

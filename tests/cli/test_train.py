@@ -14,7 +14,7 @@ import pytest
 import torch
 
 from palaestra import presets
-from palaestra.algos import DQN, PPO, LinearSchedule
+from palaestra.algos import A2C, DQN, PPO, LinearSchedule
 from palaestra.algos.callbacks import BaseCallback
 from palaestra.cli import train
 from palaestra.cli.settings import resolve_settings
@@ -25,6 +25,11 @@ from .conftest import Result, run_cli, wait_for_file
 def _rows(path: Path) -> list[dict[str, str]]:
     with open(path, newline="") as file:
         return list(csv.DictReader(file))
+
+
+def _untimed(row: dict[str, str]) -> dict[str, str]:
+    """An episodes.csv row without its training seconds (which differ between two runs)."""
+    return {k: v for k, v in row.items() if k != "time_s"}
 
 
 def test_ppo_run_folder_and_summary(ppo_run: tuple[Path, Result]) -> None:
@@ -150,6 +155,9 @@ PPO_ARGS = ["ppo", "CartPole-v1", "--n-envs", 4, "--timesteps", 512, "--seed", 1
 
 
 PPO_NORM_ARGS = [*PPO_ARGS, "--set", "normalize=true"]  # VecNormalize's statistics resume too
+# A2C's Acrobot preset normalises; rollouts of 5 x 4 steps between checkpoints every 100.
+A2C_ARGS = ["a2c", "Acrobot-v1", "--n-envs", 4, "--timesteps", 500, "--seed", 2,
+            "--checkpoint-every", 100, "--progress", "none", "--eval-episodes", 0]  # fmt: skip
 
 
 def _params(path: Path, algo: type) -> dict[str, torch.Tensor]:
@@ -165,9 +173,10 @@ def _assert_same_params(a: Path, b: Path, algo: type) -> None:
 
 @pytest.fixture(scope="module")
 def uninterrupted(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """The DQN and PPO runs of the resume tests, never stopped."""
+    """The DQN, PPO and A2C runs of the resume tests, never stopped."""
     runs = {}
-    for name, args in (("dqn", DQN_ARGS), ("ppo", PPO_ARGS), ("ppo-norm", PPO_NORM_ARGS)):
+    cases = [("dqn", DQN_ARGS), ("ppo", PPO_ARGS), ("ppo-norm", PPO_NORM_ARGS), ("a2c", A2C_ARGS)]
+    for name, args in cases:
         out = tmp_path_factory.mktemp("full") / name
         result = run_cli("train", *args, "--out", out)
         assert result.code == 0, result.err
@@ -218,7 +227,10 @@ def test_second_ctrl_c_keeps_the_last_checkpoint_and_resume_is_exact(
     assert episodes[: len(kept)] == kept and int(episodes[len(kept)]["steps"]) > 180
     assert [r["steps"] for r in episodes] == sorted({r["steps"] for r in episodes}, key=int)
     full_episodes = _rows(uninterrupted["dqn"] / "episodes.csv")
-    assert episodes == full_episodes  # the exact run logs the same episodes
+    # The exact run logs the same episodes (at other seconds of training).
+    assert [_untimed(r) for r in episodes] == [_untimed(r) for r in full_episodes]
+    times = [float(r["time_s"]) for r in episodes]
+    assert times == sorted(times)  # the resumed session counts on from the first one's time
     progress = (out / "progress.csv").read_text().splitlines()
     assert len(progress) > len(progress_before)
 
@@ -237,7 +249,7 @@ class _StopRequestAt(BaseCallback):
         return True
 
 
-@pytest.mark.parametrize("algo", ["dqn", "ppo", "ppo-norm"])
+@pytest.mark.parametrize("algo", ["dqn", "ppo", "ppo-norm", "a2c"])
 def test_graceful_stops_anywhere_resume_to_the_same_bits(
     algo: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, uninterrupted: dict[str, Path]
 ) -> None:
@@ -245,6 +257,7 @@ def test_graceful_stops_anywhere_resume_to_the_same_bits(
         "dqn": (DQN_ARGS, DQN),
         "ppo": (PPO_ARGS, PPO),
         "ppo-norm": (PPO_NORM_ARGS, PPO),
+        "a2c": (A2C_ARGS, A2C),
     }[algo]
     out = tmp_path / "run"
     # Stops inside rollouts, right after a checkpoint, on a rollout's last step.
@@ -262,7 +275,7 @@ def test_graceful_stops_anywhere_resume_to_the_same_bits(
     assert "note:" not in result.err  # exact: no "starts new episodes"
     _assert_same_params(out / "model.zip", uninterrupted[algo] / "model.zip", cls)
     assert len(list((out / "resume").iterdir())) == 2  # the newest KEEP checkpoints
-    if algo == "ppo-norm":
+    if algo in ("ppo-norm", "a2c"):
         saved = np.load(out / "vecnormalize.npz")
         full = np.load(uninterrupted[algo] / "vecnormalize.npz")
         assert all(np.array_equal(saved[k], full[k]) for k in full.files)

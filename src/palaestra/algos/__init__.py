@@ -1,4 +1,4 @@
-"""Training algorithms with Stable-Baselines3's API: ``from palaestra.algos import DQN, PPO``.
+"""Training algorithms with Stable-Baselines3's API: ``from palaestra.algos import A2C, DQN, PPO``.
 
 This subpackage needs torch (``pip install "palaestra[train]"``); ``import palaestra`` alone
 never imports it.
@@ -12,7 +12,7 @@ surprising, palaestra differs on purpose:
   passed through ``custom_objects``; callables (schedules) are stored exactly when they are
   ``ConstantSchedule``/``LinearSchedule``, as a 1001-point table otherwise;
 - exact resume: a model file also holds its ``learn`` loop's state (current observations,
-  a partial PPO rollout, DQN's open collection, episode statistics, generators), so
+  a partial PPO/A2C rollout, DQN's open collection, episode statistics, generators), so
   ``save`` + ``load(path, env=the same env)`` + ``learn(T - t, reset_num_timesteps=False)``
   ends bit-identical to a run never stopped (with another env, new episodes start, as in
   SB3). Schedules use SB3's ``1 - num_timesteps / total``; a finished run given more steps
@@ -32,9 +32,9 @@ surprising, palaestra differs on purpose:
   keeps it four times) and returns exact terminal observations, so it combines with
   ``handle_timeout_termination`` (SB3 refuses the pair).
 
-Not supported yet: ``use_sde``, DQN's ``n_steps``, custom buffer
-classes, recurrent policies, VecNormalize-aware replay (observations are stored as the env
-returns them).
+Not supported yet: ``use_sde`` (gSDE; PPO and A2C raise ``NotImplementedError``), DQN's
+``n_steps``, custom buffer classes, recurrent policies, VecNormalize-aware replay
+(observations are stored as the env returns them).
 """
 
 from palaestra.error import dependency_not_installed
@@ -46,6 +46,7 @@ except ImportError as exc:  # pragma: no cover - exercised in a subprocess test
 
 # isort: skip_file
 from palaestra.algos import callbacks, schedules
+from palaestra.algos.a2c import A2C
 from palaestra.algos.dqn import DQN
 from palaestra.algos.sac import SAC
 from palaestra.algos.td3 import DDPG, TD3
@@ -60,6 +61,7 @@ from palaestra.algos.model_io import ModelFileError
 from palaestra.algos.schedules import ConstantSchedule, LinearSchedule
 
 __all__ = [
+    "A2C",
     "DDPG",
     "DQN",
     "PPO",

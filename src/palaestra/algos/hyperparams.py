@@ -1,7 +1,7 @@
 """What a model file or a run folder may hand an algorithm's constructor, and within which limits.
 
 A model file or a run folder is data that someone else may have written. Its values reach
-``DQN(...)`` / ``PPO(...)`` only through the checks here, one function per source:
+``DQN(...)`` / ``PPO(...)`` / ``A2C(...)`` only through the checks here, one function per source:
 
 - :func:`check_model_file` (``load``): only the keys the algorithm itself saves
   (``_hyperparameters()`` and ``_schedules()``), so a file cannot choose where ``learn()``
@@ -42,7 +42,7 @@ __all__ = [
 # Limits far above any published setting (SB3 and RL-Zoo use buffers of 10^4..10^6 rows,
 # rollouts of 8..8192 steps, layers of 64..512 units) and far below what exhausts memory.
 MAX_BUFFER_SIZE = 100_000_000  # replay buffer transitions
-MAX_N_STEPS = 1_000_000  # PPO rollout steps per env
+MAX_N_STEPS = 1_000_000  # PPO/A2C rollout steps per env
 MAX_BATCH_SIZE = 1_000_000
 MAX_N_ENVS = 65_536
 MAX_NET_WIDTH = 65_536  # units of one layer
@@ -206,6 +206,16 @@ HYPERPARAMETERS: dict[str, dict[str, Check]] = {
         "vf_coef": _number(0.0, 1e6),
         "target_kl": _optional(_number(0.0, 1e6, low_open=True)),
     },
+    "A2C": {
+        **_COMMON,
+        "n_steps": _integer(1, MAX_N_STEPS),
+        "gae_lambda": _PROBABILITY,
+        "ent_coef": _number(-1e6, 1e6),
+        "vf_coef": _number(0.0, 1e6),
+        "rms_prop_eps": _number(0.0, 1.0, low_open=True),
+        "use_rms_prop": _boolean,
+        "normalize_advantage": _boolean,
+    },
 }
 
 
@@ -278,6 +288,7 @@ SCHEDULES: dict[str, dict[str, Check]] = {
         "clip_range": _number(0.0, 1e6),
         "clip_range_vf": _number(0.0, 1e6, low_open=True),
     },
+    "A2C": {"learning_rate": _number(0.0, 1e6)},
 }
 _OPTIMIZER_KWARGS: dict[str, Check] = {  # torch.optim's numeric options (lr: the schedule's)
     "eps": _number(0.0, 1.0),
@@ -323,6 +334,7 @@ _ACTOR_CRITIC = {
     "n_critics": _integer(1, 64),
 }
 POLICY_KWARGS.update(SAC=_ACTOR_CRITIC, TD3=_ACTOR_CRITIC, DDPG=_ACTOR_CRITIC)
+POLICY_KWARGS["A2C"] = POLICY_KWARGS["PPO"]  # the same ActorCritic
 
 
 def _ours(ref: Any, packages: tuple[str, ...]) -> bool:

@@ -8,19 +8,15 @@ from typing import Any
 import numpy as np
 import torch
 
-from palaestra import spaces
-from palaestra.algos.base import BaseAlgorithm
-from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.losses import explained_variance
 from palaestra.algos.learners.objectives import PPOObjective
-from palaestra.algos.policies import ActorCritic, extractor_class
-from palaestra.algos.rollout_buffer import RolloutBuffer
+from palaestra.algos.on_policy import OnPolicyAlgorithm, default_adam
 from palaestra.algos.schedules import Schedule, as_schedule
 
 __all__ = ["PPO"]
 
 
-class PPO(BaseAlgorithm):
+class PPO(OnPolicyAlgorithm):
     """Proximal Policy Optimization with the clipped surrogate: ``PPO("MlpPolicy", env, ...)``.
 
     As SB3: rollouts of ``n_steps`` per env, GAE, ``n_epochs`` passes of shuffled minibatches,
@@ -31,14 +27,7 @@ class PPO(BaseAlgorithm):
     (default 1 for MlpPolicy).
     """
 
-    supported_action_spaces = (
-        spaces.Discrete,
-        spaces.Box,
-        spaces.MultiDiscrete,
-        spaces.MultiBinary,
-    )
     _extra_counters: tuple[str, ...] = ()
-    policy: ActorCritic
 
     def __init__(
         self,
@@ -126,75 +115,9 @@ class PPO(BaseAlgorithm):
                 stacklevel=3,
             )
 
-    def _setup_model(self) -> None:
-        self.set_random_seed(self.seed)
-        kwargs = dict(self.policy_kwargs)
-        optimizer_class = kwargs.pop("optimizer_class", torch.optim.Adam)
-        optimizer_kwargs = dict(kwargs.pop("optimizer_kwargs", None) or {})
-        if optimizer_class is torch.optim.Adam:
-            optimizer_kwargs.setdefault("eps", 1e-5)  # SB3's ActorCriticPolicy default
-        backend = kwargs.pop("backend", "auto")
-        kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
-        policy = ActorCritic(self.observation_space, self.action_space, **kwargs).to(self.device)
-        params = list(policy.parameters())
-        optimizer = self._make_optimizer(params, optimizer_class, optimizer_kwargs)
-        pi_modules, vf_modules, why = policy.mlp_modules()
-        head = policy.action_head
-        extras = {"log_std": head.log_std} if head.kind == "gaussian" else {}
-        if pi_modules is not None and vf_modules is not None:
-            # The flat buffer's order (actor, critic, log-std) sets the order in which the
-            # gradient norm is summed: kept from the numpy trainer it replaces.
-            ordered = [p for m in pi_modules + vf_modules for p in m.parameters()]
-            params = list(dict.fromkeys(ordered + list(extras.values()) + params))
-        nets = {
-            "pi": Net(policy.pi_out, pi_modules, group="policy", why=why),
-            "vf": Net(policy.vf_out, vf_modules, group="policy", why=why),
-        }
-        self._set_learner(
-            policy,
-            optimizer,
-            backend,
-            nets,
-            {"policy": Group(optimizer, params, extras)},
-            joint={("pi", "vf"): policy.pi_and_vf},
-        )
-        self._head = head
-        self._make_rollout_buffer()
+    def _optimizer_choice(self, kwargs: dict[str, Any]) -> tuple[type, dict[str, Any]]:
+        return default_adam(kwargs)
 
-    def _make_rollout_buffer(self) -> None:
-        self.rollout_buffer = RolloutBuffer(
-            self.n_steps,
-            self.observation_space,
-            self.action_space,
-            self.n_envs,
-            self.gamma,
-            self.gae_lambda,
-        )
-
-    def _on_n_envs_changed(self) -> None:
-        self._check_rollout_size()
-        self._make_rollout_buffer()
-
-    def _sample(self, obs: Any, deterministic: bool) -> tuple[np.ndarray, np.ndarray]:
-        """``(actions, log_probs)`` for a batch of raw observations."""
-        log_std = self.learner.extra("log_std") if self._head.kind == "gaussian" else None
-        return self._head.sample(self.learner.forward("pi", obs), log_std, self._rng, deterministic)
-
-    def _values(self, obs: Any) -> np.ndarray:
-        """``V(obs)`` ``[B]``, in chunks (a whole rollout of images may not fit at once)."""
-        if isinstance(obs, dict):
-            n = len(next(iter(obs.values())))
-            chunks = [{k: v[i : i + 8192] for k, v in obs.items()} for i in range(0, n, 8192)]
-        else:
-            chunks = [obs[i : i + 8192] for i in range(0, len(obs), 8192)]
-        with self.learner.session():  # a whole rollout: threads cost more than they save
-            out = [self.learner.forward("vf", chunk)[:, 0] for chunk in chunks]
-        return out[0] if len(out) == 1 else np.concatenate(out)
-
-    def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
-        return self._sample(observation, deterministic)[0]
-
-    # -- learning ----------------------------------------------------------------------------
     def learn(
         self,
         total_timesteps: int,
@@ -204,91 +127,12 @@ class PPO(BaseAlgorithm):
         reset_num_timesteps: bool = True,
         progress_bar: bool = False,
     ) -> PPO:
-        """Alternate ``n_steps``-per-env rollouts and ``n_epochs`` of minibatch updates.
-
-        A callback that stops training ends the rollout after its step is stored; the partial
-        rollout stays in the buffer (and in a saved model), and the next ``learn`` completes it,
-        so a stopped and resumed run updates at the same steps as one never stopped."""
-        callback = self._setup_learn(
-            total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
+        """Alternate ``n_steps``-per-env rollouts and ``n_epochs`` of minibatch updates (a
+        stopped ``learn`` keeps its partial rollout: see ``OnPolicyAlgorithm._learn``)."""
+        self._learn(
+            total_timesteps, callback, log_interval, tb_log_name, reset_num_timesteps, progress_bar
         )
-        callback.on_training_start(self._callback_locals(), {})
-        iteration = 0
-        with self._learning_session():
-            while self.num_timesteps < self._total_timesteps:
-                if not self._collect_rollout(callback):
-                    break
-                iteration += 1
-                self._update_progress()
-                if log_interval is not None and iteration % log_interval == 0:
-                    self.logger.record("time/iterations", iteration, exclude="tensorboard")
-                    self._record_episode_stats()
-                    self.logger.dump(step=self.num_timesteps)
-                self.train()
-                self.rollout_buffer.reset()
-        callback.on_training_end()
         return self
-
-    def _on_env_reset(self, restart: bool) -> None:
-        self.rollout_buffer.reset()  # a partial rollout only continues its own episodes
-
-    def _collect_rollout(self, callback: Any) -> bool:
-        """Fill the rest of the rollout buffer; False if a callback asked to stop."""
-        env, buf = self.env, self.rollout_buffer
-        box = self.action_space if isinstance(self.action_space, spaces.Box) else None
-        callback.on_rollout_start()
-        # The values of the whole rollout come from one batched forward at its end (the
-        # parameters do not change during a rollout): per step, only the policy.
-        bits = isinstance(self.action_space, spaces.MultiBinary)
-        while not buf.full:
-            actions, log_probs = self._sample(self._last_obs, False)
-            if bits:
-                actions = actions.astype(self.action_space.dtype)  # Bernoulli samples are floats
-            env_actions = np.clip(actions, box.low, box.high) if box is not None else actions
-            new_obs, rewards, dones, infos = env.step(env_actions)
-            running = self._stepped(callback, actions, new_obs, rewards, dones, infos)
-            rewards = np.asarray(rewards, dtype=np.float32)
-            if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
-                rewards = self._bootstrap_truncated(rewards, dones, infos)
-            buf.add(
-                self._last_obs,
-                actions,
-                rewards,
-                self._last_episode_starts,  # type: ignore[arg-type]
-                None,
-                log_probs,
-            )
-            self._last_obs, self._last_episode_starts = new_obs, dones
-            if not running:
-                return False
-        buf.values[...] = self._values(buf.flat_observations()).reshape(buf.values.shape)
-        # The last step's dones (also after a resume that found the buffer already full).
-        assert self._last_episode_starts is not None
-        buf.compute_returns_and_advantage(self._values(self._last_obs), self._last_episode_starts)
-        callback.update_locals({"rollout_buffer": buf})
-        callback.on_rollout_end()
-        return True
-
-    def _bootstrap_truncated(
-        self, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]]
-    ) -> np.ndarray:
-        """Add ``gamma * V(terminal_obs)`` where an episode was cut by a time limit (SB3)."""
-        idx = [
-            i
-            for i in np.flatnonzero(dones)
-            if infos[i].get("TimeLimit.truncated", False)
-            and infos[i].get("terminal_observation") is not None
-        ]
-        if not idx:
-            return rewards
-        terminal = [infos[i]["terminal_observation"] for i in idx]
-        if isinstance(terminal[0], dict):
-            batch: Any = {k: np.stack([t[k] for t in terminal]) for k in terminal[0]}
-        else:
-            batch = np.stack(terminal)
-        rewards = rewards.copy()
-        rewards[idx] += self.gamma * self._values(batch)
-        return rewards
 
     def train(self) -> None:
         """``n_epochs`` passes of minibatch updates over the current rollout."""
@@ -363,12 +207,6 @@ class PPO(BaseAlgorithm):
             "seed": self.seed,
             "stats_window_size": self._stats_window_size,
         }
-
-    def _loop_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-        return self.rollout_buffer.partial_state()
-
-    def _load_loop_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
-        self.rollout_buffer.load_partial_state(meta, arrays)
 
     def _schedules(self) -> dict[str, Any]:
         return {

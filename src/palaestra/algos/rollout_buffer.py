@@ -1,4 +1,5 @@
-"""PPO's rollout buffer: ``n_steps`` steps of ``n_envs`` envs, then GAE, then minibatches."""
+"""The on-policy rollout buffer: ``n_steps`` steps of ``n_envs`` envs, then GAE, then
+minibatches (PPO) or the whole rollout as one batch (A2C)."""
 
 from __future__ import annotations
 
@@ -138,12 +139,8 @@ class RolloutBuffer:
         """All stored observations as ``[n_steps * n_envs, ...]`` (views)."""
         return _flat(self.observations)
 
-    def minibatch_arrays(
-        self, batch_size: int, rng: np.random.Generator
-    ) -> Iterator[dict[str, Any]]:
-        """Shuffled minibatches over all ``n_steps * n_envs`` samples (the last may be short),
-        as the learners' batch fields."""
-        obs = _flat(self.observations)
+    def _batch_columns(self) -> dict[str, Any]:
+        """All ``n_steps * n_envs`` samples as the learners' batch fields (views)."""
         cols = {
             "actions": self.actions,
             "old_values": self.values,
@@ -151,7 +148,21 @@ class RolloutBuffer:
             "advantages": self.advantages,
             "returns": self.returns,
         }
-        flat = {k: _flat(v) for k, v in cols.items()}
+        return {k: _flat(v) for k, v in cols.items()}
+
+    def whole_batch(self) -> dict[str, Any]:
+        """The whole rollout as one batch (A2C's single update), step-major."""
+        batch = self._batch_columns()
+        batch["observations"] = _flat(self.observations)
+        return batch
+
+    def minibatch_arrays(
+        self, batch_size: int, rng: np.random.Generator
+    ) -> Iterator[dict[str, Any]]:
+        """Shuffled minibatches over all ``n_steps * n_envs`` samples (the last may be short),
+        as the learners' batch fields."""
+        obs = _flat(self.observations)
+        flat = self._batch_columns()
         total = self.n_steps * self.n_envs
         perm = rng.permutation(total)
         for start in range(0, total, batch_size):

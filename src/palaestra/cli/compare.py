@@ -1,5 +1,9 @@
 """``palaestra compare``: runs that differ only by seed form one variant; a table of final
-returns with 95% t-intervals over seeds, and the learning curves of all variants on one plot."""
+returns with 95% t-intervals over seeds and the training wall time, and the learning curves of
+all variants on one plot against env steps and on a second against wall-clock seconds.
+
+``palaestra compare algos --env CartPole-v1 --algos a2c ppo dqn --seeds 0 1 2 3 4`` trains
+each algorithm's preset on each seed first (see :mod:`palaestra.cli.variants`)."""
 
 from __future__ import annotations
 
@@ -10,7 +14,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from palaestra.cli.common import CONFIG_FILE, CLIError, is_goal_env, read_json
+from palaestra.cli.common import CONFIG_FILE, STATUS_FILE, CLIError, is_goal_env, read_json
 
 __all__ = ["Variant", "add_parser", "group_runs", "run"]
 
@@ -91,16 +95,22 @@ def add_parser(sub: Any) -> None:
         "success rate, and plot every variant's learning curve (mean ± 95% CI band). "
         "Settings files among the arguments are variants trained first, one run per seed: "
         "palaestra compare preset shaped.yaml --algo dqn --env MountainCar-v0 --seeds 0 1 2 "
-        "(shaped.yaml: env_wrapper: shaping:BetterRewardShaping).",
+        "(shaped.yaml: env_wrapper: shaping:BetterRewardShaping). 'algos' compares "
+        "algorithms, each on its preset: palaestra compare algos --env CartPole-v1 "
+        "--algos a2c ppo dqn --seeds 0 1 2 3 4.",
     )
     p.add_argument(
         "runs",
         nargs="+",
         metavar="RUN_DIR|SETTINGS",
         help="run folders written by train; or variants to train first on each of --seeds: "
-        "settings files (.yaml/.json, as for train --config) or 'preset' (the preset alone)",
+        "settings files (.yaml/.json, as for train --config) or 'preset' (the preset alone); "
+        "or 'algos': each of --algos on its preset",
     )
-    p.add_argument("--algo", metavar="ALGO", help="algorithm the variants train (dqn or ppo)")
+    p.add_argument("--algo", metavar="ALGO", help="algorithm the variants train (e.g. dqn)")
+    p.add_argument(
+        "--algos", nargs="+", metavar="ALGO", help="algorithms to compare (with 'algos')"
+    )
     p.add_argument("--env", metavar="ENV", help="env id the variants train on")
     p.add_argument("--seeds", nargs="+", type=int, metavar="S", help="seeds each variant trains on")
     p.add_argument("--timesteps", type=int, metavar="N", help="steps per variant run")
@@ -156,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
                 "give one label per variant, in order of first appearance: " + "; ".join(labels),
             )
         labels = list(args.labels)
-    rows, bands = [], []
+    rows, bands, time_bands = [], [], []
     for label, variant in zip(labels, variants):
         episodes = [read_episodes(r) for r in variant.runs]
         finals = [float(np.mean(e.returns[-args.last :])) for e in episodes if len(e.returns)]
@@ -168,10 +178,13 @@ def run(args: argparse.Namespace) -> int:
             if is_goal_env(env_id) and known
             else None
         )
-        rows.append((label, len(variant.runs), mean, low, high, success))
+        rows.append((label, len(variant.runs), mean, low, high, success, _wall_time(variant)))
         band = variant_band(label, episodes)
         if band is not None:
             bands.append(band)
+        band = variant_band(label, episodes, x="times")
+        if band is not None:
+            time_bands.append(band)
     _print_table(rows, args.last)
     for label, variant in zip(labels, variants):
         print(f"  {label}: {', '.join(str(r) for r in variant.runs)}")
@@ -182,16 +195,36 @@ def run(args: argparse.Namespace) -> int:
 
         print(f"(Atari runs: training {GAMES_NOTE})")
     envs = sorted({str(v.config.get("env_id")) for v in variants if v.config})
-    plot_compare(bands, Path(args.out), " / ".join(envs) or "learning curves")
+    # Against wall-clock time only when every variant's runs logged their times.
+    timed = time_bands if len(time_bands) == len(bands) else None
+    plot_compare(bands, Path(args.out), " / ".join(envs) or "learning curves", timed)
     print(f"wrote {args.out}")
     return 0
 
 
+def _wall_time(variant: Variant) -> float | None:
+    """Mean training seconds per run (``status.json``); None when a run has none."""
+    seconds = []
+    for run in variant.runs:
+        path = run / STATUS_FILE
+        if not path.is_file():
+            return None
+        wall = read_json(path, "run status").get("wall_time_s")
+        if isinstance(wall, bool) or not isinstance(wall, (int, float)):
+            return None
+        seconds.append(float(wall))
+    return float(np.mean(seconds)) if seconds else None
+
+
 def _print_table(rows: list[tuple[Any, ...]], last: int) -> None:
     width = max(len("variant"), *(len(r[0]) for r in rows))
-    print(f"{'variant':<{width}}  seeds  final mean return  {'95% CI':<20}  success")
-    for label, n, mean, low, high, success in rows:
+    print(f"{'variant':<{width}}  seeds  final mean return  {'95% CI':<20}  success  wall time")
+    for label, n, mean, low, high, success, wall in rows:
         ci = "n/a (one seed)" if np.isnan(low) else f"[{low:.2f}, {high:.2f}]"
         rate = "-" if success is None else f"{success:.1f}%"
-        print(f"{label:<{width}}  {n:>5}  {mean:>17.2f}  {ci:<20}  {rate:>7}")
-    print(f"(final mean return: mean of each run's last {last} episodes, averaged over seeds)")
+        seconds = "-" if wall is None else f"{wall:.1f} s"
+        print(f"{label:<{width}}  {n:>5}  {mean:>17.2f}  {ci:<20}  {rate:>7}  {seconds:>9}")
+    print(
+        f"(final mean return: mean of each run's last {last} episodes, averaged over seeds; "
+        "wall time: training seconds per run, averaged over seeds)"
+    )

@@ -47,12 +47,14 @@ LEARNING_CURVE_FILE = "learning_curve.png"
 
 
 class Episodes(NamedTuple):
-    """Finished episodes of one run, in order; ``terminated`` is None when unknown."""
+    """Finished episodes of one run, in order; ``terminated`` and ``times`` are None when
+    unknown."""
 
     steps: np.ndarray  # [E] env steps when the episode ended
     returns: np.ndarray  # [E] float
     lengths: np.ndarray  # [E] int
     terminated: np.ndarray | None  # [E] bool
+    times: np.ndarray | None = None  # [E] seconds of training when the episode ended
 
 
 def _read_csv(path: Path) -> list[dict[str, str]]:
@@ -71,23 +73,27 @@ def read_episodes(run: Path) -> Episodes:
     try:
         if (run / EPISODES_FILE).is_file():
             rows = _read_csv(run / EPISODES_FILE)
+            times = _floats(rows, "time_s") if rows and "time_s" in rows[0] else None
             return Episodes(
                 _floats(rows, "steps").astype(np.int64),
                 _floats(rows, "return"),
                 _floats(rows, "length").astype(np.int64),
                 _floats(rows, "terminated").astype(bool),
+                times,
             )
         monitors = sorted(run.glob("*monitor.csv"))
         if monitors:
             rows = _read_csv(monitors[0])  # one env's file: its lengths add up to its steps
             lengths = _floats(rows, "l").astype(np.int64)
-            return Episodes(np.cumsum(lengths), _floats(rows, "r"), lengths, None)
+            times = _floats(rows, "t") if rows and "t" in rows[0] else None  # since its start
+            return Episodes(np.cumsum(lengths), _floats(rows, "r"), lengths, None, times)
         if (run / "progress.csv").is_file():
             rows = [r for r in _read_csv(run / "progress.csv") if r.get("rollout/ep_rew_mean")]
             returns = _floats(rows, "rollout/ep_rew_mean")
             steps = _floats(rows, "time/total_timesteps").astype(np.int64)
             lengths = np.nan_to_num(_floats(rows, "rollout/ep_len_mean")).astype(np.int64)
-            return Episodes(steps, returns, lengths, None)
+            times = _floats(rows, "time/time_elapsed") if "time/time_elapsed" in rows[0] else None
+            return Episodes(steps, returns, lengths, None, times)
     except (OSError, KeyError, ValueError) as exc:
         raise CLIError(f"cannot read the episodes of run {str(run)!r}: {exc}", "") from None
     raise CLIError(
@@ -199,45 +205,58 @@ def _save(fig: Any, path: Path) -> None:
 
 
 class Band(NamedTuple):
-    """One variant's curve on a step grid: mean and the 95% interval over seeds."""
+    """One variant's curve on a grid of steps (or seconds): mean and the 95% interval over
+    seeds."""
 
     label: str
-    steps: np.ndarray  # [G]
+    steps: np.ndarray  # [G] env steps, or seconds for a band against time
     mean: np.ndarray  # [G]
     low: np.ndarray  # [G] nan with one seed
     high: np.ndarray  # [G]
 
 
-def variant_band(label: str, runs: list[Episodes], points: int = 100) -> Band | None:
-    """Each seed's rolling mean interpolated on a common step grid, then mean ± t-interval."""
+def variant_band(
+    label: str, runs: list[Episodes], points: int = 100, x: str = "steps"
+) -> Band | None:
+    """Each seed's rolling mean interpolated on a common grid of ``x`` (``"steps"`` or
+    ``"times"``: training seconds), then mean ± t-interval; None without data (no episodes,
+    or a run without times)."""
     from palaestra.cli.stats import confidence_interval
 
     runs = [r for r in runs if len(r.returns)]
-    if not runs:
+    xs = [getattr(r, x) for r in runs]
+    if not runs or any(v is None or np.isnan(v).any() for v in xs):
         return None
-    start = max(int(r.steps[0]) for r in runs)
-    end = min(int(r.steps[-1]) for r in runs)
+    start = max(float(v[0]) for v in xs)
+    end = min(float(v[-1]) for v in xs)
     grid = np.linspace(start, max(end, start), points)
     curves = np.stack(
         [
-            np.interp(grid, r.steps, rolling_mean(r.returns, default_window(len(r.returns))))
-            for r in runs
+            np.interp(grid, v, rolling_mean(r.returns, default_window(len(r.returns))))
+            for v, r in zip(xs, runs)
         ]
     )  # [seeds, G]
     stats = np.array([confidence_interval(list(col)) for col in curves.T])  # [G, 3]
     return Band(label, grid, stats[:, 0], stats[:, 1], stats[:, 2])
 
 
-def plot_compare(bands: list[Band], path: Path, title: str) -> None:
-    """Every variant's mean curve with its 95% confidence band, on one plot."""
+def plot_compare(
+    bands: list[Band], path: Path, title: str, time_bands: list[Band] | None = None
+) -> None:
+    """Every variant's mean curve with its 95% confidence band against env steps; with
+    ``time_bands``, a second plot beside it against training wall-clock seconds."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    for band in bands:
-        (line,) = ax.plot(band.steps, band.mean, lw=2, label=band.label)
-        if not all(math.isnan(v) for v in band.low):
-            ax.fill_between(band.steps, band.low, band.high, color=line.get_color(), alpha=0.2)
-    ax.set(xlabel="env steps", ylabel="return (rolling mean)", title=title)
-    ax.legend(loc="best")
+    panels = [(bands, "env steps")]
+    if time_bands:
+        panels.append((time_bands, "wall-clock seconds of training"))
+    fig, axes = plt.subplots(1, len(panels), figsize=(8 * len(panels), 4.5), squeeze=False)
+    for ax, (panel, xlabel) in zip(axes[0], panels):
+        for band in panel:
+            (line,) = ax.plot(band.steps, band.mean, lw=2, label=band.label)
+            if not all(math.isnan(v) for v in band.low):
+                ax.fill_between(band.steps, band.low, band.high, color=line.get_color(), alpha=0.2)
+        ax.set(xlabel=xlabel, ylabel="return (rolling mean)", title=title)
+        ax.legend(loc="best")
     fig.tight_layout()
     try:
         _save(fig, path)

@@ -34,16 +34,19 @@ class Played(NamedTuple):
 
 
 def load_model(path: Path, device: str = "auto") -> Any:
-    """A DQN or PPO model; the algorithm comes from the file's own metadata."""
-    from palaestra.algos import DQN, PPO
+    """A model of any algorithm in ``settings.ALGOS``; which comes from the file's metadata."""
     from palaestra.algos.model_io import read_manifest
+    from palaestra.cli.settings import ALGO_CLASSES, algo_class
 
     meta = read_manifest(path, "model").meta
-    classes: dict[str, Any] = {"DQN": DQN, "PPO": PPO}
+    by_class = {cls: name for name, cls in ALGO_CLASSES.items()}
     algo = meta.get("algo")
-    if algo not in classes:
-        raise CLIError(f"{str(path)!r} holds a {algo!r} model", "palaestra trains DQN and PPO")
-    return classes[algo].load(path, device=device)
+    if algo not in by_class:
+        raise CLIError(
+            f"{str(path)!r} holds a {algo!r} model",
+            f"palaestra trains {', '.join(sorted(by_class))}",
+        )
+    return algo_class(by_class[algo]).load(path, device=device)
 
 
 def model_env_id(

@@ -19,19 +19,28 @@ from palaestra.utils.atomic_write import cut_torn_line, open_append
 
 __all__ = ["AppendingCSV", "EpisodeLog", "GracefulStop", "LiveProgress", "format_duration"]
 
-EPISODE_COLUMNS = ("steps", "return", "length", "terminated")
+EPISODE_COLUMNS = ("steps", "return", "length", "terminated", "time_s")
 LINE_INTERVAL_S = 2.0  # seconds between two plain progress lines
 
 
 class EpisodeLog(BaseCallback):
     """Append one row per finished episode to ``episodes.csv``: the env step count when it
-    ended, its return and length, and whether it terminated (rather than hit a time limit)."""
+    ended, its return and length, whether it terminated (rather than hit a time limit), and
+    the run's training wall time in seconds then (``wall_before``: the seconds of earlier
+    sessions of a resumed run), for learning curves against wall-clock time."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, wall_before: float = 0.0) -> None:
         super().__init__()
+        # A file written before the time column existed keeps its four columns when resumed.
+        timed = True
+        if path.is_file() and path.stat().st_size:
+            with open(path, encoding="utf-8", newline="") as file:
+                timed = "time_s" in next(csv.reader([file.readline()]), [])
+        self.timed = timed
         # A new file gets its header atomically; a resumed one loses a row torn by a crash.
         self.file = open_append(path, ",".join(EPISODE_COLUMNS) + "\r\n")  # csv's line end
         self.writer = csv.writer(self.file)
+        self.clock_zero = time.perf_counter() - wall_before
 
     def _on_step(self) -> bool:
         dones = self.locals.get("dones")
@@ -40,8 +49,11 @@ class EpisodeLog(BaseCallback):
                 episode = info.get("episode") if done else None
                 if episode is not None:
                     terminated = not info.get("TimeLimit.truncated", False)
-                    row = (self.num_timesteps, float(episode["r"]), int(episode["l"]), terminated)
-                    self.writer.writerow([*row[:3], int(row[3])])
+                    row: list[Any] = [self.num_timesteps, float(episode["r"])]
+                    row += [int(episode["l"]), int(terminated)]
+                    if self.timed:
+                        row.append(round(time.perf_counter() - self.clock_zero, 3))
+                    self.writer.writerow(row)
         return True
 
     def _on_training_end(self) -> None:

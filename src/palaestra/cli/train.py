@@ -1,9 +1,10 @@
-"""``palaestra train``: train DQN or PPO from a preset, a config file and ``--set`` overrides,
-into a run folder that ``eval``, ``record``, ``compare`` and ``--resume`` read.
+"""``palaestra train``: train an algorithm of ``settings.ALGOS`` from a preset, a config file
+and ``--set`` overrides, into a run folder that ``eval``, ``record``, ``compare`` and
+``--resume`` read.
 
 Run folder: ``config.json`` (resolved settings), ``status.json`` (steps done, total, wall
 time), ``progress.csv`` (SB3's log), ``episodes.csv`` (every episode: steps, return, length,
-terminated), ``model.zip``, ``replay_buffer.zip`` (DQN), ``checkpoints/``,
+terminated, training seconds), ``model.zip``, ``replay_buffer.zip`` (DQN), ``checkpoints/``,
 ``learning_curve.png``, ``tb/`` (when tensorboard is installed).
 
 The env comes from :mod:`palaestra.cli.pipeline` (SB3's Atari recipe when the settings say
@@ -43,7 +44,7 @@ def add_parser(sub: Any) -> None:
     """Register ``train`` on the subcommand parsers."""
     p = sub.add_parser(
         "train",
-        help="train DQN or PPO on an env",
+        help="train an agent (" + ", ".join(settings_mod.ALGOS) + ") on an env",
         description="Train an agent. Settings come from the preset (the 'default' preset when "
         "one exists for ALGO and ENV, else the algorithm's defaults), overridden by --config, "
         "then by --set, then by --n-envs/--timesteps/--seed. Atari ids (ALE/Breakout-v5) train "
@@ -52,7 +53,10 @@ def add_parser(sub: Any) -> None:
         "143 for SIGTERM); a second signal stops at once.",
     )
     p.add_argument(
-        "algo", nargs="?", metavar="ALGO", help="dqn or ppo (any case); not needed with --resume"
+        "algo",
+        nargs="?",
+        metavar="ALGO",
+        help=" or ".join(settings_mod.ALGOS) + " (any case); not needed with --resume",
     )
     p.add_argument(
         "env", nargs="?", metavar="ENV", help="env id, e.g. CartPole-v1 (see palaestra envs)"
@@ -370,7 +374,7 @@ def _train(
     from palaestra.cli.run_files import print_summary, write_status
 
     model.set_logger(_make_logger(run_dir, args.verbose))
-    episodes = EpisodeLog(run_dir / EPISODES_FILE)
+    episodes = EpisodeLog(run_dir / EPISODES_FILE, float(status.get("wall_time_s", 0.0)))
     stop = GracefulStop()
     stop.finish_at = total
     every = args.checkpoint_every if args.checkpoint_every is not None else total // 10

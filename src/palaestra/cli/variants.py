@@ -7,8 +7,15 @@ tutorial's baseline-vs-reward-shaping study is one command::
 
     palaestra compare preset naive.yaml better.yaml --algo dqn --env MountainCar-v0 --seeds 0 1 2
 
-with ``naive.yaml`` holding ``env_wrapper: shaping:NaiveRewardShaping``. A run that already
-finished is reused, so a second call only trains what is missing.
+with ``naive.yaml`` holding ``env_wrapper: shaping:NaiveRewardShaping``. The word ``algos``
+compares algorithms instead, each on its own preset for the env (``settings.ALGOS`` lists
+them)::
+
+    palaestra compare algos --env CartPole-v1 --algos a2c ppo dqn --seeds 0 1 2 3 4
+
+Algorithm ``a`` on seed ``s`` trains as ``palaestra train a ENV --seed s --out
+RUNS/a/seed<s>``. A run that already finished is reused, so a second call only trains what is
+missing.
 """
 
 from __future__ import annotations
@@ -18,9 +25,10 @@ from pathlib import Path
 
 from palaestra.cli.common import CONFIG_FILE, STATUS_FILE, CLIError, read_json
 
-__all__ = ["BASELINE", "is_variant", "train_variants"]
+__all__ = ["ALGOS_WORD", "BASELINE", "is_variant", "train_variants"]
 
 BASELINE = "preset"
+ALGOS_WORD = "algos"  # compare algorithms, each on its preset
 _SUFFIXES = (".yaml", ".yml", ".json")
 
 
@@ -33,9 +41,12 @@ def _label(item: str) -> str:
     return BASELINE if item == BASELINE else Path(item).stem
 
 
-def _train_argv(args: argparse.Namespace, item: str, seed: int, out: Path) -> list[str]:
-    argv = ["train", args.algo, args.env, "--seed", str(seed), "--out", str(out)]
-    if item != BASELINE:
+def _train_argv(
+    args: argparse.Namespace, item: str, seed: int, out: Path, algo: str | None = None
+) -> list[str]:
+    """``train`` arguments for variant ``item`` (or, with ``algo``, that algorithm's preset)."""
+    argv = ["train", algo or args.algo, args.env, "--seed", str(seed), "--out", str(out)]
+    if algo is None and item != BASELINE:
         argv += ["--config", item]
     if args.timesteps is not None:
         argv += ["--timesteps", str(args.timesteps)]
@@ -50,8 +61,10 @@ def _finished(run: Path) -> bool:
 def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str]]:
     """Run folders for ``args.runs`` (folders as given, variants trained on ``args.seeds``) and
     the variant name of each trained one."""
-    from palaestra.cli import build_parser
-
+    if ALGOS_WORD in args.runs:
+        return _train_algos(args)
+    if getattr(args, "algos", None):
+        raise CLIError("--algos only applies to 'algos'", "palaestra compare algos --algos ...")
     variants = [item for item in args.runs if is_variant(item)]
     if not variants:
         given = [f for f in ("algo", "env", "seeds", "timesteps", "runs_dir") if getattr(args, f)]
@@ -73,7 +86,6 @@ def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str
     if len(set(args.seeds)) < len(args.seeds):
         raise CLIError(f"--seeds repeats a seed: {args.seeds}", "list each seed once")
     root = Path(args.runs_dir or f"runs/compare-{args.algo.lower()}-{args.env.replace('/', '_')}")
-    parser = build_parser()
     folders: list[Path] = []
     names: dict[Path, str] = {}
     for item in args.runs:
@@ -84,14 +96,59 @@ def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str
             out = root / _label(item) / f"seed{seed}"
             folders.append(out)
             names[out] = _label(item)
-            if (out / CONFIG_FILE).is_file():
-                if not _finished(out):
-                    raise CLIError(
-                        f"{out} holds an unfinished run", f"palaestra train --resume {out}"
-                    )
-                print(f"{_label(item)} seed {seed}: reusing {out}")
-                continue
-            print(f"{_label(item)} seed {seed}: training -> {out}", flush=True)
-            train_args = parser.parse_args(_train_argv(args, item, seed, out))
-            train_args.func(train_args)
+            _train_or_reuse(_label(item), seed, out, _train_argv(args, item, seed, out))
     return folders, names
+
+
+def _train_algos(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str]]:
+    """``compare algos``: each of ``args.algos`` on its preset for ``args.env``, per seed."""
+    from palaestra.cli.settings import ALGOS, check_algo
+
+    if args.runs != [ALGOS_WORD]:
+        others = [r for r in args.runs if r != ALGOS_WORD]
+        raise CLIError(
+            f"'{ALGOS_WORD}' compares algorithms alone, not with {others}",
+            "compare run folders or settings files in a separate command",
+        )
+    if not args.algos or args.env is None or not args.seeds:
+        raise CLIError(
+            "comparing algorithms needs --algos, --env and --seeds",
+            f"e.g. --algos {' '.join(ALGOS)} --env CartPole-v1 --seeds 0 1 2",
+        )
+    if args.algo is not None:
+        raise CLIError("--algo does not apply to 'algos'", "list them with --algos")
+    algos = [check_algo(a) for a in args.algos]
+    if len(set(algos)) < len(algos):
+        raise CLIError(f"--algos repeats an algorithm: {args.algos}", "list each once")
+    if len(set(args.seeds)) < len(args.seeds):
+        raise CLIError(f"--seeds repeats a seed: {args.seeds}", "list each seed once")
+    root = Path(args.runs_dir or f"runs/compare-algos-{args.env.replace('/', '_')}")
+    folders: list[Path] = []
+    names: dict[Path, str] = {}
+    for algo in algos:
+        for seed in args.seeds:
+            out = root / algo / f"seed{seed}"
+            folders.append(out)
+            names[out] = algo
+            _train_or_reuse(algo, seed, out, _train_argv(args, algo, seed, out, algo=algo))
+    return folders, names
+
+
+def _train_or_reuse(label: str, seed: int, out: Path, argv: list[str]) -> None:
+    """Train one variant run into ``out`` unless a finished run is already there."""
+    from palaestra.cli import build_parser
+
+    if (out / CONFIG_FILE).is_file():
+        if not _finished(out):
+            raise CLIError(f"{out} holds an unfinished run", f"palaestra train --resume {out}")
+        print(f"{label} seed {seed}: reusing {out}")
+        return
+    print(f"{label} seed {seed}: training -> {out}", flush=True)
+    train_args = build_parser().parse_args(argv)
+    code = train_args.func(train_args)
+    if code:
+        raise CLIError(
+            f"training {label} seed {seed} stopped (exit code {code})",
+            f"palaestra train --resume {out}, then run compare again",
+            code=code,
+        )

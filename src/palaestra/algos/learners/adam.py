@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import torch
 
-__all__ = ["FlatAdam", "adam_unsupported", "one_blas_thread"]
+__all__ = ["FlatAdam", "adam_unsupported", "clip_flat_grad_norm", "one_blas_thread"]
 
 
 def adam_unsupported(optimizer: torch.optim.Optimizer) -> str | None:
@@ -41,6 +41,14 @@ def adam_unsupported(optimizer: torch.optim.Optimizer) -> str | None:
     return None
 
 
+def clip_flat_grad_norm(grad: np.ndarray, max_norm: float) -> None:
+    """Scale a flat gradient in place like ``clip_grad_norm_`` (coefficient clamped at 1)."""
+    total = math.sqrt(float(np.dot(grad, grad)))
+    coef = max_norm / (total + 1e-6)
+    if coef < 1.0:
+        grad *= coef
+
+
 class FlatAdam:
     """``torch.optim.Adam`` (L2 ``weight_decay`` included) over ``params``, a flat float32
     buffer; ``grad`` is the flat gradient the backward pass writes into."""
@@ -56,10 +64,7 @@ class FlatAdam:
 
     def clip_grad_norm(self, max_norm: float) -> None:
         """Scale ``grad`` in place like ``clip_grad_norm_`` (coefficient clamped at 1)."""
-        total = math.sqrt(float(np.dot(self.grad, self.grad)))
-        coef = max_norm / (total + 1e-6)
-        if coef < 1.0:
-            self.grad *= coef
+        clip_flat_grad_norm(self.grad, max_norm)
 
     def step(self, params: np.ndarray) -> None:
         """Apply ``grad`` (already clipped) to ``params`` in place."""

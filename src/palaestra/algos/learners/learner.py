@@ -1,6 +1,7 @@
 """Two learners behind one interface: the torch learner differentiates the networks, heads and
 losses with autograd; the numpy learner runs the same functions on numpy arrays and calls their
-hand-written vector-Jacobian products, with a flat-buffer Adam.
+hand-written vector-Jacobian products, with a flat-buffer Adam or RMSprop (by the type of the
+torch optimizer it stands in for).
 
 An algorithm describes its networks (``Net``: the torch modules, the optimizer group it trains
 in, or the net it is a target of) and hands each update an ``Objective``: the loss over ``xp``,
@@ -8,7 +9,7 @@ running nets through ``run``, and, for numpy, the loss's VJP, which sends gradie
 through ``backprop``. Several groups (an actor, twin critics, an entropy coefficient) each
 take their own ``update``; ``forward`` runs a net for acting; ``polyak`` moves a target net.
 
-Ownership (numpy learner): the learner owns the parameters and the Adam state as flat numpy
+Ownership (numpy learner): the learner owns the parameters and the optimizer state as flat numpy
 buffers while it trains and acts. The torch modules and optimizer the user sees are brought up
 to date at explicit points: ``to_torch()``, which the model calls when its ``policy``,
 ``optimizer`` (or DQN's ``q_net``) is read, when saving, in ``get_parameters`` and at the end
@@ -33,6 +34,7 @@ from torch import nn
 from palaestra.algos.learners.adam import FlatAdam, adam_unsupported, one_blas_thread
 from palaestra.algos.learners.losses import polyak
 from palaestra.algos.learners.mlp import MLP, NotAnMLP, describe, mlp_forward, mlp_forward_vjp
+from palaestra.algos.learners.rmsprop import FlatRMSprop, rmsprop_unsupported
 from palaestra.algos.learners.xp import numpy_ops, torch_ops
 
 __all__ = ["Learner", "Net", "NumpyLearner", "Objective", "TorchLearner", "build_learner"]
@@ -85,6 +87,23 @@ class Objective(Protocol):
     ) -> tuple[Any, dict[str, Any], Any]: ...
 
     def vjp(self, tape: Any, backprop: Backprop) -> dict[str, np.ndarray]: ...
+
+
+# The flat-buffer optimizers, by the torch optimizer each stands in for, with the check of the
+# options it covers: a new one is one line here.
+FLAT_OPTIMIZERS: dict[type, tuple[type, Callable[[torch.optim.Optimizer], str | None]]] = {
+    torch.optim.Adam: (FlatAdam, adam_unsupported),
+    torch.optim.RMSprop: (FlatRMSprop, rmsprop_unsupported),
+}
+
+
+def flat_unsupported(optimizer: torch.optim.Optimizer) -> str | None:
+    """Why no flat optimizer can stand in for ``optimizer`` (None: one can)."""
+    entry = FLAT_OPTIMIZERS.get(type(optimizer))
+    if entry is None:
+        names = " or ".join(cls.__name__ for cls in FLAT_OPTIMIZERS)
+        return f"the optimizer is {type(optimizer).__name__}, not {names}"
+    return entry[1](optimizer)
 
 
 class Learner:
@@ -230,7 +249,8 @@ class TorchLearner(Learner):
 
 
 class NumpyLearner(Learner):
-    """Hand-written VJPs and ``FlatAdam`` over flat numpy buffers (see the module docstring)."""
+    """Hand-written VJPs and ``FlatAdam``/``FlatRMSprop`` over flat numpy buffers (see the
+    module docstring)."""
 
     backend = "numpy"
 
@@ -242,10 +262,11 @@ class NumpyLearner(Learner):
         # One flat buffer per optimizer group (its tensors in the group's order) and one per
         # target net; every layer and extra parameter is a view into one of them.
         self._buffers: dict[str, tuple[np.ndarray, list[nn.Parameter], list[slice]]] = {}
-        self._adam: dict[str, FlatAdam] = {}
+        self._optim: dict[str, FlatAdam | FlatRMSprop] = {}  # a flat optimizer per group
         for gname, group in groups.items():
             flat, slices = self._flat(gname, group.params)
-            self._adam[gname] = FlatAdam(flat.size, len(group.params), slices)
+            flat_class = FLAT_OPTIMIZERS[type(group.optimizer)][0]
+            self._optim[gname] = flat_class(flat.size, len(group.params), slices)
         for name, net in nets.items():
             if net.target_of is not None:
                 self._flat(f"target:{name}", list(self.mlps[name].parameters()))
@@ -266,11 +287,11 @@ class NumpyLearner(Learner):
         views: dict[int, np.ndarray] = {}
         grad_views: dict[int, np.ndarray] = {}
         for key, (flat, params, slices) in self._buffers.items():
-            adam = self._adam.get(key)
+            optim = self._optim.get(key)
             for p, sl in zip(params, slices):
                 views[id(p)] = flat[sl].reshape(p.shape)
-                if adam is not None:
-                    grad_views[id(p)] = adam.grad[sl].reshape(p.shape)
+                if optim is not None:
+                    grad_views[id(p)] = optim.grad[sl].reshape(p.shape)
         self.layers = {
             name: [
                 (views[id(lin.weight)], views[id(lin.bias)], act)
@@ -304,8 +325,8 @@ class NumpyLearner(Learner):
                 for key, (flat, params, slices) in self._buffers.items():
                     for p, sl in zip(params, slices):
                         p.copy_(torch.from_numpy(flat[sl]).view_as(p))
-                    if key in self._adam:
-                        self._adam[key].to_torch(self.groups[key].optimizer, params)
+                    if key in self._optim:
+                        self._optim[key].to_torch(self.groups[key].optimizer, params)
             self._numpy_changed = False
         self._torch_changed = True  # handed out: the caller may change it
 
@@ -316,8 +337,8 @@ class NumpyLearner(Learner):
         for key, (flat, params, slices) in self._buffers.items():
             for p, sl in zip(params, slices):
                 flat[sl] = p.detach().reshape(-1).cpu().numpy()
-            if key in self._adam:
-                self._adam[key].from_torch(self.groups[key].optimizer, params)
+            if key in self._optim:
+                self._optim[key].from_torch(self.groups[key].optimizer, params)
         self._torch_changed = False
 
     # -- the interface ------------------------------------------------------------------------
@@ -334,7 +355,7 @@ class NumpyLearner(Learner):
     def set_learning_rate(self, group: str, lr: float) -> None:
         if self._torch_changed:
             self._own()
-        self._adam[group].lr = lr
+        self._optim[group].lr = lr
         self._numpy_changed = True
 
     def extra(self, name: str) -> np.ndarray:
@@ -382,9 +403,9 @@ class NumpyLearner(Learner):
         for name, view in self.extra_grads.items():
             if name in self.groups[group].extras:
                 view[...] = extra_grads.get(name, 0.0)
-        adam = self._adam[group]
-        adam.clip_grad_norm(max_grad_norm)
-        adam.step(self._buffers[group][0])
+        optim = self._optim[group]
+        optim.clip_grad_norm(max_grad_norm)
+        optim.step(self._buffers[group][0])
         self._numpy_changed = True
         return values, True
 
@@ -428,7 +449,7 @@ def numpy_unsupported(nets: dict[str, Net], groups: dict[str, Group]) -> str | N
         except NotAnMLP as exc:
             return f"the {name} network: {exc}"
     for group in groups.values():
-        why = adam_unsupported(group.optimizer)
+        why = flat_unsupported(group.optimizer)
         if why is not None:
             return why
         in_nets = {
@@ -468,5 +489,6 @@ def build_learner(
     if request == "torch":
         return TorchLearner(nets, groups, device, "asked for", joint)
     if why_not is None:
-        return NumpyLearner(nets, groups, "small MLPs with Adam on the CPU")
+        optimizers = sorted({type(g.optimizer).__name__ for g in groups.values()})
+        return NumpyLearner(nets, groups, f"small MLPs with {'/'.join(optimizers)} on the CPU")
     return TorchLearner(nets, groups, device, f"numpy cannot: {why_not}", joint)

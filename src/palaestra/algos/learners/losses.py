@@ -1,4 +1,4 @@
-"""The losses of DQN and PPO written once over an array namespace ``xp``, each with its
+"""The losses of DQN, PPO and A2C written once over an array namespace ``xp``, each with its
 vector-Jacobian product beside it, and GAE and explained variance (not differentiated).
 
 Each loss returns ``(loss, metrics, tape)``: ``loss`` is what autograd differentiates on the
@@ -6,9 +6,10 @@ torch learner, ``metrics`` the logged values (numbers the caller turns into floa
 what the VJP needs on the numpy learner. Conventions are SB3's: Huber (smooth L1, delta 1) TD
 loss against a target net, truncated episodes bootstrapped by the buffer; PPO's clipped
 surrogate with per-minibatch advantage normalisation (unbiased std, +1e-8), optional value
-clipping, and the entropy bonus (``-log_prob`` where a head has no entropy).
+clipping, and the entropy bonus (``-log_prob`` where a head has no entropy); A2C's plain
+policy gradient over the whole rollout with the same value and entropy terms.
 
-References: Mnih et al. 2015 (DQN), Schulman et al. 2016 (GAE) and 2017 (PPO).
+References: Mnih et al. 2015 (DQN), 2016 (A2C/A3C), Schulman et al. 2016 (GAE) and 2017 (PPO).
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "a2c_loss",
+    "a2c_loss_vjp",
     "deterministic_actor_loss",
     "deterministic_actor_loss_vjp",
     "dqn_loss",
@@ -230,12 +233,67 @@ def ent_coef_loss_vjp(tape: Any) -> np.ndarray:
     return np.array([-float(np.mean(tape))], dtype=np.float32)
 
 
+def a2c_loss(
+    xp: Any,
+    log_prob: Any,
+    advantages: Any,
+    values: Any,
+    returns: Any,
+    entropy: Any,
+    ent_coef: float = 0.0,
+    vf_coef: float = 0.5,
+    normalize_advantage: bool = False,
+) -> tuple[Any, dict[str, Any], Any]:
+    """Policy gradient + value loss - entropy bonus over one rollout (inputs ``[B]``;
+    ``entropy`` ``[B]`` or None for ``-log_prob``), as SB3's ``A2C.train``:
+    ``-mean(adv * log_prob) + ent_coef * entropy_loss + vf_coef * mean((returns - V)^2)``.
+
+    >>> from palaestra.algos.learners.xp import numpy_ops as xp
+    >>> one = np.array([1.0, 1.0])
+    >>> loss, m, _ = a2c_loss(xp, np.log([0.5, 0.25]), np.array([2.0, 1.0]), 0 * one, one, None)
+    >>> round(float(loss), 4), round(m["policy_loss"], 4), m["value_loss"]
+    (1.8863, 1.3863, 1.0)
+    """
+    n = log_prob.shape[0]
+    adv = xp.standardize(advantages) if normalize_advantage and n > 1 else advantages
+    policy_loss = -xp.mean(adv * log_prob)
+    v_err = values - returns
+    value_loss = xp.mean(v_err * v_err)
+    entropy_loss = xp.mean(log_prob) if entropy is None else -xp.mean(entropy)
+    loss = policy_loss + ent_coef * entropy_loss + vf_coef * value_loss
+    metrics = {
+        "loss": loss,
+        "policy_loss": policy_loss,
+        "value_loss": value_loss,
+        "entropy_loss": entropy_loss,
+    }
+    return loss, metrics, (adv, v_err, ent_coef, vf_coef, entropy is None)
+
+
+def a2c_loss_vjp(tape: Any) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(d/d log_prob [B], d/d values [B], d/d mean(entropy))``; the advantages are
+    constants (computed before the update), so normalising them adds no gradient path."""
+    adv, v_err, ent_coef, vf_coef, no_entropy = tape
+    n = adv.shape[0]
+    g_log_prob = (-1.0 / n) * adv
+    if no_entropy:  # entropy_loss = mean(log_prob)
+        g_log_prob = g_log_prob + ent_coef / n
+    g_values = (2.0 * vf_coef / n) * v_err
+    return (
+        g_log_prob.astype(np.float32, copy=False),
+        g_values.astype(np.float32, copy=False),
+        0.0 if no_entropy else -ent_coef,
+    )
+
+
 def polyak(params: list[Any], target_params: list[Any], tau: float) -> None:
     """``target = tau * online + (1 - tau) * target`` in place (numpy arrays or torch tensors
     under ``no_grad``); ``tau == 1`` copies exactly."""
     for p, tp in zip(params, target_params, strict=True):
         if tau == 1.0:
             tp[...] = p
+        elif hasattr(tp, "add_"):  # torch: one fused a + tau * b, SB3's bits
+            tp.mul_(1.0 - tau).add_(p, alpha=tau)
         else:
             tp *= 1.0 - tau
             tp += tau * p
@@ -283,8 +341,18 @@ def gae(
 def explained_variance(y_pred: np.ndarray, y_true: np.ndarray) -> float:
     """``1 - Var[y_true - y_pred] / Var[y_true]``; NaN when ``y_true`` is constant (as SB3).
 
+    In float64 with dot products: logged once per update (every 5 steps for A2C), where
+    ``np.var``'s Python layers cost more than the arithmetic.
+
     >>> explained_variance(np.array([1.0, 2.0, 3.0]), np.array([1.0, 2.0, 3.0]))
     1.0
     """
-    var_y = float(np.var(y_true))
-    return float("nan") if var_y == 0 else float(1.0 - np.var(y_true - y_pred) / var_y)
+    true = np.asarray(y_true, dtype=np.float64).ravel()
+    resid = true - np.asarray(y_pred, dtype=np.float64).ravel()
+    n = true.size
+    centred = true - np.add.reduce(true) / n
+    var_y = float(np.dot(centred, centred)) / n
+    if var_y == 0:
+        return float("nan")
+    resid -= np.add.reduce(resid) / n
+    return 1.0 - float(np.dot(resid, resid)) / n / var_y

@@ -13,6 +13,8 @@ from palaestra.algos.learners.heads import (
 )
 from palaestra.algos.learners.learner import Backprop, Run
 from palaestra.algos.learners.losses import (
+    a2c_loss,
+    a2c_loss_vjp,
     deterministic_actor_loss,
     deterministic_actor_loss_vjp,
     dqn_loss,
@@ -29,6 +31,7 @@ from palaestra.algos.learners.losses import (
 )
 
 __all__ = [
+    "A2CObjective",
     "DQNObjective",
     "EntCoefObjective",
     "PPOObjective",
@@ -242,3 +245,35 @@ class TD3ActorObjective:
         assert g_input is not None
         backprop("actor", g_input[:, -self.action_dim :])
         return {}
+
+
+class A2CObjective:
+    """Policy gradient, value and entropy terms of the actor ``pi`` (through ``head``) and the
+    critic ``vf`` over a whole rollout."""
+
+    def __init__(
+        self, head: Any, ent_coef: float, vf_coef: float, normalize_advantage: bool
+    ) -> None:
+        self.head = head
+        self.args = (ent_coef, vf_coef, normalize_advantage)
+
+    def loss(
+        self, xp: Any, run: Run, extras: dict[str, Any], batch: dict[str, Any]
+    ) -> tuple[Any, dict[str, Any], Any]:
+        obs = batch["observations"]
+        head_params, values = run("pi", obs), run("vf", obs)[:, 0]
+        log_prob, entropy, head_tape = self.head.evaluate(
+            xp, head_params, extras.get("log_std"), batch["actions"]
+        )
+        loss, metrics, tape = a2c_loss(
+            xp, log_prob, batch["advantages"], values, batch["returns"], entropy, *self.args
+        )
+        return loss, metrics, (tape, head_tape)
+
+    def vjp(self, tape: Any, backprop: Backprop) -> dict[str, np.ndarray]:
+        loss_tape, head_tape = tape
+        g_log_prob, g_values, g_mean_entropy = a2c_loss_vjp(loss_tape)
+        g_params, g_log_std = self.head.evaluate_vjp(head_tape, g_log_prob, g_mean_entropy)
+        backprop("vf", g_values[:, None])
+        backprop("pi", g_params)
+        return {} if g_log_std is None else {"log_std": g_log_std}
