@@ -228,7 +228,7 @@ def test_yaml_config_without_pyyaml(tmp_path: Path, monkeypatch: pytest.MonkeyPa
 
 def test_console_script_and_module_errors_have_no_traceback() -> None:
     for argv in (
-        [sys.executable, "-m", "palaestra", "train", "sac", "Pendulum-v1"],
+        [sys.executable, "-m", "palaestra", "train", "trpo", "Pendulum-v1"],
         [str(Path(sys.executable).with_name("palaestra")), "eval", "missing.zip"],
     ):
         if not Path(argv[0]).exists():

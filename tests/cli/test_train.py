@@ -406,3 +406,33 @@ def test_kill_9_then_resume_ends_as_the_uninterrupted_run(tmp_path: Path) -> Non
     result = run_cli("train", "--resume", out, "--progress", "none", "--eval-episodes", 0)
     assert result.code == 0, result.err
     _assert_same_params(out / "model.zip", full / "model.zip", DQN)
+
+
+def test_sac_run_folder_saves_and_resumes_its_replay_buffer(tmp_path: Path) -> None:
+    """The off-policy algorithms keep their replay buffer with the run, as DQN does."""
+    from palaestra.cli import main
+
+    out = tmp_path / "sac"
+    settings = ["--set", "hyperparams.learning_starts=50", "--set", "hyperparams.batch_size=16"]
+    assert (
+        main(
+            [
+                "train",
+                "sac",
+                "Pendulum-v1",
+                "--timesteps",
+                "120",
+                "--seed",
+                "0",
+                "--out",
+                str(out),
+                *settings,
+            ]
+        )
+        == 0
+    )
+    assert (out / "replay_buffer.zip").is_file() and (out / "model.zip").is_file()
+    assert main(["train", "--resume", str(out), "--timesteps", "200"]) == 0
+    from palaestra.algos import SAC
+
+    assert SAC.load(out / "model.zip").num_timesteps == 200

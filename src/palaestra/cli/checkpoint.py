@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.algos.callbacks import BaseCallback
-from palaestra.cli.common import MODEL_FILE, NORMALIZE_FILE, REPLAY_FILE
+from palaestra.cli.common import MODEL_FILE, NORMALIZE_FILE, REPLAY_ALGOS, REPLAY_FILE
 
 __all__ = [
     "ENV_STATE_FILE",
@@ -108,7 +108,7 @@ def write_checkpoint(model: Any, run_dir: Path, algo: str) -> tuple[Path, bool]:
     tmp.mkdir(parents=True)
     venv = model.get_env()
     model.save(tmp / MODEL_FILE)  # tags venv: env_state below carries the same token
-    if algo == "dqn":
+    if algo in REPLAY_ALGOS:
         model.save_replay_buffer(tmp / REPLAY_FILE)
     if isinstance(venv, VecNormalize):
         venv.save(str(tmp / NORMALIZE_FILE))

@@ -29,6 +29,8 @@ STATUS_FILE = "status.json"
 EPISODES_FILE = "episodes.csv"
 MODEL_FILE = "model.zip"
 REPLAY_FILE = "replay_buffer.zip"
+# Off-policy algorithms: their replay buffer is saved with each checkpoint and the final model.
+REPLAY_ALGOS = ("dqn", "sac", "td3", "ddpg")
 NORMALIZE_FILE = "vecnormalize.npz"
 
 # Envs whose episodes end by termination only when the agent reaches the goal, so

@@ -13,6 +13,7 @@ from palaestra.cli.common import (
     EPISODES_FILE,
     MODEL_FILE,
     NORMALIZE_FILE,
+    REPLAY_ALGOS,
     REPLAY_FILE,
     STATUS_FILE,
     eprint,
@@ -94,7 +95,7 @@ def print_summary(
             print(f"  {text}")
     if curve:
         written.append(curve)
-    if config["algo"] == "dqn":
+    if config["algo"] in REPLAY_ALGOS:
         written.append(REPLAY_FILE)
     if (run_dir / NORMALIZE_FILE).is_file():
         written.append(NORMALIZE_FILE)

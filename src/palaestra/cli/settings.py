@@ -14,12 +14,13 @@ from pathlib import Path
 from typing import Any
 
 from palaestra import presets
-from palaestra.cli.common import CLIError, parse_value
+from palaestra.cli.common import REPLAY_ALGOS, CLIError, parse_value
 from palaestra.cli.pipeline import atari_defaults, check_pipeline, is_atari_id
 
 __all__ = [
     "ALGOS",
     "ALGO_CLASSES",
+    "REPLAY_ALGOS",
     "algo_class",
     "check_settings",
     "hyperparameter_names",
@@ -29,7 +30,14 @@ __all__ = [
 
 # The algorithms the CLI trains, compares and evaluates: name -> class name in palaestra.algos.
 # Adding one (sac, td3, ddpg) is one line here, plus its presets.
-ALGO_CLASSES = {"dqn": "DQN", "ppo": "PPO", "a2c": "A2C"}
+ALGO_CLASSES = {
+    "dqn": "DQN",
+    "ppo": "PPO",
+    "a2c": "A2C",
+    "sac": "SAC",
+    "td3": "TD3",
+    "ddpg": "DDPG",
+}
 ALGOS = tuple(ALGO_CLASSES)
 # Constructor arguments the CLI sets itself (or that make no sense from a command line).
 _NOT_HYPERPARAMS = {"self", "policy", "env", "_init_setup_model", "verbose", "seed", "device"}

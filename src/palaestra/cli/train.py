@@ -224,7 +224,7 @@ def _resume(config: dict[str, Any], run_dir: Path) -> tuple[Any, str | None]:
     cls = settings_mod.algo_class(config["algo"])
     try:
         model = cls.load(folder / MODEL_FILE, env=venv, device=config["device"])
-        if config["algo"] == "dqn" and (folder / REPLAY_FILE).is_file():
+        if config["algo"] in settings_mod.REPLAY_ALGOS and (folder / REPLAY_FILE).is_file():
             model.load_replay_buffer(folder / REPLAY_FILE)
     except FileNotFoundError:
         raise CLIError(f"{run_dir} has no {MODEL_FILE} to resume from", "check DIR") from None
@@ -257,7 +257,8 @@ def _make_model(config: dict[str, Any], venv: Any) -> Any:
             raise CLIError(
                 f"invalid {config['algo']} settings: {exc}", "check the values"
             ) from None
-        other = "ppo" if config["algo"] == "dqn" else "another algorithm"
+        # Discrete-only (DQN) or Box-only (SAC, TD3, DDPG): PPO and A2C take both.
+        other = "ppo" if config["algo"] in settings_mod.REPLAY_ALGOS else "another algorithm"
         raise CLIError(
             f"cannot train {config['algo']} on {config['env_id']}: {exc}", f"use {other}"
         ) from None
