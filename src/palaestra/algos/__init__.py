@@ -28,11 +28,16 @@ surprising, palaestra differs on purpose:
   with torch autograd; ``policy_kwargs={"backend": "numpy"|"torch"}`` forces one (numpy
   raises ``ValueError`` naming what it cannot run), ``verbose=1`` prints which runs and why.
   Acting samples from the model's numpy generator on either learner;
+- SAC, TD3 and DDPG draw their exploration, target-smoothing and action noise from the model's
+  seeded generator (SB3: torch's and numpy's global ones), so the same seed gives the same bits
+  on either learner, and a model file stores its ``action_noise`` with its state (SB3 pickles
+  it); SAC updates its temperature after the actor in each step, with that step's log-probs
+  (the same update as SB3's, which runs it first: both losses use the coefficient from before);
 - DQN's ``optimize_memory_usage=True`` keeps each frame of stacked observations once (SB3
   keeps it four times) and returns exact terminal observations, so it combines with
   ``handle_timeout_termination`` (SB3 refuses the pair).
 
-Not supported yet: ``use_sde`` (gSDE; PPO and A2C raise ``NotImplementedError``), DQN's
+Not supported yet: ``use_sde`` (gSDE; PPO, A2C and SAC raise ``NotImplementedError``), DQN's
 ``n_steps``, custom buffer classes, recurrent policies, VecNormalize-aware replay
 (observations are stored as the env returns them).
 """
