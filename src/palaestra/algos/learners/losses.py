@@ -155,9 +155,9 @@ def q_regression_loss(
     not differentiated). SAC halves it (``scale=0.5``), TD3 and DDPG do not (``scale=1``).
 
     >>> from palaestra.algos.learners.xp import numpy_ops as xp
-    >>> q_regression_loss(xp, [np.array([1.0, 2.0]), np.array([0.0, 2.0])], np.array([1.0, 1.0]),
-    ...                   0.5)[0]
-    0.5
+    >>> qs, target = [np.array([1.0, 2.0]), np.array([0.0, 2.0])], np.array([1.0, 1.0])
+    >>> q_regression_loss(xp, qs, target, 0.5)[0]  # 0.5 * (mean(0, 1) + mean(1, 1))
+    0.75
     """
     errors = [q - target_q for q in current_qs]
     loss = scale * sum(xp.mean(e * e) for e in errors)
