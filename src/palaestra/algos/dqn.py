@@ -213,25 +213,10 @@ class DQN(OffPolicyAlgorithm):
 
     # -- persistence ---------------------------------------------------------------------------
     def _hyperparameters(self) -> dict[str, Any]:
-        return {
-            "buffer_size": self.buffer_size,
-            "learning_starts": self.learning_starts,
-            "batch_size": self.batch_size,
-            "tau": self.tau,
-            "gamma": self.gamma,
-            "train_freq": list(self.train_freq),
-            "gradient_steps": self.gradient_steps,
+        return self._off_policy_hyperparameters() | {
             "target_update_interval": self.target_update_interval,
             "exploration_fraction": self.exploration_fraction,
             "exploration_initial_eps": self.exploration_initial_eps,
             "exploration_final_eps": self.exploration_final_eps,
             "max_grad_norm": self.max_grad_norm,
-            "verbose": self.verbose,
-            "seed": self.seed,
-            "stats_window_size": self._stats_window_size,
-            "replay_buffer_kwargs": self.replay_buffer_kwargs,
-            "optimize_memory_usage": self.optimize_memory_usage,
         }
-
-    def _schedules(self) -> dict[str, Any]:
-        return {"learning_rate": self.lr_schedule}

@@ -105,6 +105,26 @@ class OffPolicyAlgorithm(BaseAlgorithm):
             warnings.warn("n_envs changed: starting a new, empty replay buffer", stacklevel=3)
         self._make_replay_buffer()
 
+    def _off_policy_hyperparameters(self) -> dict[str, Any]:
+        """What every off-policy model file stores (subclasses add their own keys)."""
+        return {
+            "buffer_size": self.buffer_size,
+            "learning_starts": self.learning_starts,
+            "batch_size": self.batch_size,
+            "tau": self.tau,
+            "gamma": self.gamma,
+            "train_freq": list(self.train_freq),
+            "gradient_steps": self.gradient_steps,
+            "verbose": self.verbose,
+            "seed": self.seed,
+            "stats_window_size": self._stats_window_size,
+            "replay_buffer_kwargs": self.replay_buffer_kwargs,
+            "optimize_memory_usage": self.optimize_memory_usage,
+        }
+
+    def _schedules(self) -> dict[str, Any]:
+        return {"learning_rate": self.lr_schedule}
+
     def _sample_actions(self) -> tuple[np.ndarray, np.ndarray]:
         """``(actions for the env, actions for the buffer)`` at the current observations."""
         raise NotImplementedError

@@ -223,27 +223,12 @@ class TD3(ActorCriticOffPolicy):
 
     # -- persistence ---------------------------------------------------------------------------
     def _hyperparameters(self) -> dict[str, Any]:
-        return {
-            "buffer_size": self.buffer_size,
-            "learning_starts": self.learning_starts,
-            "batch_size": self.batch_size,
-            "tau": self.tau,
-            "gamma": self.gamma,
-            "train_freq": list(self.train_freq),
-            "gradient_steps": self.gradient_steps,
+        return self._off_policy_hyperparameters() | {
             "action_noise": self._noise_json(),
             "policy_delay": self.policy_delay,
             "target_policy_noise": self.target_policy_noise,
             "target_noise_clip": self.target_noise_clip,
-            "verbose": self.verbose,
-            "seed": self.seed,
-            "stats_window_size": self._stats_window_size,
-            "replay_buffer_kwargs": self.replay_buffer_kwargs,
-            "optimize_memory_usage": self.optimize_memory_usage,
         }
-
-    def _schedules(self) -> dict[str, Any]:
-        return {"learning_rate": self.lr_schedule}
 
 
 class DDPG(TD3):
