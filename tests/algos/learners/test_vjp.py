@@ -263,3 +263,18 @@ def test_actor_critic_loss_vjps(n_critics: int) -> None:
     _, _, tape = losses.ent_coef_loss(numpy_ops, log_alpha, log_prob, -1.0)
     losses.ent_coef_loss(torch_ops, t_alpha, t_lp.detach(), -1.0)[0].backward()
     _close(losses.ent_coef_loss_vjp(tape), t_alpha.grad)
+
+
+def test_large_products_agree_with_numpy() -> None:
+    """Products past ``LARGE_PRODUCT`` run on torch's kernels over the same memory: the same
+    values to float32 rounding, into ``out`` too, transposed operands included."""
+    from palaestra.algos.learners import mlp
+
+    a, b = _f32(256, 300), _f32(256, 200)
+    assert 300 * 256 * 200 >= mlp.LARGE_PRODUCT
+    out = np.empty((300, 200), np.float32)
+    got = mlp._product(a.T, b, out=out)
+    assert got is out
+    np.testing.assert_allclose(out, a.T.astype(np.float64) @ b, rtol=1e-4, atol=1e-3)
+    small = _f32(8, 4)
+    np.testing.assert_array_equal(mlp._product(small, small.T), small.dot(small.T))
