@@ -266,6 +266,8 @@ def test_bad_input() -> None:
             cls("MlpPolicy", "Pendulum-v1", tau=-0.1)
         with pytest.raises(ValueError, match=r"action_noise of shape \(2,\) does not fit"):
             cls("MlpPolicy", "Pendulum-v1", action_noise=NormalActionNoise(np.zeros(2), np.ones(2)))
+    with pytest.raises(TypeError, match="policy_delay"):  # DDPG's is fixed, as in SB3
+        DDPG("MlpPolicy", "Pendulum-v1", policy_delay=2)
     with pytest.raises(ValueError, match="policy_delay must be a positive int, got 0"):
         TD3("MlpPolicy", "Pendulum-v1", policy_delay=0)
     with pytest.raises(ValueError, match=r"ent_coef must be .* got .auto_x."):

@@ -276,7 +276,11 @@ HYPERPARAMETERS["TD3"] = {
     "target_policy_noise": _number(0.0, 1e6),
     "target_noise_clip": _number(0.0, 1e6),
 }
-HYPERPARAMETERS["DDPG"] = HYPERPARAMETERS["TD3"]
+HYPERPARAMETERS["DDPG"] = {
+    k: v
+    for k, v in HYPERPARAMETERS["TD3"].items()
+    if k not in ("policy_delay", "target_policy_noise", "target_noise_clip")  # DDPG's fixes
+}
 # Each schedule's values: a learning rate, a clip range (>= 0; PPO refuses 0 for clip_range_vf).
 SCHEDULES: dict[str, dict[str, Check]] = {
     "DQN": {"learning_rate": _number(0.0, 1e6)},

@@ -177,6 +177,7 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
                 why=why,
                 module=frozen,
             )
+        self._n_critics = len(critic.q_networks)
         shared = {id(p) for p in critic.features_extractor.parameters()}
         params = [
             p
@@ -192,8 +193,17 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
         return self._make_optimizer(params, optimizer_class, optimizer_kwargs)
 
     def _polyak_critics(self) -> None:
-        for name in [n for n in self.learner.nets if n.startswith("qf") and n.endswith("_target")]:
-            self.learner.polyak(name, self.tau)
+        for i in range(self._n_critics):
+            self.learner.polyak(f"qf{i}_target", self.tau)
+
+    def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
+        """SB3's ``actor.optimizer`` and ``critic.optimizer`` (SAC adds its temperature's)."""
+        self.learner.to_torch()
+        groups = self.learner.groups
+        return {
+            "actor_optimizer": ("actor.optimizer", groups["actor"].optimizer),
+            "critic_optimizer": ("critic.optimizer", groups["critic"].optimizer),
+        }
 
     def _noise_json(self) -> dict[str, Any] | None:
         """The exploration noise with its state, for the model file."""

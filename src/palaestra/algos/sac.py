@@ -58,8 +58,6 @@ class SAC(ActorCriticOffPolicy):
     ``use_sde`` (gSDE) is not implemented.
     """
 
-    _extra_counters = ("_n_calls", "_collected_steps", "_collected_episodes")
-
     def __init__(
         self,
         policy: str,
@@ -189,7 +187,6 @@ class SAC(ActorCriticOffPolicy):
             groups["ent_coef"] = Group(
                 ent_optimizer, [log_ent_coef], {"log_ent_coef": log_ent_coef}
             )
-        self._fixed_ent_coef = self._ent_coef_init
         self._set_learner(policy, groups["actor"].optimizer, backend, nets, groups)
         self._groups = list(groups)
         self._make_replay_buffer()
@@ -207,19 +204,15 @@ class SAC(ActorCriticOffPolicy):
         return self.policy["critic_target"]
 
     def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
-        self.learner.to_torch()
+        optimizers = super()._optimizers()
         groups = self.learner.groups
-        optimizers = {
-            "actor_optimizer": ("actor.optimizer", groups["actor"].optimizer),
-            "critic_optimizer": ("critic.optimizer", groups["critic"].optimizer),
-        }
         if "ent_coef" in groups:
             optimizers["ent_coef_optimizer"] = ("ent_coef_optimizer", groups["ent_coef"].optimizer)
         return optimizers
 
     def _current_ent_coef(self) -> float:
         if not self._learn_ent_coef:
-            return self._fixed_ent_coef
+            return self._ent_coef_init
         return float(np.exp(self.learner.extra("log_ent_coef")[0]))
 
     # -- acting ------------------------------------------------------------------------------
@@ -238,7 +231,6 @@ class SAC(ActorCriticOffPolicy):
         for group in self._groups:
             self._update_learning_rate(group)
         logs: dict[str, list[float]] = {}
-        n_critics = len([n for n in self.learner.nets if n.startswith("qf") and "_" not in n])
         with self.learner.session():
             for step in range(gradient_steps):
                 batch = self._sample_batch(batch_size)
@@ -247,9 +239,9 @@ class SAC(ActorCriticOffPolicy):
                 batch["next_noise"] = self._rng.standard_normal(shape, np.float32)
                 ent_coef = self._current_ent_coef()
                 logs.setdefault("ent_coef", []).append(ent_coef)
-                critic = SACCriticObjective(n_critics, self.gamma, ent_coef)
+                critic = SACCriticObjective(self._n_critics, self.gamma, ent_coef)
                 metrics, _ = self.learner.update("critic", critic, batch)
-                actor = SACActorObjective(n_critics, ent_coef, self.action_dim)
+                actor = SACActorObjective(self._n_critics, ent_coef, self.action_dim)
                 metrics.update(self.learner.update("actor", actor, batch)[0])
                 if self._learn_ent_coef:
                     temperature = EntCoefObjective(self.target_entropy, actor.last_log_prob)

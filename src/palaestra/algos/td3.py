@@ -29,7 +29,6 @@ class TD3(ActorCriticOffPolicy):
     from the model's generator (same seed, same run, on either learner).
     """
 
-    _extra_counters = ("_n_calls", "_collected_steps", "_collected_episodes")
     _default_net_arch = [400, 300]  # SB3's TD3 and DDPG
 
     def __init__(
@@ -182,14 +181,6 @@ class TD3(ActorCriticOffPolicy):
     def critic_target(self) -> Any:
         return self.policy["critic_target"]
 
-    def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
-        self.learner.to_torch()
-        groups = self.learner.groups
-        return {
-            "actor_optimizer": ("actor.optimizer", groups["actor"].optimizer),
-            "critic_optimizer": ("critic.optimizer", groups["critic"].optimizer),
-        }
-
     # -- acting ------------------------------------------------------------------------------
     def _policy_actions(self, obs: Any, deterministic: bool) -> np.ndarray:
         return self.learner.forward("actor", obs)  # exploration: action_noise only
@@ -199,8 +190,7 @@ class TD3(ActorCriticOffPolicy):
         """Critic updates every step; actor and target updates every ``policy_delay``."""
         for group in ("actor", "critic"):
             self._update_learning_rate(group)
-        n_critics = len([n for n in self.learner.nets if n.startswith("qf") and "_" not in n])
-        critic = TD3CriticObjective(n_critics, self.gamma)
+        critic = TD3CriticObjective(self._n_critics, self.gamma)
         actor = TD3ActorObjective(self.action_dim)
         actor_losses, critic_losses = [], []
         with self.learner.session():
@@ -255,6 +245,7 @@ class DDPG(TD3):
         replay_buffer_kwargs: dict[str, Any] | None = None,
         optimize_memory_usage: bool = False,
         n_steps: int = 1,
+        stats_window_size: int = 100,
         tensorboard_log: str | None = None,
         policy_kwargs: dict[str, Any] | None = None,
         verbose: int = 0,
@@ -262,9 +253,7 @@ class DDPG(TD3):
         device: torch.device | str = "auto",
         num_threads: int | None = None,
         _init_setup_model: bool = True,
-        **_loaded: Any,
     ) -> None:
-        # A saved DDPG holds TD3's keys; they are DDPG's fixed values.
         super().__init__(
             policy,
             env,
@@ -284,7 +273,7 @@ class DDPG(TD3):
             policy_delay=1,
             target_policy_noise=0.1,
             target_noise_clip=0.0,
-            stats_window_size=_loaded.get("stats_window_size", 100),
+            stats_window_size=stats_window_size,
             tensorboard_log=tensorboard_log,
             policy_kwargs=policy_kwargs,
             verbose=verbose,
@@ -293,3 +282,8 @@ class DDPG(TD3):
             num_threads=num_threads,
             _init_setup_model=_init_setup_model,
         )
+
+    def _hyperparameters(self) -> dict[str, Any]:
+        """TD3's keys without the three DDPG fixes (a file cannot change them)."""
+        fixed = ("policy_delay", "target_policy_noise", "target_noise_clip")
+        return {k: v for k, v in super()._hyperparameters().items() if k not in fixed}
