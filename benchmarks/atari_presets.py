@@ -18,7 +18,7 @@ Steps, all through the CLI except the random policy:
    (sampled actions, how RL-Zoo evaluates Atari). Episodes are whole games: all lives, the
    unclipped score, as the Monitor under SB3's AtariWrapper reports them.
 3. A uniformly random policy for the same number of whole games on the same pipeline
-   (``palaestra.cli.pipeline``: ``make_atari_env`` + ``VecFrameStack``, one env, seed 0).
+   (``palaestra.runs.recipe``: ``make_atari_env`` + ``VecFrameStack``, one env, seed 0).
 
 One seed per preset: a training costs a quarter of an hour of a shared 2-core CPU.
 """
@@ -43,7 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from presets import machine, write_measured
 
 from palaestra import presets
-from palaestra.cli.pipeline import atari_kwargs
+from palaestra.runs.recipe import atari_kwargs
 
 PALAESTRA = str(Path(sys.executable).with_name("palaestra"))
 ENV_ID = "ALE/Breakout-v5"
@@ -102,12 +102,14 @@ def cli_eval(out: Path, games: int, stochastic: bool) -> tuple[float, float, str
 
 def random_games(config: dict[str, Any], games: int) -> list[float]:
     """Whole-game scores of a uniformly random policy on the run's pipeline."""
-    from palaestra.cli.pipeline import make_vec, play_vec
+    from palaestra.runs.evaluation import play_episodes
+    from palaestra.runs.recipe import make_vec
 
     venv = make_vec(config, 1, seed=0)
-    played = play_vec(RandomPolicy(int(venv.action_space.n), 0), venv, games, seed=0)
+    venv.seed(0)
+    returns, _, _ = play_episodes(RandomPolicy(int(venv.action_space.n), 0), venv, games)
     venv.close()
-    return played.returns
+    return returns
 
 
 def load_summary(path: Path) -> dict[str, Any]:

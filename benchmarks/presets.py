@@ -38,8 +38,8 @@ import numpy as np
 
 import palaestra
 from palaestra import presets
-from palaestra.cli.common import is_goal_env, parse_value
-from palaestra.cli.settings import ALGOS
+from palaestra.runs.files import is_goal_env
+from palaestra.runs.settings import ALGOS, parse_value
 
 PRESETS_JSON = Path(__file__).resolve().parents[1] / "src/palaestra/presets/presets.json"
 EVAL_EPISODES = 100
@@ -104,7 +104,7 @@ def run_one(algo: str, env_id: str, name: str, preset: dict[str, Any], seed: int
     import torch
 
     from palaestra.algos import evaluate_policy
-    from palaestra.cli.settings import algo_class
+    from palaestra.runs.settings import algo_class
 
     torch.set_num_threads(1)
     venv = make_training_env(env_id, preset, seed)

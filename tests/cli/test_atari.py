@@ -52,7 +52,7 @@ def test_presets_resolve_to_the_atari_recipe() -> None:
 
 
 def test_atari_id_without_preset_gets_the_recipe() -> None:
-    from palaestra.cli.settings import resolve_settings
+    from palaestra.runs.settings import resolve_settings
 
     settings, used, notes = resolve_settings("ppo", "ALE/Pong-v5", None, None, [])
     assert used is None and settings["atari"] is True and settings["policy"] == "CnnPolicy"
@@ -88,9 +88,10 @@ class RandomPolicy:
         return self.rng.integers(0, 4, len(obs)), None
 
 
-def test_play_vec_counts_games_not_lives() -> None:
+def test_play_episodes_counts_games_not_lives() -> None:
     """A lost life is a done for training, but a game has 5 lives: one game sees 5 dones."""
-    from palaestra.cli.pipeline import make_vec, play_vec
+    from palaestra.runs.evaluation import play_episodes
+    from palaestra.runs.recipe import make_vec
 
     config = {**presets.get_preset("ppo", BREAKOUT), "env_id": BREAKOUT}
     venv = make_vec(config, 1, seed=0)
@@ -103,10 +104,11 @@ def test_play_vec_counts_games_not_lives() -> None:
         return result
 
     venv.step = counting_step
-    played = play_vec(RandomPolicy(), venv, 1, seed=0)
+    venv.seed(0)
+    returns, lengths, terminated = play_episodes(RandomPolicy(), venv, 1)
     venv.close()
-    assert sum(dones) == 5 and len(played.returns) == 1
-    assert played.lengths == [len(dones)] and played.terminated == [True]
+    assert sum(dones) == 5 and len(returns) == 1
+    assert lengths == [len(dones)] and terminated == [True]
 
 
 def test_record_writes_a_gif(

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from palaestra.cli import COMMANDS, build_parser
-from palaestra.cli.settings import ALGOS
+from palaestra.runs.settings import ALGOS
 
 from .conftest import run_cli
 

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from palaestra.cli.curves import read_episodes, rolling_mean
-from palaestra.cli.stats import confidence_interval, t_cdf, t_quantile
+from palaestra.runs.curves import read_episodes, rolling_mean
+from palaestra.runs.stats import confidence_interval, t_cdf, t_quantile
 
 from .conftest import run_cli
 

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from tests.cli.conftest import Result
 
-from palaestra.cli.curves import Episodes, variant_band
-from palaestra.cli.settings import ALGO_CLASSES, ALGOS, algo_class, hyperparameter_names
+from palaestra.runs.curves import Episodes, variant_band
+from palaestra.runs.settings import ALGO_CLASSES, ALGOS, algo_class, hyperparameter_names
 
 
 def test_registry_is_one_list() -> None:
@@ -140,7 +140,7 @@ def test_band_against_wall_clock_time() -> None:
 def test_episode_log_keeps_the_columns_of_a_resumed_old_file(tmp_path: Path) -> None:
     """A run folder written before the time column resumes with its four columns (one header
     per file); a new file gets the training seconds, counted on from the run's earlier time."""
-    from palaestra.cli.progress import EpisodeLog
+    from palaestra.runs.logs import EpisodeLog
 
     class Model:
         num_timesteps = 7

@@ -142,7 +142,7 @@ def test_eval_and_record_bad_input(tmp_path: Path, ppo_run: tuple[Path, Result])
 
 
 def test_eval_detects_the_algorithm(dqn_run: tuple[Path, Result]) -> None:
-    from palaestra.cli.evaluate import load_model
+    from palaestra.runs import load_model
 
     assert isinstance(load_model(dqn_run[0] / "model.zip"), DQN)
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from palaestra.cli.curves import read_episodes
-from palaestra.cli.progress import AppendingCSV, EpisodeLog
+from palaestra.runs.curves import read_episodes
+from palaestra.runs.logs import AppendingCSV, EpisodeLog
 
 
 def test_episode_log_header_then_resume_after_a_torn_row(tmp_path: Path) -> None:

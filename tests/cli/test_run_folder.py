@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from palaestra.cli.settings import ALGOS
+from palaestra.runs.settings import ALGOS
 
 from .conftest import Result, run_cli
 

@@ -162,7 +162,9 @@ def test_a_bad_status_file_is_found_before_training(
     def no_env(*args: object) -> None:
         raise AssertionError("an env was built")
 
-    monkeypatch.setattr(train, "_make_env", no_env)
+    from palaestra.runs import training
+
+    monkeypatch.setattr(training, "make_env", no_env)
     result = run_cli("train", "--resume", run, "--progress", "none")
     assert result.code == 2
     assert result.err.startswith("palaestra: error: " + message.format(path=run / "status.json"))

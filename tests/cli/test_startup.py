@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 import palaestra
-from palaestra.cli import curves
 from palaestra.error import DependencyNotInstalled
+from palaestra.runs import curves
 
 from .conftest import Result, run_cli, wait_for_file
 

@@ -17,7 +17,7 @@ from palaestra import presets
 from palaestra.algos import A2C, DQN, PPO, LinearSchedule
 from palaestra.algos.callbacks import BaseCallback
 from palaestra.cli import train
-from palaestra.cli.settings import resolve_settings
+from palaestra.runs.settings import resolve_settings
 
 from .conftest import Result, run_cli, wait_for_file
 

@@ -165,7 +165,8 @@ def test_eval_of_a_normalized_run_with_env_wrapper_normalizes(workdir: Path) -> 
     from tests.cli.conftest import run_cli
 
     from palaestra.algos import PPO
-    from palaestra.cli.evaluate import obs_normalizer, play, play_saved
+    from palaestra.runs import evaluate_run
+    from palaestra.vec_env import VecNormalize, make_vec_env
 
     (workdir / "same.py").write_text(
         "import palaestra as gym\n\nclass Same(gym.Wrapper):\n    pass\n", encoding="utf-8"
@@ -176,15 +177,31 @@ def test_eval_of_a_normalized_run_with_env_wrapper_normalizes(workdir: Path) -> 
                 "--progress", "none", "--eval-episodes", 0)  # fmt: skip
     assert r.code == 0, r.err
     model = PPO.load(out / "model.zip")
-    _, piped, _, _ = play_saved(model, out / "model.zip", None, 5, seed=3)
+    piped = evaluate_run(out, 5, seed=3, allow_import=["same"])
 
     import palaestra
 
-    plain = palaestra.make("CartPole-v1")
-    normalize = obs_normalizer(out / "model.zip", "CartPole-v1")
-    assert normalize is not None
-    expected = play(model, plain, 5, seed=3, normalize=normalize)
-    unnormalized = play(model, palaestra.make("CartPole-v1"), 5, seed=3)
-    assert piped.lengths == expected.lengths
-    assert piped.returns == expected.returns
-    assert expected.lengths != unnormalized.lengths  # the statistics change what it plays
+    stats = VecNormalize.load(str(out / "vecnormalize.npz"), make_vec_env("CartPole-v1"))
+    stats.training = False
+
+    def play(normalize: bool) -> tuple[list[float], list[int]]:
+        """The reference loop: one plain env, first reset seeded, observations normalized."""
+        env, returns, lengths = palaestra.make("CartPole-v1"), [], []
+        obs, _ = env.reset(seed=3)
+        for _ in range(5):
+            total, length, done = 0.0, 0, False
+            while not done:
+                seen = stats.normalize_obs(obs[None])[0] if normalize else obs
+                obs, reward, terminated, truncated, _ = env.step(
+                    model.predict(seen, deterministic=True)[0]
+                )
+                total, length, done = total + float(reward), length + 1, terminated or truncated
+            returns.append(total)
+            lengths.append(length)
+            obs, _ = env.reset()
+        return returns, lengths
+
+    expected, unnormalized = play(True), play(False)
+    assert piped.lengths == expected[1]
+    assert piped.returns == expected[0]
+    assert expected[1] != unnormalized[1]  # the statistics change what it plays

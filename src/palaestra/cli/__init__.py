@@ -53,9 +53,11 @@ def build_parser() -> argparse.ArgumentParser:
 def _report(exc: BaseException) -> int:
     """One stderr line for an exception; the exit code."""
     from palaestra import error
+    from palaestra.runs.errors import RunError
 
-    if isinstance(exc, CLIError):
-        print(exc.line(), file=sys.stderr)
+    if isinstance(exc, RunError):  # CLIError, and the run API's errors
+        line = exc.line()
+        print(line if isinstance(exc, CLIError) else f"palaestra: error: {line}", file=sys.stderr)
         return exc.code
     if isinstance(exc, error.DependencyNotInstalled):
         return _report(CLIError(str(exc), code=1))

@@ -1,88 +1,23 @@
 """``palaestra compare``: runs that differ only by seed form one variant; a table of final
 returns with 95% t-intervals over seeds and the training wall time, and the learning curves of
-all variants on one plot against env steps and on a second against wall-clock seconds.
+all variants on one plot against env steps and on a second against wall-clock seconds
+(:mod:`palaestra.runs.compare` computes them).
 
 ``palaestra compare algos --env CartPole-v1 --algos a2c ppo dqn --seeds 0 1 2 3 4`` trains
-each algorithm's preset on each seed first (see :mod:`palaestra.cli.variants`)."""
+each algorithm's preset on each seed first (see :mod:`palaestra.cli.variants`), locally or on
+Ray (``--backend ray``)."""
 
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from palaestra.cli.common import CONFIG_FILE, STATUS_FILE, CLIError, is_goal_env, read_json
+from palaestra.cli.common import CLIError
 
-__all__ = ["Variant", "add_parser", "group_runs", "run"]
-
-# Config keys that do not make two runs different variants.
-_IGNORED = {"seed", "device", "palaestra_version"}
-
-
-class Variant(NamedTuple):
-    """Runs with the same settings but for the seed."""
-
-    key: str
-    config: dict[str, Any]
-    runs: list[Path]
-
-
-def _flatten(config: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for key, value in config.items():
-        name = key if prefix in ("", "hyperparams.") else prefix + key
-        if isinstance(value, dict) and value:
-            out.update(_flatten(value, f"{name}."))
-        else:
-            out[name] = value
-    return out
-
-
-def group_runs(runs: list[Path]) -> list[Variant]:
-    """Variants in order of first appearance; a run without config.json is its own variant."""
-    variants: dict[str, Variant] = {}
-    for run in runs:
-        if not run.is_dir():
-            raise CLIError(f"no run folder at {str(run)!r}", "pass folders written by train")
-        config_path = run / CONFIG_FILE
-        if config_path.is_file():
-            config = read_json(config_path, "run config")
-            kept = {k: v for k, v in config.items() if k not in _IGNORED}
-            key = json.dumps(kept, sort_keys=True, default=str)
-        else:
-            config, key = {}, f"run:{run.resolve()}"
-        variants.setdefault(key, Variant(key, config, []))
-        variants[key].runs.append(run)
-    return list(variants.values())
-
-
-def default_labels(variants: list[Variant]) -> list[str]:
-    """Each variant named by the settings in which the variants differ.
-
-    >>> a = Variant("a", {"algo": "ppo", "hyperparams": {"gamma": 0.9}}, [])
-    >>> b = Variant("b", {"algo": "ppo", "hyperparams": {"gamma": 0.99}}, [])
-    >>> default_labels([a, b])
-    ['gamma=0.9', 'gamma=0.99']
-    """
-    flat = [_flatten({k: v for k, v in v.config.items() if k not in _IGNORED}) for v in variants]
-    keys = sorted({k for f in flat for k in f})
-    differing = [k for k in keys if len({json.dumps(f.get(k), default=str) for f in flat}) > 1]
-    labels = []
-    for variant, values in zip(variants, flat):
-        if not variant.config:
-            labels.append(variant.runs[0].name)
-        elif differing:
-            parts = [
-                str(values.get(k)) if k in ("algo", "env_id") else f"{k}={values.get(k)}"
-                for k in differing
-            ]
-            labels.append(", ".join(parts))
-        else:
-            labels.append(f"{values.get('algo')} {values.get('env_id')}")
-    return labels
+__all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
@@ -140,19 +75,33 @@ def add_parser(sub: Any) -> None:
         metavar="N",
         help="final return = mean of each run's last N episodes (default: 100)",
     )
+    p.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="where variant runs train: one after another in this process (local, the "
+        "default), or as Ray tasks (ray: a local Ray on this machine's cores, or the cluster "
+        "at --address)",
+    )
+    p.add_argument(
+        "--address",
+        metavar="ADDR",
+        help="Ray cluster to run on with --backend ray: auto (the cluster this machine "
+        "joined with `ray start`) or ray://HOST:10001 (default: a local Ray)",
+    )
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """The ``compare`` command."""
-    from palaestra.cli.curves import plot_compare, read_episodes, variant_band
-    from palaestra.cli.stats import confidence_interval
+    from palaestra.cli.variants import train_variants
+    from palaestra.runs.compare import default_labels, group_runs, summarize
+    from palaestra.runs.curves import plot_compare, variant_band
+    from palaestra.runs.recipe import atari_kwargs
 
     if args.last < 1:
         raise CLIError(f"--last must be at least 1, got {args.last}", "e.g. --last 100")
-    from palaestra.cli.variants import train_variants
-
-    folders, names = train_variants(args)
+    folders, names, failed = train_variants(args)
     variants = group_runs(folders)
     labels = default_labels(variants)
     for i, variant in enumerate(variants):  # a trained variant is named after its file
@@ -166,60 +115,32 @@ def run(args: argparse.Namespace) -> int:
                 "give one label per variant, in order of first appearance: " + "; ".join(labels),
             )
         labels = list(args.labels)
-    rows, bands, time_bands = [], [], []
-    for label, variant in zip(labels, variants):
-        episodes = [read_episodes(r) for r in variant.runs]
-        finals = [float(np.mean(e.returns[-args.last :])) for e in episodes if len(e.returns)]
-        mean, low, high = confidence_interval(finals)
-        env_id = str(variant.config.get("env_id", ""))
-        known = [e.terminated for e in episodes if e.terminated is not None and len(e.returns)]
-        success = (
-            100.0 * float(np.mean([t[-args.last :].mean() for t in known]))
-            if is_goal_env(env_id) and known
-            else None
-        )
-        rows.append((label, len(variant.runs), mean, low, high, success, _wall_time(variant)))
-        band = variant_band(label, episodes)
-        if band is not None:
-            bands.append(band)
-        band = variant_band(label, episodes, x="times")
-        if band is not None:
-            time_bands.append(band)
+    rows = summarize(variants, labels, args.last)
     _print_table(rows, args.last)
-    for label, variant in zip(labels, variants):
-        print(f"  {label}: {', '.join(str(r) for r in variant.runs)}")
-    from palaestra.cli.pipeline import atari_kwargs
-
+    for row in rows:
+        print(f"  {row.label}: {', '.join(str(r) for r in row.variant.runs)}")
+    for outcome in failed:
+        print(f"  failed: {outcome.run.label} seed {outcome.run.spec.seed}: {outcome.error}")
     if any(atari_kwargs(v.config) is not None for v in variants):
         from palaestra.cli.evaluate import GAMES_NOTE
 
         print(f"(Atari runs: training {GAMES_NOTE})")
+    bands = [b for r in rows if (b := variant_band(r.label, r.episodes)) is not None]
+    time_bands = [b for r in rows if (b := variant_band(r.label, r.episodes, x="times"))]
     envs = sorted({str(v.config.get("env_id")) for v in variants if v.config})
     # Against wall-clock time only when every variant's runs logged their times.
     timed = time_bands if len(time_bands) == len(bands) else None
     plot_compare(bands, Path(args.out), " / ".join(envs) or "learning curves", timed)
     print(f"wrote {args.out}")
-    return 0
+    return 1 if failed else 0
 
 
-def _wall_time(variant: Variant) -> float | None:
-    """Mean training seconds per run (``status.json``); None when a run has none."""
-    seconds = []
-    for run in variant.runs:
-        path = run / STATUS_FILE
-        if not path.is_file():
-            return None
-        wall = read_json(path, "run status").get("wall_time_s")
-        if isinstance(wall, bool) or not isinstance(wall, (int, float)):
-            return None
-        seconds.append(float(wall))
-    return float(np.mean(seconds)) if seconds else None
-
-
-def _print_table(rows: list[tuple[Any, ...]], last: int) -> None:
-    width = max(len("variant"), *(len(r[0]) for r in rows))
+def _print_table(rows: list[Any], last: int) -> None:
+    width = max(len("variant"), *(len(r.label) for r in rows))
     print(f"{'variant':<{width}}  seeds  final mean return  {'95% CI':<20}  success  wall time")
-    for label, n, mean, low, high, success, wall in rows:
+    for row in rows:
+        label, n, mean, low, high = row.label, row.seeds, row.mean, row.low, row.high
+        success, wall = row.success, row.wall_time_s
         ci = "n/a (one seed)" if np.isnan(low) else f"[{low:.2f}, {high:.2f}]"
         rate = "-" if success is None else f"{success:.1f}%"
         seconds = "-" if wall is None else f"{wall:.1f} s"

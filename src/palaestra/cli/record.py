@@ -6,9 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from palaestra.cli import run_folder
-from palaestra.cli.common import CLIError, model_file
-from palaestra.cli.evaluate import load_model, play_saved
+from palaestra.cli.common import CLIError, add_allow_import
 
 __all__ = ["add_parser", "run"]
 
@@ -48,7 +46,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument(
         "--device", default="auto", metavar="DEV", help="torch device: auto (default), cpu, cuda"
     )
-    run_folder.add_allow_import(p, "record")
+    add_allow_import(p, "record")
     p.set_defaults(func=run)
 
 
@@ -69,19 +67,19 @@ def run(args: argparse.Namespace) -> int:
 
         if not mp4_available():  # before playing, not after
             raise dependency_not_installed("imageio-ffmpeg", "video", "writing MP4 files")
-    path = model_file(args.model)
-    config = run_folder.find_run_config(path, args.allow_import, args.env)
-    model = load_model(path, args.device)
-    _, played, env_fps, games = play_saved(
-        model,
-        path,
-        args.env,
+    from palaestra.runs import evaluate_run
+
+    played = evaluate_run(
+        args.model,
         args.episodes,
         not args.stochastic,
         args.seed,
+        args.env,
+        args.allow_import,
         record=True,
-        run_config=config,
+        device=args.device,
     )
+    env_fps, games = played.fps, played.games
     fps = args.fps or env_fps
     from palaestra.utils.video import save_video
 

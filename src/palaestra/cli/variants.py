@@ -15,15 +15,17 @@ them)::
 
 Algorithm ``a`` on seed ``s`` trains as ``palaestra train a ENV --seed s --out
 RUNS/a/seed<s>``. A run that already finished is reused, so a second call only trains what is
-missing.
+missing. The runs train through :func:`palaestra.runs.grid.run_grid`, one after another or as
+Ray tasks (``--backend ray``).
 """
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
-from palaestra.cli.common import CONFIG_FILE, STATUS_FILE, CLIError, read_json
+from palaestra.cli.common import CLIError
 
 __all__ = ["ALGOS_WORD", "BASELINE", "is_variant", "train_variants"]
 
@@ -41,40 +43,33 @@ def _label(item: str) -> str:
     return BASELINE if item == BASELINE else Path(item).stem
 
 
-def _train_argv(
-    args: argparse.Namespace, item: str, seed: int, out: Path, algo: str | None = None
-) -> list[str]:
-    """``train`` arguments for variant ``item`` (or, with ``algo``, that algorithm's preset)."""
-    argv = ["train", algo or args.algo, args.env, "--seed", str(seed), "--out", str(out)]
-    if algo is None and item != BASELINE:
-        argv += ["--config", item]
-    if args.timesteps is not None:
-        argv += ["--timesteps", str(args.timesteps)]
-    return [*argv, "--progress", "none", "--eval-episodes", "0"]
+def _check_seeds(seeds: list[int]) -> None:
+    if len(set(seeds)) < len(seeds):
+        raise CLIError(f"--seeds repeats a seed: {seeds}", "list each seed once")
 
 
-def _finished(run: Path) -> bool:
-    status = run / STATUS_FILE
-    return status.is_file() and read_json(status, "run status").get("status") == "finished"
+def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str], list[Any]]:
+    """Run folders for ``args.runs`` (folders as given, variants trained on ``args.seeds``),
+    the variant name of each trained one, and the runs that failed."""
+    from palaestra.runs.grid import GridRun
+    from palaestra.runs.spec import resolve_spec
 
-
-def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str]]:
-    """Run folders for ``args.runs`` (folders as given, variants trained on ``args.seeds``) and
-    the variant name of each trained one."""
     if ALGOS_WORD in args.runs:
-        return _train_algos(args)
+        return _train(args, _algo_runs(args))
     if getattr(args, "algos", None):
         raise CLIError("--algos only applies to 'algos'", "palaestra compare algos --algos ...")
     variants = [item for item in args.runs if is_variant(item)]
     if not variants:
         given = [f for f in ("algo", "env", "seeds", "timesteps", "runs_dir") if getattr(args, f)]
+        if args.backend != "local" or args.address:
+            given += ["backend", "address"][: 1 + bool(args.address)]
         if given:
             flags = ", ".join("--" + f.replace("_", "-") for f in given)
             raise CLIError(
                 f"{flags} only apply to variants to train (settings files or 'preset')",
                 "drop them to compare the run folders as they are",
             )
-        return [Path(item) for item in args.runs], {}
+        return [Path(item) for item in args.runs], {}, []
     if args.algo is None or args.env is None or not args.seeds:
         raise CLIError(
             f"training the variants {variants} needs --algo, --env and --seeds",
@@ -83,26 +78,30 @@ def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str
     labels = [_label(v) for v in variants]
     if len(set(labels)) < len(labels):
         raise CLIError(f"two variants share a name: {labels}", "give the files different names")
-    if len(set(args.seeds)) < len(args.seeds):
-        raise CLIError(f"--seeds repeats a seed: {args.seeds}", "list each seed once")
+    _check_seeds(args.seeds)
     root = Path(args.runs_dir or f"runs/compare-{args.algo.lower()}-{args.env.replace('/', '_')}")
-    folders: list[Path] = []
-    names: dict[Path, str] = {}
+    items: list[Any] = []  # run folders as given, and runs to train, in the order given
     for item in args.runs:
         if not is_variant(item):
-            folders.append(Path(item))
+            items.append(Path(item))
             continue
         for seed in args.seeds:
-            out = root / _label(item) / f"seed{seed}"
-            folders.append(out)
-            names[out] = _label(item)
-            _train_or_reuse(_label(item), seed, out, _train_argv(args, item, seed, out))
-    return folders, names
+            spec, _ = resolve_spec(
+                args.algo,
+                args.env,
+                config=None if item == BASELINE else item,
+                seed=seed,
+                n_timesteps=args.timesteps,
+            )
+            items.append(GridRun(_label(item), spec, root / _label(item) / f"seed{seed}"))
+    return _train(args, items)
 
 
-def _train_algos(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str]]:
+def _algo_runs(args: argparse.Namespace) -> list[Any]:
     """``compare algos``: each of ``args.algos`` on its preset for ``args.env``, per seed."""
-    from palaestra.cli.settings import ALGOS, check_algo
+    from palaestra.runs.grid import GridRun
+    from palaestra.runs.settings import ALGOS, check_algo
+    from palaestra.runs.spec import resolve_spec
 
     if args.runs != [ALGOS_WORD]:
         others = [r for r in args.runs if r != ALGOS_WORD]
@@ -120,35 +119,39 @@ def _train_algos(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str]]
     algos = [check_algo(a) for a in args.algos]
     if len(set(algos)) < len(algos):
         raise CLIError(f"--algos repeats an algorithm: {args.algos}", "list each once")
-    if len(set(args.seeds)) < len(args.seeds):
-        raise CLIError(f"--seeds repeats a seed: {args.seeds}", "list each seed once")
+    _check_seeds(args.seeds)
     root = Path(args.runs_dir or f"runs/compare-algos-{args.env.replace('/', '_')}")
-    folders: list[Path] = []
-    names: dict[Path, str] = {}
+    runs = []
     for algo in algos:
         for seed in args.seeds:
-            out = root / algo / f"seed{seed}"
-            folders.append(out)
-            names[out] = algo
-            _train_or_reuse(algo, seed, out, _train_argv(args, algo, seed, out, algo=algo))
-    return folders, names
+            spec, _ = resolve_spec(algo, args.env, seed=seed, n_timesteps=args.timesteps)
+            runs.append(GridRun(algo, spec, root / algo / f"seed{seed}"))
+    return runs
 
 
-def _train_or_reuse(label: str, seed: int, out: Path, argv: list[str]) -> None:
-    """Train one variant run into ``out`` unless a finished run is already there."""
-    from palaestra.cli import build_parser
+def _train(
+    args: argparse.Namespace, items: list[Any]
+) -> tuple[list[Path], dict[Path, str], list[Any]]:
+    """Train the ``GridRun`` items on the chosen backend; folders in the order given."""
+    from palaestra.runs.grid import GridRun, run_grid
 
-    if (out / CONFIG_FILE).is_file():
-        if not _finished(out):
-            raise CLIError(f"{out} holds an unfinished run", f"palaestra train --resume {out}")
-        print(f"{label} seed {seed}: reusing {out}")
-        return
-    print(f"{label} seed {seed}: training -> {out}", flush=True)
-    train_args = build_parser().parse_args(argv)
-    code = train_args.func(train_args)
-    if code:
-        raise CLIError(
-            f"training {label} seed {seed} stopped (exit code {code})",
-            f"palaestra train --resume {out}, then run compare again",
-            code=code,
-        )
+    def report(kind: str, run: Any, outcome: Any) -> None:
+        where = f"{run.label} seed {run.spec.seed}"
+        if kind == "reused":
+            print(f"{where}: reusing {run.run_dir}", flush=True)
+        elif kind == "start":
+            print(f"{where}: training -> {run.run_dir}", flush=True)
+        elif outcome.status == "failed":
+            print(f"{where}: failed: {outcome.error}", flush=True)
+
+    grid = [item for item in items if isinstance(item, GridRun)]
+    outcomes = run_grid(grid, args.backend, args.address, on_event=report)
+    failed = [o for o in outcomes if o.status == "failed"]
+    lost = {o.run.run_dir for o in failed}
+    folders = [
+        item.run_dir if isinstance(item, GridRun) else item
+        for item in items
+        if not (isinstance(item, GridRun) and item.run_dir in lost)
+    ]
+    names = {item.run_dir: item.label for item in grid}
+    return folders, names, failed

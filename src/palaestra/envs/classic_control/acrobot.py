@@ -128,6 +128,8 @@ class AcrobotEnv(ClassicControlEnv):
     """Single Acrobot: the Python-float path of :func:`step_state`."""
 
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 15}
+    # Episodes end by termination only at the goal, so "terminated" means "succeeded".
+    success_on_termination = True
     AVAIL_TORQUE = list(AVAIL_TORQUE)
 
     def __init__(self, render_mode: str | None = None) -> None:

@@ -197,6 +197,8 @@ class Continuous_MountainCarEnv(ClassicControlEnv):
     """Single continuous MountainCar: the Python-float path of :func:`step_state`."""
 
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 30}
+    # Episodes end by termination only at the goal, so "terminated" means "succeeded".
+    success_on_termination = True
 
     def __init__(self, render_mode: str | None = None, goal_velocity: float = 0) -> None:
         self.params = ContinuousMountainCarParams(goal_velocity=goal_velocity)

@@ -78,6 +78,8 @@ class MountainCarEnv(ClassicControlEnv):
     """
 
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 30}
+    # Episodes end by termination only at the goal, so "terminated" means "succeeded".
+    success_on_termination = True
 
     def __init__(self, render_mode: str | None = None, goal_velocity: float = 0) -> None:
         self.params = MountainCarParams(goal_velocity=goal_velocity)

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.algos.callbacks import BaseCallback
-from palaestra.cli.common import MODEL_FILE, NORMALIZE_FILE, REPLAY_ALGOS, REPLAY_FILE
+from palaestra.runs.files import MODEL_FILE, NORMALIZE_FILE, REPLAY_ALGOS, REPLAY_FILE
 
 __all__ = [
     "ENV_STATE_FILE",

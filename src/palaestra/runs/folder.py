@@ -25,14 +25,14 @@ from pathlib import Path
 from typing import Any
 
 from palaestra import presets
-from palaestra.cli import settings
-from palaestra.cli.common import CONFIG_FILE, CLIError, eprint, read_json
-from palaestra.cli.pipeline import wrapper_module
+from palaestra.runs import settings
+from palaestra.runs.errors import RunError
+from palaestra.runs.files import CONFIG_FILE, note, read_json
+from palaestra.runs.recipe import wrapper_module
 
 __all__ = [
     "CONFIG_KEYS",
     "RESUME_KEYS",
-    "add_allow_import",
     "check_imports",
     "check_run_config",
     "find_run_config",
@@ -71,19 +71,6 @@ _ATARI_LIMITS: dict[str, tuple[type, float, float]] = {
 }
 
 
-def add_allow_import(parser: Any, what: str) -> None:
-    """The ``--allow-import MODULE`` option of a command that reads a run folder."""
-    parser.add_argument(
-        "--allow-import",
-        action="append",
-        default=[],
-        metavar="MODULE",
-        help=f"let {what} import MODULE when the run's config.json names it (env_wrapper "
-        "'MODULE:Class', env_id 'MODULE:Name-v0'); repeatable. Without it a run folder "
-        "runs no code.",
-    )
-
-
 # -- imports -----------------------------------------------------------------------------------
 def _env_id_module(env_id: str) -> str | None:
     """The module ``palaestra.make(env_id)`` would import first (``resolve_id``'s rule), or
@@ -105,28 +92,28 @@ def modules_named(config: dict[str, Any]) -> list[tuple[str, str, str]]:
 
 
 def check_imports(config: dict[str, Any], source: str, allowed: Sequence[str]) -> None:
-    """``CLIError`` for the first module ``config`` names that ``allowed`` does not hold (the
+    """``RunError`` for the first module ``config`` names that ``allowed`` does not hold (the
     fix lists every flag needed); a note on stderr for each module that will be imported."""
     named = modules_named(config)
     refused = [(s, v, m) for s, v, m in named if m not in allowed]
     if refused:
         setting, value, module = refused[0]
         flags = " ".join(f"--allow-import {m}" for m in dict.fromkeys(m for _, _, m in refused))
-        raise CLIError(
+        raise RunError(
             f"{source} names {setting} {value!r}, which would import module {module!r}; "
             "palaestra runs no code named by a run folder",
             f"pass {flags} to allow it",
         )
     for setting, value, module in named:
-        eprint(f"note: importing module {module!r} for {setting} {value!r} of {source} (allowed)")
+        note(f"importing module {module!r} for {setting} {value!r} of {source} (allowed)")
     unused = sorted(set(allowed) - {m for _, _, m in named})
     if unused:
-        eprint(f"note: --allow-import {', '.join(unused)}: {source} names no such module")
+        note(f"--allow-import {', '.join(unused)}: {source} names no such module")
 
 
 # -- values ------------------------------------------------------------------------------------
-def _fail(source: str, key: str, value: Any, expected: str) -> CLIError:
-    return CLIError(
+def _fail(source: str, key: str, value: Any, expected: str) -> RunError:
+    return RunError(
         f"{source}: {key} must be {expected}, got {reprlib.repr(value)}",
         "fix the file, or start a new run",
     )
@@ -173,13 +160,13 @@ def _check_normalize(source: str, normalize: Any) -> None:
 def _check_keys(config: dict[str, Any], source: str, required: Sequence[str]) -> None:
     unknown = sorted(str(k) for k in config if k not in CONFIG_KEYS)
     if unknown:
-        raise CLIError(
+        raise RunError(
             f"{source} holds unknown key(s) {unknown}",
             f"a run's config.json holds only {', '.join(sorted(CONFIG_KEYS))}",
         )
     missing = [k for k in required if k not in config]
     if missing:
-        raise CLIError(f"{source} lacks {', '.join(missing)}", "fix the file, or start a new run")
+        raise RunError(f"{source} lacks {', '.join(missing)}", "fix the file, or start a new run")
 
 
 def _check_names(config: dict[str, Any], source: str) -> None:
@@ -220,7 +207,7 @@ def _check_pipeline(config: dict[str, Any], source: str) -> None:
 def check_run_config(
     config: dict[str, Any], source: str, required: Sequence[str] = ("env_id",)
 ) -> None:
-    """``CLIError`` unless ``config`` holds only the keys ``train`` writes, ``required`` among
+    """``RunError`` unless ``config`` holds only the keys ``train`` writes, ``required`` among
     them, with usable types and values within limits. Imports no user module."""
     _check_keys(config, source, required)
     _check_names(config, source)
@@ -233,7 +220,7 @@ def check_run_config(
         try:
             check_run_hyperparams(algo, config["hyperparams"], names, source)
         except ValueError as exc:
-            raise CLIError(str(exc), "fix the file, or start a new run") from None
+            raise RunError(str(exc), "fix the file, or start a new run") from None
 
 
 def read_run_config(
@@ -261,19 +248,19 @@ def find_run_config(
         if candidate.is_file():
             return read_run_config(candidate, allowed, env_id=env_id)
     if allowed:
-        eprint(f"note: --allow-import {', '.join(allowed)}: no config.json beside {model_path}")
+        note(f"--allow-import {', '.join(allowed)}: no config.json beside {model_path}")
     return None
 
 
 def read_status(path: Path) -> dict[str, Any]:
-    """``status.json`` at ``path``: ``CLIError`` unless it is a mapping whose step counts are
+    """``status.json`` at ``path``: ``RunError`` unless it is a mapping whose step counts are
     integers >= 0 (the total >= 1), whose wall time is a finite number >= 0 and whose state is
     a name. Keys it does not know are left alone."""
     status = read_json(path, "run status")
     source = str(path)
     for key in ("status", "num_timesteps", "total_timesteps", "wall_time_s"):
         if key not in status:
-            raise CLIError(f"{source} lacks {key}", "fix the file, or start a new run")
+            raise RunError(f"{source} lacks {key}", "fix the file, or start a new run")
     if not isinstance(status["status"], str):
         raise _fail(source, "status", status["status"], "a name")
     _integer(source, "num_timesteps", status["num_timesteps"], 0, MAX_STEPS)

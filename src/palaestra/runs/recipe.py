@@ -17,7 +17,7 @@ one ``palaestra.make`` env. Two settings change that:
   current folder first (``python -m`` style), so a ``shaping.py`` beside the run works; the
   name must be a ``palaestra.Wrapper`` subclass. A module named by a run folder (``eval``,
   ``record``, ``train --resume``) is imported only when the command line allows it
-  (:mod:`palaestra.cli.run_folder`).
+  (:mod:`palaestra.runs.folder`).
 
 Such a run is evaluated on the same pipeline with one env, and an evaluation episode is a
 whole game: the Monitor under the ``AtariWrapper`` reports it (all lives, unclipped score),
@@ -31,7 +31,7 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from palaestra.cli.common import CLIError
+from palaestra.runs.errors import RunError
 
 __all__ = [
     "ATARI_ENTRY_POINT",
@@ -41,7 +41,6 @@ __all__ = [
     "env_wrapper",
     "is_atari_id",
     "make_vec",
-    "play_vec",
     "render_fps",
     "uses_vec_pipeline",
     "wrapper_module",
@@ -101,15 +100,15 @@ WRAPPER_FIX = "write env_wrapper as 'module:Class', e.g. shaping:BetterRewardSha
 
 
 def wrapper_module(path: Any) -> tuple[str, str]:
-    """``"module:Class"`` (or ``"module.Class"``) -> ``(module, class name)``; ``CLIError``
+    """``"module:Class"`` (or ``"module.Class"``) -> ``(module, class name)``; ``RunError``
     for anything else. Imports nothing."""
     if not isinstance(path, str) or not path.strip():
-        raise CLIError(f"env_wrapper must be 'module:Class', got {path!r}", WRAPPER_FIX)
+        raise RunError(f"env_wrapper must be 'module:Class', got {path!r}", WRAPPER_FIX)
     module_name, sep, name = path.partition(":")
     if not sep:
         module_name, _, name = path.rpartition(".")
     if not module_name or not name:
-        raise CLIError(f"env_wrapper {path!r} names no module and class", WRAPPER_FIX)
+        raise RunError(f"env_wrapper {path!r} names no module and class", WRAPPER_FIX)
     return module_name, name
 
 
@@ -124,16 +123,16 @@ def _import_wrapper(path: Any) -> type[Any]:
     try:
         module = importlib.import_module(module_name)
     except ImportError as exc:
-        raise CLIError(
+        raise RunError(
             f"cannot import module {module_name!r} of env_wrapper {path!r}: {exc}",
             "run from the folder that holds it, or fix the name",
         ) from None
     cls = getattr(module, name, None)
     if cls is None:
-        raise CLIError(f"module {module_name!r} has no class {name!r} (env_wrapper)", WRAPPER_FIX)
+        raise RunError(f"module {module_name!r} has no class {name!r} (env_wrapper)", WRAPPER_FIX)
     if not (isinstance(cls, type) and issubclass(cls, Wrapper)):
         kind = "a class but no Wrapper" if isinstance(cls, type) else f"a {type(cls).__name__}"
-        raise CLIError(
+        raise RunError(
             f"env_wrapper {path!r} is {kind}, not a wrapper class",
             "name a subclass of palaestra.Wrapper (gym.Wrapper, gym.RewardWrapper, ...)",
         )
@@ -157,7 +156,7 @@ def env_wrapper(config: dict[str, Any]) -> Callable[[Any], Any] | None:
 
 
 def check_pipeline(settings: dict[str, Any], env_id: str) -> None:
-    """``CLIError`` unless ``atari`` and ``frame_stack`` are usable for ``env_id``."""
+    """``RunError`` unless ``atari`` and ``frame_stack`` are usable for ``env_id``."""
     atari = settings.get("atari")
     stack = settings.get("frame_stack")
     if stack is not None:
@@ -166,25 +165,25 @@ def check_pipeline(settings: dict[str, Any], env_id: str) -> None:
         try:
             check_n_stack(stack, name="frame_stack")
         except (TypeError, ValueError) as exc:
-            raise CLIError(str(exc), "e.g. 4, or null for no stack") from None
+            raise RunError(str(exc), "e.g. 4, or null for no stack") from None
     if not isinstance(atari, (bool, dict, type(None))):
-        raise CLIError(f"atari must be true/false or AtariWrapper kwargs, got {atari!r}", "fix it")
+        raise RunError(f"atari must be true/false or AtariWrapper kwargs, got {atari!r}", "fix it")
     env_wrapper(settings)  # imports it: a bad name fails before training starts
     if atari_kwargs(settings) is None:
         return
     if settings.get("env_wrapper"):
-        raise CLIError("env_wrapper does not apply to the Atari recipe", "drop one of them")
+        raise RunError("env_wrapper does not apply to the Atari recipe", "drop one of them")
     if isinstance(atari, dict):
         unknown = sorted(set(atari) - set(WRAPPER_KEYS))
         if unknown:
-            raise CLIError(
+            raise RunError(
                 f"unknown AtariWrapper setting(s) {unknown} in atari",
                 f"valid keys: {', '.join(WRAPPER_KEYS)}",
             )
     if not is_atari_id(env_id):
-        raise CLIError(f"atari is set but {env_id} is not an Atari game", "drop atari")
+        raise RunError(f"atari is set but {env_id} is not an Atari game", "drop atari")
     if settings.get("normalize"):
-        raise CLIError("normalize does not apply to the Atari recipe", "drop normalize or atari")
+        raise RunError("normalize does not apply to the Atari recipe", "drop normalize or atari")
     from palaestra.envs.atari.checks import import_ale_py
 
     import_ale_py()  # before torch is imported: a missing ale-py fails at once, in one line
@@ -210,7 +209,7 @@ def make_vec(config: dict[str, Any], n_envs: int, seed: int | None, render: bool
                 env_kwargs=env_kwargs,
             )
         except (TypeError, ValueError) as exc:  # AtariWrapper's checks of its arguments
-            raise CLIError(f"invalid atari settings {wrapper_kwargs}: {exc}", "fix atari") from None
+            raise RunError(f"invalid atari settings {wrapper_kwargs}: {exc}", "fix atari") from None
     else:
         if render:
             env_kwargs["render_mode"] = "rgb_array"
@@ -235,41 +234,3 @@ def render_fps(venv: Any, config: dict[str, Any]) -> float:
         return ATARI_HZ / max(int(wrapper_kwargs.get("frame_skip", 4)), 1)
     metadata = venv.get_attr("metadata")[0] or {}
     return float(metadata.get("render_fps") or 30)
-
-
-def play_vec(
-    model: Any,
-    venv: Any,
-    episodes: int,
-    deterministic: bool = True,
-    seed: int | None = 0,
-    record: bool = False,
-    normalize: Any = None,
-) -> Any:
-    """``episodes`` Monitor episodes on a one-env pipeline (whole games for Atari): returns a
-    ``Played`` with each episode's Monitor return and its length in agent steps. ``normalize``
-    maps observations as the run's ``VecNormalize`` did in training."""
-    from palaestra.cli.evaluate import Played
-
-    out = Played([], [], [], [])
-    venv.seed(seed)
-    obs = venv.reset()
-    steps = 0
-    if record:
-        out.frames.append(venv.get_images()[0])
-    while len(out.returns) < episodes:
-        action, _ = model.predict(
-            obs if normalize is None else normalize(obs), deterministic=deterministic
-        )
-        obs, _, dones, infos = venv.step(action)
-        steps += 1
-        if record:
-            out.frames.append(venv.get_images()[0])
-        # A lost life is a ``done`` too; only the Monitor's "episode" marks the game's end.
-        episode = infos[0].get("episode") if dones[0] else None
-        if episode is not None:
-            out.returns.append(float(episode["r"]))
-            out.lengths.append(steps)
-            out.terminated.append(not infos[0].get("TimeLimit.truncated", False))
-            steps = 0
-    return out

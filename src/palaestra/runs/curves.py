@@ -29,8 +29,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from palaestra.cli.common import EPISODES_FILE, CLIError
 from palaestra.error import dependency_not_installed
+from palaestra.runs.errors import RunError
+from palaestra.runs.files import EPISODES_FILE
 from palaestra.utils.atomic_write import atomic_write, complete_text
 
 __all__ = [
@@ -95,8 +96,8 @@ def read_episodes(run: Path) -> Episodes:
             times = _floats(rows, "time/time_elapsed") if "time/time_elapsed" in rows[0] else None
             return Episodes(steps, returns, lengths, None, times)
     except (OSError, KeyError, ValueError) as exc:
-        raise CLIError(f"cannot read the episodes of run {str(run)!r}: {exc}", "") from None
-    raise CLIError(
+        raise RunError(f"cannot read the episodes of run {str(run)!r}: {exc}", "") from None
+    raise RunError(
         f"run {str(run)!r} has no episodes.csv, monitor.csv or progress.csv",
         "pass folders written by palaestra train",
     )
@@ -156,7 +157,7 @@ def plot_learning_curve(episodes: Episodes, path: Path, title: str) -> None:
 # The drawing process: this process's sys.path, then draw_main on the remaining arguments.
 _CHILD_CODE = (
     "import json, sys; sys.path[:] = json.loads(sys.argv[1]); "
-    "from palaestra.cli.curves import draw_main; sys.exit(draw_main(sys.argv[2:]))"
+    "from palaestra.runs.curves import draw_main; sys.exit(draw_main(sys.argv[2:]))"
 )
 
 
@@ -221,7 +222,7 @@ def variant_band(
     """Each seed's rolling mean interpolated on a common grid of ``x`` (``"steps"`` or
     ``"times"``: training seconds), then mean ± t-interval; None without data (no episodes,
     or a run without times)."""
-    from palaestra.cli.stats import confidence_interval
+    from palaestra.runs.stats import confidence_interval
 
     runs = [r for r in runs if len(r.returns)]
     xs = [getattr(r, x) for r in runs]

@@ -2,20 +2,23 @@
 
 Settings are plain data in the preset format (``policy``, ``n_envs``, ``n_timesteps``,
 ``hyperparams``, ``env_kwargs``, ``normalize``, ``env_wrapper``, and for Atari ``atari`` and
-``frame_stack``; see :mod:`palaestra.cli.pipeline`) plus ``seed``; ``config.json`` records them
+``frame_stack``; see :mod:`palaestra.runs.recipe`) plus ``seed``; ``config.json`` records them
 exactly as resolved, so a run's ``config.json`` is itself a valid ``--config`` file.
 """
 
 from __future__ import annotations
 
+import ast
 import inspect
 import json
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from palaestra import presets
-from palaestra.cli.common import REPLAY_ALGOS, CLIError, parse_value
-from palaestra.cli.pipeline import atari_defaults, check_pipeline, is_atari_id
+from palaestra.runs.errors import RunError
+from palaestra.runs.files import REPLAY_ALGOS
+from palaestra.runs.recipe import atari_defaults, check_pipeline, is_atari_id
 
 __all__ = [
     "ALGOS",
@@ -27,6 +30,23 @@ __all__ = [
     "load_config_file",
     "resolve_settings",
 ]
+
+
+def parse_value(text: str) -> Any:
+    """``--set`` values: JSON, else a Python literal, else the text itself.
+
+    >>> parse_value("[128, 128]"), parse_value("True"), parse_value("1e-3"), parse_value("relu")
+    ([128, 128], True, 0.001, 'relu')
+    """
+    try:
+        return json.loads(text)
+    except ValueError:
+        pass
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+        return text
+
 
 # The algorithms the CLI trains, compares and evaluates: name -> class name in palaestra.algos.
 # Adding one (sac, td3, ddpg) is one line here, plus its presets.
@@ -48,10 +68,10 @@ _TOP_KEYS = (*presets.SETTINGS_KEYS, "seed")
 
 
 def check_algo(algo: str) -> str:
-    """``"PPO"`` -> ``"ppo"``; ``CLIError`` for anything not in ``ALGOS``."""
+    """``"PPO"`` -> ``"ppo"``; ``RunError`` for anything not in ``ALGOS``."""
     key = algo.lower()
     if key not in ALGOS:
-        raise CLIError(f"unknown algorithm {algo!r}", f"choose one of: {', '.join(ALGOS)}")
+        raise RunError(f"unknown algorithm {algo!r}", f"choose one of: {', '.join(ALGOS)}")
     return key
 
 
@@ -73,23 +93,23 @@ def load_config_file(path: str) -> dict[str, Any]:
     file = Path(path)
     suffix = file.suffix.lower()
     if suffix not in (".json", ".yaml", ".yml"):
-        raise CLIError(f"config file {path!r} has an unknown suffix", "use .json, .yaml or .yml")
+        raise RunError(f"config file {path!r} has an unknown suffix", "use .json, .yaml or .yml")
     try:
         text = file.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise CLIError(f"no config file at {path!r}", "check the path") from None
+        raise RunError(f"no config file at {path!r}", "check the path") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise CLIError(f"cannot read config file {path!r}: {exc}", "check the file") from None
+        raise RunError(f"cannot read config file {path!r}: {exc}", "check the file") from None
     if suffix == ".json":
         try:
             data = json.loads(text)
         except ValueError as exc:
-            raise CLIError(f"malformed JSON in {path!r}: {exc}", "fix the file") from None
+            raise RunError(f"malformed JSON in {path!r}: {exc}", "fix the file") from None
     else:
         try:
             import yaml
         except ImportError:
-            raise CLIError(
+            raise RunError(
                 f"reading the YAML config {path!r} needs PyYAML",
                 "pip install pyyaml, or write the config as JSON",
                 code=1,
@@ -100,9 +120,9 @@ def load_config_file(path: str) -> dict[str, Any]:
             where = getattr(exc, "problem_mark", None)
             at = f" at line {where.line + 1}, column {where.column + 1}" if where else ""
             problem = getattr(exc, "problem", None) or type(exc).__name__
-            raise CLIError(f"malformed YAML in {path!r}{at}: {problem}", "fix the file") from None
+            raise RunError(f"malformed YAML in {path!r}{at}: {problem}", "fix the file") from None
     if not isinstance(data, dict):
-        raise CLIError(
+        raise RunError(
             f"config file {path!r} holds a {type(data).__name__}, not a mapping",
             "write keys such as hyperparams, n_envs, n_timesteps at the top level",
         )
@@ -120,7 +140,7 @@ def _split(algo: str, data: dict[str, Any], source: str) -> dict[str, Any]:
     hyper: dict[str, Any] = {}
     nested = data.get("hyperparams", {})
     if not isinstance(nested, dict):
-        raise CLIError(f"{source}: hyperparams must be a mapping, got {nested!r}", "fix it")
+        raise RunError(f"{source}: hyperparams must be a mapping, got {nested!r}", "fix it")
     for key, value in [*data.items(), *nested.items()]:
         if key == "hyperparams" or key in _RUN_KEYS:
             continue
@@ -129,7 +149,7 @@ def _split(algo: str, data: dict[str, Any], source: str) -> dict[str, Any]:
         elif key in names:
             hyper[key] = value
         else:
-            raise CLIError(
+            raise RunError(
                 f"{source}: unknown {algo} setting {key!r}",
                 f"valid keys: {', '.join(_valid_keys(algo))}",
             )
@@ -141,7 +161,7 @@ def _split(algo: str, data: dict[str, Any], source: str) -> dict[str, Any]:
 def _check_run_keys(algo: str, env_id: str, data: dict[str, Any], source: str) -> None:
     for key, expected in (("algo", algo), ("env_id", env_id)):
         if key in data and str(data[key]).lower() != expected.lower():
-            raise CLIError(
+            raise RunError(
                 f"{source} is for {key} {data[key]!r}, not {expected!r}",
                 f"remove its {key!r} key or train {data[key]}",
             )
@@ -154,14 +174,14 @@ def parse_set(algo: str, assignments: list[str]) -> dict[str, Any]:
         key, sep, text = item.partition("=")
         key = key.strip()
         if not sep or not key:
-            raise CLIError(f"--set {item!r} is not key=value", "e.g. --set learning_rate=0.001")
+            raise RunError(f"--set {item!r} is not key=value", "e.g. --set learning_rate=0.001")
         parts = key.split(".")
         if parts[0] == "hyperparams":
             parts = parts[1:]
         if not parts or not all(parts):
-            raise CLIError(f"--set {item!r}: malformed key {key!r}", "e.g. policy_kwargs.net_arch")
+            raise RunError(f"--set {item!r}: malformed key {key!r}", "e.g. policy_kwargs.net_arch")
         if parts[0] not in {*_TOP_KEYS, *hyperparameter_names(algo)} - {"hyperparams"}:
-            raise CLIError(
+            raise RunError(
                 f"unknown --set key {parts[0]!r} for {algo}",
                 f"valid keys: {', '.join(_valid_keys(algo))}",
             )
@@ -169,7 +189,7 @@ def parse_set(algo: str, assignments: list[str]) -> dict[str, Any]:
         for part in parts[:-1]:
             child = node.setdefault(part, {})
             if not isinstance(child, dict):
-                raise CLIError(f"--set {item!r} conflicts with an earlier --set", "set it once")
+                raise RunError(f"--set {item!r} conflicts with an earlier --set", "set it once")
             node = child
         node[parts[-1]] = parse_value(text)
     return _split(algo, data, "--set")
@@ -178,17 +198,20 @@ def parse_set(algo: str, assignments: list[str]) -> dict[str, Any]:
 def resolve_settings(
     algo: str,
     env_id: str,
-    preset: str | None,
-    config: str | None,
-    assignments: list[str],
+    preset: str | None = None,
+    config: str | Path | Mapping[str, Any] | None = None,
+    assignments: Sequence[str] = (),
+    overrides: Mapping[str, Any] | None = None,
 ) -> tuple[dict[str, Any], str | None, list[str]]:
-    """``(settings, preset name used or None, notes for the user)``."""
+    """``(settings, preset name used or None, notes for the user)``: the preset (the
+    ``default`` one when it exists), then ``config`` (a settings file, or a mapping of the same
+    keys), then ``assignments`` (``"key=value"`` strings), then ``overrides`` (nested settings)."""
     notes: list[str] = []
     if preset is not None:
         try:
             settings = presets.get_preset(algo, env_id, preset)
         except presets.PresetError as exc:
-            raise CLIError(str(exc), "pick another --preset, or drop it") from None
+            raise RunError(str(exc), "pick another --preset, or drop it") from None
         used: str | None = preset
     elif presets.has_preset(algo, env_id):
         settings, used = presets.get_preset(algo, env_id), "default"
@@ -204,33 +227,38 @@ def resolve_settings(
     settings.pop("measured", None)
     settings = {**presets.base_settings(), **settings}
     if config is not None:
-        data = load_config_file(config)
-        _check_run_keys(algo, env_id, data, f"config file {config!r}")
-        settings = presets.merge(settings, _split(algo, data, f"config file {config!r}"))
+        if isinstance(config, Mapping):
+            data, source = dict(config), "settings"
+        else:
+            data, source = load_config_file(str(config)), f"config file {str(config)!r}"
+        _check_run_keys(algo, env_id, data, source)
+        settings = presets.merge(settings, _split(algo, data, source))
     if assignments:
-        settings = presets.merge(settings, parse_set(algo, assignments))
+        settings = presets.merge(settings, parse_set(algo, list(assignments)))
+    if overrides:
+        settings = presets.merge(settings, _split(algo, dict(overrides), "overrides"))
     return settings, used, notes
 
 
 def _positive_int(value: Any, what: str) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise CLIError(f"{what} must be a positive integer, got {value!r}", f"fix {what}")
+        raise RunError(f"{what} must be a positive integer, got {value!r}", f"fix {what}")
     return value
 
 
 def check_settings(settings: dict[str, Any], env_id: str) -> None:
-    """``CLIError`` unless the top-level settings have usable types and values for ``env_id``."""
+    """``RunError`` unless the top-level settings have usable types and values for ``env_id``."""
     _positive_int(settings["n_envs"], "n_envs")
     _positive_int(settings["n_timesteps"], "n_timesteps")
     seed = settings.get("seed")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
-        raise CLIError(f"seed must be an integer, got {seed!r}", "fix seed")
+        raise RunError(f"seed must be an integer, got {seed!r}", "fix seed")
     if not isinstance(settings["policy"], str):
-        raise CLIError(f"policy must be a name, got {settings['policy']!r}", "e.g. MlpPolicy")
+        raise RunError(f"policy must be a name, got {settings['policy']!r}", "e.g. MlpPolicy")
     if not isinstance(settings.get("env_kwargs") or {}, dict):
-        raise CLIError(f"env_kwargs must be a mapping, got {settings['env_kwargs']!r}", "fix it")
+        raise RunError(f"env_kwargs must be a mapping, got {settings['env_kwargs']!r}", "fix it")
     if not isinstance(settings.get("normalize", False), (bool, dict)):
-        raise CLIError(
+        raise RunError(
             f"normalize must be true/false or VecNormalize kwargs, got {settings['normalize']!r}",
             "fix it",
         )

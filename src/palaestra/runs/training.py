@@ -1,0 +1,325 @@
+"""Train a :class:`~palaestra.runs.spec.RunSpec` into a run folder, and resume one.
+
+``train_run(spec, "runs/x")`` is what ``palaestra train`` does: build the env recipe and the
+model, train to the budget while writing ``progress.csv`` and ``episodes.csv``, save a complete
+checkpoint every ``checkpoint_every`` steps (ending ``learn`` between two consistent steps and
+continuing exactly: :mod:`palaestra.runs.checkpoint`), publish the final model, replay buffer and
+normalization statistics, and write ``status.json``. ``resume_run("runs/x")`` continues from
+the newest checkpoint, exactly where the run stopped when the checkpoint holds the env state.
+
+For the notes a command prints between building and training (a resume that starts new
+episodes, an extended budget) use the two steps: :func:`open_run`/:func:`open_resume`, then
+:meth:`Run.train`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from palaestra.runs.errors import RunError
+from palaestra.runs.files import (
+    CONFIG_FILE,
+    EPISODES_FILE,
+    MODEL_FILE,
+    NORMALIZE_FILE,
+    REPLAY_ALGOS,
+    REPLAY_FILE,
+    STATUS_FILE,
+    write_json,
+    write_status,
+)
+from palaestra.runs.spec import RunSpec
+
+__all__ = [
+    "Run",
+    "TrainResult",
+    "make_env",
+    "make_model",
+    "open_resume",
+    "open_run",
+    "resume_run",
+    "train_run",
+]
+
+
+@dataclasses.dataclass
+class TrainResult:
+    """What a training session left: ``status`` is ``"finished"`` or ``"interrupted"`` (a
+    callback stopped ``learn``; the checkpoint saved then is what a resume continues)."""
+
+    run_dir: Path
+    spec: RunSpec
+    status: str
+    num_timesteps: int
+    total_timesteps: int
+    session_steps: int  # steps trained by this call
+    session_seconds: float  # wall-clock seconds of this call's training
+    wall_time_s: float  # of the whole run, earlier sessions included
+    model: Any
+
+
+def make_env(spec: RunSpec, seed: int | None, saved: Path | None = None) -> Any:
+    """The run's training vector env (under ``VecNormalize`` when the spec says
+    ``normalize``); ``saved``: the folder whose ``vecnormalize.npz`` to continue."""
+    from palaestra.runs.recipe import make_vec
+    from palaestra.vec_env import VecNormalize
+
+    config = spec.to_config()
+    venv = make_vec(config, spec.n_envs, seed)
+    if spec.normalize is False:
+        return venv
+    if saved is not None and (saved / NORMALIZE_FILE).is_file():
+        return VecNormalize.load(str(saved / NORMALIZE_FILE), venv)
+    kwargs = dict(spec.normalize) if isinstance(spec.normalize, dict) else {}
+    kwargs.setdefault("gamma", spec.hyperparams.get("gamma", 0.99))
+    return VecNormalize(venv, **kwargs)
+
+
+def make_model(spec: RunSpec, venv: Any) -> Any:
+    """The spec's algorithm on ``venv`` (``RunError`` naming the setting a constructor
+    refused)."""
+    from palaestra import presets
+    from palaestra.runs.settings import algo_class
+
+    cls = algo_class(spec.algo)
+    try:
+        hyper = presets.resolve(spec.hyperparams)
+        return cls(spec.policy, venv, seed=spec.seed, device=spec.device, verbose=0, **hyper)
+    except presets.PresetError as exc:
+        raise RunError(str(exc), "fix the setting") from None
+    except TypeError as exc:
+        if "does not support" not in str(exc):
+            raise RunError(f"invalid {spec.algo} settings: {exc}", "check the values") from None
+        # Discrete-only (DQN) or Box-only (SAC, TD3, DDPG): PPO and A2C take both.
+        other = "ppo" if spec.algo in REPLAY_ALGOS else "another algorithm"
+        raise RunError(
+            f"cannot train {spec.algo} on {spec.env_id}: {exc}", f"use {other}"
+        ) from None
+    except (ValueError, NotImplementedError, RuntimeError) as exc:
+        raise RunError(
+            f"invalid {spec.algo} settings: {exc}", "check --set/--config values"
+        ) from None
+
+
+def _logger(run_dir: Path, verbose: bool) -> Any:
+    from palaestra.algos.logger import HumanOutputFormat, Logger, TensorBoardOutputFormat
+    from palaestra.runs.logs import AppendingCSV
+
+    formats: list[Any] = [AppendingCSV(str(run_dir / "progress.csv"))]
+    if importlib.util.find_spec("tensorboard") is not None:
+        formats.append(TensorBoardOutputFormat(str(run_dir / "tb")))
+    if verbose:
+        formats.append(HumanOutputFormat(sys.stdout))
+    return Logger(str(run_dir), formats)
+
+
+@dataclasses.dataclass
+class Run:
+    """A run folder with its model built, ready to train (:func:`open_run`,
+    :func:`open_resume`)."""
+
+    spec: RunSpec
+    run_dir: Path
+    model: Any
+    resumed: bool
+    wall_before: float  # training seconds of earlier sessions
+    notes: list[str]
+
+    def train(
+        self,
+        callbacks: Sequence[Any] = (),
+        checkpoint_every: int | None = None,
+        verbose: bool = False,
+    ) -> TrainResult:
+        """Train to ``spec.n_timesteps``, with a complete checkpoint every
+        ``checkpoint_every`` steps (default: a tenth of the budget; 0: only at the end).
+
+        A callback returning False stops training: the run is saved and its status is
+        ``"interrupted"``. A ``KeyboardInterrupt`` inside ``learn`` (the model may be
+        mid-update) saves nothing new: ``status.json`` points at the last checkpoint, and the
+        exception propagates."""
+        from palaestra.algos.callbacks import CallbackList
+        from palaestra.runs.checkpoint import (
+            CheckpointDue,
+            checkpoint_steps,
+            latest_checkpoint,
+            publish,
+            write_checkpoint,
+        )
+        from palaestra.runs.logs import EpisodeLog
+
+        if checkpoint_every is not None and checkpoint_every < 0:
+            raise RunError(f"checkpoint_every must be >= 0, got {checkpoint_every}", "e.g. 10000")
+        model, run_dir, total = self.model, self.run_dir, self.spec.n_timesteps
+        model.set_logger(_logger(run_dir, verbose))
+        episodes = EpisodeLog(run_dir / EPISODES_FILE, self.wall_before)
+        every = checkpoint_every if checkpoint_every is not None else total // 10
+        due = CheckpointDue(every, total)
+        start_steps = model.num_timesteps
+        saved = latest_checkpoint(run_dir)  # what a stop at once leaves to resume from
+        stopped = False
+        start = time.perf_counter()
+        try:
+            first = not self.resumed
+            while model.num_timesteps < total:
+                due.plan(model.num_timesteps)
+                model.learn(
+                    total - model.num_timesteps,
+                    callback=CallbackList([episodes, due, *callbacks]),
+                    reset_num_timesteps=first,
+                )
+                first = False
+                if model.num_timesteps >= total or not due.reached(model.num_timesteps):
+                    stopped = model.num_timesteps < total  # a callback stopped learn
+                    break
+                saved, _ = write_checkpoint(model, run_dir, self.spec.algo)
+                wall = self.wall_before + time.perf_counter() - start
+                write_status(
+                    run_dir, "running", model.num_timesteps, total, wall, _rel(saved, run_dir)
+                )
+        except KeyboardInterrupt:
+            wall = self.wall_before + time.perf_counter() - start
+            steps = checkpoint_steps(saved) if saved else 0
+            write_status(run_dir, "interrupted", steps, total, wall, _rel(saved, run_dir))
+            raise
+        finally:
+            seconds = time.perf_counter() - start
+            episodes.close()
+            model.logger.close()
+        folder, _ = write_checkpoint(model, run_dir, self.spec.algo)
+        publish(folder, run_dir)
+        state = "interrupted" if stopped else "finished"
+        wall = self.wall_before + seconds
+        write_status(run_dir, state, model.num_timesteps, total, wall, _rel(folder, run_dir))
+        return TrainResult(
+            run_dir,
+            self.spec,
+            state,
+            model.num_timesteps,
+            total,
+            model.num_timesteps - start_steps,
+            seconds,
+            wall,
+            model,
+        )
+
+
+def _rel(folder: Path | None, run_dir: Path) -> str | None:
+    return None if folder is None else folder.relative_to(run_dir).as_posix()
+
+
+def _one_thread() -> None:
+    import torch
+
+    torch.set_num_threads(1)  # the small nets here are fastest on one thread
+
+
+def open_run(spec: RunSpec, run_dir: str | Path) -> Run:
+    """Check ``spec``, build its env and model, and write ``config.json`` into ``run_dir``
+    (``RunError`` when ``run_dir`` already holds a run)."""
+    run_dir = Path(run_dir)
+    spec.validate()
+    if (run_dir / CONFIG_FILE).exists():
+        raise RunError(
+            f"{run_dir} already holds a run", f"choose another --out, or --resume {run_dir}"
+        )
+    _one_thread()
+    model = make_model(spec, make_env(spec, spec.seed))
+    run_dir.mkdir(parents=True, exist_ok=True)
+    write_json(run_dir / CONFIG_FILE, spec.to_config())
+    return Run(spec, run_dir, model, False, 0.0, [])
+
+
+def open_resume(
+    run_dir: str | Path,
+    n_timesteps: int | None = None,
+    allow_import: Sequence[str] = (),
+    expect: dict[str, str] | None = None,
+) -> Run:
+    """The run in ``run_dir`` with the model and env of its newest complete checkpoint (a
+    resume is exact when the checkpoint holds the env's state; ``Run.notes`` says when it is
+    not). ``n_timesteps`` extends the budget; ``allow_import``: the modules its config may
+    import; ``expect``: ``{"algo": ..., "env_id": ...}`` the caller believes it resumes."""
+    from palaestra.algos.model_io import ModelFileError
+    from palaestra.runs import folder as run_folder
+    from palaestra.runs import settings
+    from palaestra.runs.checkpoint import latest_checkpoint, load_env_state, trim_logs
+
+    run_dir = Path(run_dir)
+    config = run_folder.read_run_config(run_dir / CONFIG_FILE, allow_import, run_folder.RESUME_KEYS)
+    for key, value in (expect or {}).items():
+        if value is not None and str(value).lower() != str(config.get(key)).lower():
+            raise RunError(
+                f"{run_dir} is a run of {config.get(key)}, not {value}",
+                f"palaestra train --resume {run_dir}",
+            )
+    if n_timesteps is not None:
+        config["n_timesteps"] = n_timesteps
+    settings.check_settings(config, str(config.get("env_id")))
+    status = run_folder.read_status(run_dir / STATUS_FILE)  # before any env or model
+    spec = RunSpec.from_config(config, str(run_dir / CONFIG_FILE))
+    _one_thread()
+    checkpoint = latest_checkpoint(run_dir) or run_dir
+    venv = make_env(spec, spec.seed, checkpoint)
+    inexact = load_env_state(checkpoint, venv)
+    try:
+        model = settings.algo_class(spec.algo).load(
+            checkpoint / MODEL_FILE, env=venv, device=spec.device
+        )
+        if spec.algo in REPLAY_ALGOS and (checkpoint / REPLAY_FILE).is_file():
+            model.load_replay_buffer(checkpoint / REPLAY_FILE)
+    except FileNotFoundError:
+        raise RunError(f"{run_dir} has no {MODEL_FILE} to resume from", "check DIR") from None
+    except (ModelFileError, ValueError) as exc:
+        raise RunError(f"cannot resume {run_dir}: {exc}", "start a new run") from None
+    if inexact and spec.seed is not None:
+        venv.seed(spec.seed + model.num_timesteps)  # new episodes, not a replay of the first ones
+    total = spec.n_timesteps
+    if model.num_timesteps >= total:
+        raise RunError(
+            f"{run_dir} already trained {model.num_timesteps:,} of its {total:,} steps",
+            f"pass --timesteps larger than {model.num_timesteps} to train further",
+        )
+    notes = []
+    if inexact:
+        notes.append(f"{inexact}: the resume starts new episodes (not an exact resume)")
+    trim_logs(run_dir, model.num_timesteps)  # rows of a run that died past its checkpoint
+    if total > int(status.get("total_timesteps", total)):
+        notes.append(
+            f"extending the run from {status['total_timesteps']:,} to {total:,} steps: the "
+            f"schedules continue as a {total:,}-step run would from step "
+            f"{model.num_timesteps:,} (progress remaining {1 - model.num_timesteps / total:.3f})"
+        )
+    write_json(run_dir / CONFIG_FILE, {**config, "n_timesteps": total})
+    return Run(spec, run_dir, model, True, float(status.get("wall_time_s", 0.0)), notes)
+
+
+def train_run(
+    spec: RunSpec,
+    run_dir: str | Path,
+    callbacks: Sequence[Any] = (),
+    checkpoint_every: int | None = None,
+    verbose: bool = False,
+) -> TrainResult:
+    """Train ``spec`` into the new run folder ``run_dir``: ``palaestra train`` as a call."""
+    return open_run(spec, run_dir).train(callbacks, checkpoint_every, verbose)
+
+
+def resume_run(
+    run_dir: str | Path,
+    n_timesteps: int | None = None,
+    allow_import: Sequence[str] = (),
+    callbacks: Sequence[Any] = (),
+    checkpoint_every: int | None = None,
+    verbose: bool = False,
+) -> TrainResult:
+    """Continue the run in ``run_dir`` (to ``n_timesteps`` when given): ``palaestra train
+    --resume`` as a call."""
+    run = open_resume(run_dir, n_timesteps, allow_import)
+    return run.train(callbacks, checkpoint_every, verbose)
