@@ -37,8 +37,8 @@ import numpy as np
 import palaestra as gym
 from palaestra import presets
 from palaestra.algos.callbacks import BaseCallback
-from palaestra.cli.curves import Episodes, plot_compare, variant_band
-from palaestra.cli.stats import confidence_interval
+from palaestra.runs.curves import Episodes, plot_compare, variant_band
+from palaestra.runs.stats import confidence_interval
 
 ENV_ID = "MountainCar-v0"
 

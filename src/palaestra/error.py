@@ -129,6 +129,12 @@ def dependency_not_installed(package: str, extra: str, purpose: str) -> Dependen
     )
 
 
+# Algorithms
+class UnsupportedSpace(Error, TypeError):
+    """An algorithm was given an observation or action space it cannot learn on (a TypeError,
+    as palaestra has always raised it)."""
+
+
 # Run state (exact resume)
 class RunStateError(Error, ValueError):
     """A run state cannot be saved by, or does not fit, the object it is restored into."""

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from palaestra import spaces
+from palaestra import error, spaces
 from palaestra.algos import saving
 from palaestra.algos.callbacks import (
     BaseCallback,
@@ -152,7 +152,7 @@ class BaseAlgorithm:
             self.n_envs = self.env.num_envs
             if not isinstance(self.action_space, self.supported_action_spaces):
                 names = ", ".join(s.__name__ for s in self.supported_action_spaces)
-                raise TypeError(
+                raise error.UnsupportedSpace(
                     f"{type(self).__name__} does not support {self.action_space} "
                     f"action spaces; supported: {names}"
                 )

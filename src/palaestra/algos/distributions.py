@@ -16,6 +16,7 @@ from torch import nn
 
 from palaestra import spaces
 from palaestra.algos.learners import heads
+from palaestra.error import UnsupportedSpace
 
 __all__ = ["ActionHead"]
 
@@ -46,7 +47,9 @@ class ActionHead(nn.Module):
             out = self.sizes[0]
             self.log_std = nn.Parameter(torch.full((out,), float(log_std_init)))
         else:
-            raise TypeError(f"PPO does not support {type(action_space).__name__} action spaces")
+            raise UnsupportedSpace(
+                f"PPO does not support {type(action_space).__name__} action spaces"
+            )
         self.action_shape: tuple[int, ...] = tuple(action_space.shape or ())
         self.net = nn.Linear(latent_dim, out)
 

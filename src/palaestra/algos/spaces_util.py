@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from palaestra import spaces
+from palaestra.error import UnsupportedSpace
 
 __all__ = [
     "allocate",
@@ -42,7 +43,9 @@ def allocate(space: spaces.Space[Any], lead: tuple[int, ...]) -> Any:
     if isinstance(space, (spaces.Box, spaces.Discrete, spaces.MultiDiscrete, spaces.MultiBinary)):
         shape: tuple[int, ...] = tuple(space.shape or ())
         return np.zeros(lead + shape, dtype=space.dtype)
-    raise TypeError(f"palaestra.algos does not support {type(space).__name__} spaces: {space}")
+    raise UnsupportedSpace(
+        f"palaestra.algos does not support {type(space).__name__} spaces: {space}"
+    )
 
 
 def is_vectorized_observation(obs: Any, space: spaces.Space[Any]) -> bool:

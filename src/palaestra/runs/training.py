@@ -85,6 +85,7 @@ def make_model(spec: RunSpec, venv: Any) -> Any:
     """The spec's algorithm on ``venv`` (``RunError`` naming the setting a constructor
     refused)."""
     from palaestra import presets
+    from palaestra.error import UnsupportedSpace
     from palaestra.runs.settings import algo_class
 
     cls = algo_class(spec.algo)
@@ -93,14 +94,14 @@ def make_model(spec: RunSpec, venv: Any) -> Any:
         return cls(spec.policy, venv, seed=spec.seed, device=spec.device, verbose=0, **hyper)
     except presets.PresetError as exc:
         raise RunError(str(exc), "fix the setting") from None
-    except TypeError as exc:
-        if "does not support" not in str(exc):
-            raise RunError(f"invalid {spec.algo} settings: {exc}", "check the values") from None
+    except UnsupportedSpace as exc:
         # Discrete-only (DQN) or Box-only (SAC, TD3, DDPG): PPO and A2C take both.
         other = "ppo" if spec.algo in REPLAY_ALGOS else "another algorithm"
         raise RunError(
             f"cannot train {spec.algo} on {spec.env_id}: {exc}", f"use {other}"
         ) from None
+    except TypeError as exc:
+        raise RunError(f"invalid {spec.algo} settings: {exc}", "check the values") from None
     except (ValueError, NotImplementedError, RuntimeError) as exc:
         raise RunError(
             f"invalid {spec.algo} settings: {exc}", "check --set/--config values"
