@@ -1,5 +1,5 @@
 """The ``palaestra`` command line: ``envs``, ``train``, ``eval``, ``record``, ``compare``,
-``bench``. Run ``palaestra --help`` or ``palaestra <command> --help``.
+``sweep``, ``bench``. Run ``palaestra --help`` or ``palaestra <command> --help``.
 
 Every failure the user can fix prints one line, ``palaestra: error: <what> (<fix>)``, and
 exits with 2 (bad input) or 1 (a runtime failure, e.g. a missing optional package); Ctrl-C
@@ -20,7 +20,7 @@ from palaestra.cli.common import CLIError
 
 __all__ = ["build_parser", "main"]
 
-COMMANDS = ("envs", "train", "eval", "record", "compare", "bench")
+COMMANDS = ("envs", "train", "eval", "record", "compare", "sweep", "bench")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -32,7 +32,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every command."""
-    from palaestra.cli import bench, compare, envs, evaluate, record, train
+    from palaestra.cli import bench, compare, envs, evaluate, record, sweep, train
 
     parser = _Parser(
         prog="palaestra",
@@ -45,7 +45,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser.add_argument("--version", action="version", version=f"palaestra {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
-    for module in (envs, train, evaluate, record, compare, bench):
+    for module in (envs, train, evaluate, record, compare, sweep, bench):
         module.add_parser(sub)
     return parser
 

@@ -9,6 +9,7 @@ generator.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
@@ -17,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.runs.errors import RunError
-from palaestra.runs.files import NORMALIZE_FILE, is_goal_env, model_file
+from palaestra.runs.files import MODEL_FILE, NORMALIZE_FILE, is_goal_env, model_file
 
 __all__ = ["EvalResult", "evaluate_run", "load_model", "play_episodes"]
 
@@ -201,7 +202,10 @@ def evaluate_run(
 
     if episodes < 1:
         raise RunError(f"episodes must be at least 1, got {episodes}", "e.g. --episodes 10")
-    path = model_file(run)
+    given = Path(run) / MODEL_FILE
+    path = (
+        given if model is not None and spec is not None and Path(run).is_dir() else model_file(run)
+    )
     if spec is not None:
         config: dict[str, Any] | None = spec.to_config()
     else:
@@ -229,9 +233,20 @@ def evaluate_run(
     venv = _eval_env(config, seed, frames)
     try:
         _check_spaces(model, venv, env_id)
-        if (path.parent / NORMALIZE_FILE).is_file():
-            from palaestra.vec_env import VecNormalize
+        from palaestra.vec_env import VecNormalize
 
+        training_env = model.get_env()
+        if isinstance(training_env, VecNormalize):  # a model in training: its statistics now
+            venv = VecNormalize(
+                venv,
+                training=False,
+                norm_obs=training_env.norm_obs,
+                norm_reward=False,
+                clip_obs=training_env.clip_obs,
+                epsilon=training_env.epsilon,
+            )
+            venv.obs_rms = copy.deepcopy(training_env.obs_rms)
+        elif (path.parent / NORMALIZE_FILE).is_file():
             venv = VecNormalize.load(str(path.parent / NORMALIZE_FILE), venv)
             venv.training, venv.norm_reward = False, False
         returns, lengths, terminated = play_episodes(model, venv, episodes, deterministic)

@@ -18,7 +18,7 @@ import dataclasses
 import importlib.util
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -137,9 +137,14 @@ class Run:
         callbacks: Sequence[Any] = (),
         checkpoint_every: int | None = None,
         verbose: bool = False,
+        evaluate_every: int = 0,
+        on_evaluate: Callable[[Any], bool] | None = None,
     ) -> TrainResult:
         """Train to ``spec.n_timesteps``, with a complete checkpoint every
         ``checkpoint_every`` steps (default: a tenth of the budget; 0: only at the end).
+        ``on_evaluate(model)`` runs every ``evaluate_every`` steps between two whole steps
+        (``learn`` ends there and continues exactly, as at a checkpoint); returning False stops
+        training as a callback would (a search pruning a run).
 
         A callback returning False stops training: the run is saved and its status is
         ``"interrupted"``. A ``KeyboardInterrupt`` inside ``learn`` (the model may be
@@ -162,6 +167,7 @@ class Run:
         episodes = EpisodeLog(run_dir / EPISODES_FILE, self.wall_before)
         every = checkpoint_every if checkpoint_every is not None else total // 10
         due = CheckpointDue(every, total)
+        evaluation = CheckpointDue(evaluate_every if on_evaluate is not None else 0, total)
         start_steps = model.num_timesteps
         saved = latest_checkpoint(run_dir)  # what a stop at once leaves to resume from
         stopped = False
@@ -170,20 +176,25 @@ class Run:
             first = not self.resumed
             while model.num_timesteps < total:
                 due.plan(model.num_timesteps)
+                evaluation.plan(model.num_timesteps)
                 model.learn(
                     total - model.num_timesteps,
-                    callback=CallbackList([episodes, due, *callbacks]),
+                    callback=CallbackList([episodes, due, evaluation, *callbacks]),
                     reset_num_timesteps=first,
                 )
                 first = False
-                if model.num_timesteps >= total or not due.reached(model.num_timesteps):
-                    stopped = model.num_timesteps < total  # a callback stopped learn
+                steps = model.num_timesteps
+                checkpoint, evaluate = due.reached(steps), evaluation.reached(steps)
+                if steps >= total or not (checkpoint or evaluate):
+                    stopped = steps < total  # a callback stopped learn
                     break
-                saved, _ = write_checkpoint(model, run_dir, self.spec.algo)
-                wall = self.wall_before + time.perf_counter() - start
-                write_status(
-                    run_dir, "running", model.num_timesteps, total, wall, _rel(saved, run_dir)
-                )
+                if checkpoint:
+                    saved, _ = write_checkpoint(model, run_dir, self.spec.algo)
+                    wall = self.wall_before + time.perf_counter() - start
+                    write_status(run_dir, "running", steps, total, wall, _rel(saved, run_dir))
+                if evaluate and on_evaluate is not None and not on_evaluate(model):
+                    stopped = True
+                    break
         except KeyboardInterrupt:
             wall = self.wall_before + time.perf_counter() - start
             steps = checkpoint_steps(saved) if saved else 0

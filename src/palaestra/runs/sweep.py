@@ -1,0 +1,618 @@
+"""Hyperparameter search with Optuna, each trial scored over several seeds, locally or on Ray.
+
+A search space maps hyperparameter names (the algorithm's constructor keywords, or ``n_envs``;
+dotted names reach inside dicts: ``policy_kwargs.net_arch``) to a list of choices or to a range
+``{low: ..., high: ..., log: true|false, step: ...}`` (integer bounds give an integer range)::
+
+    learning_rate: {low: 1.0e-4, high: 3.0e-3, log: true}
+    n_steps: [64, 128, 256]
+    policy_kwargs.net_arch: [[64, 64], [128, 128]]
+
+A trial samples one setting (TPE by default), trains it on each of the seeds on top of the
+preset, and scores it by the mean over seeds of a deterministic evaluation at the end. The
+first seed's run is evaluated ``evaluations`` times along the way; those values feed the pruner
+(median by default), which stops a trial that is behind the others at the same step before its
+other seeds train. Trials run one after another in this process, or as Ray tasks (one CPU
+each). The study lives in ``study.db`` (SQLite) in the sweep folder, or in the database at
+``storage`` (needed when the workers run on other machines): a sweep stopped and started again
+with the same command continues it, losing at most the trials that were running.
+
+The sweep folder: ``study.db``, ``trials/<n>/seed<s>/`` (each a run folder),
+``trials.csv`` (every trial, best first), ``best.yaml`` (the best settings: ``palaestra train
+ALGO ENV --config best.yaml``), ``history.png`` and ``importance.png``.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from palaestra.runs.errors import RunError
+from palaestra.runs.spec import RunSpec, resolve_spec
+
+__all__ = ["Choice", "Range", "SweepResult", "load_space", "run_sweep", "space_from_mapping"]
+
+STUDY_FILE = "study.db"
+TRIALS_FILE = "trials.csv"
+BEST_FILE = "best.yaml"
+EVAL_SEED = 10_000  # evaluation episodes of seed s start from EVAL_SEED + s
+
+
+@dataclasses.dataclass(frozen=True)
+class Choice:
+    """One of ``values`` (JSON values: numbers, strings, lists, mappings, null)."""
+
+    values: tuple[Any, ...]
+
+
+@dataclasses.dataclass(frozen=True)
+class Range:
+    """A number in ``[low, high]``: an integer when both bounds are, log-uniform with
+    ``log``, on a grid of ``step`` when given."""
+
+    low: float
+    high: float
+    log: bool = False
+    step: float | None = None
+    integer: bool = False
+
+
+Param = Choice | Range
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _parse(name: str, value: Any, source: str) -> Param:
+    if isinstance(value, list):
+        if not value:
+            raise RunError(f"{source}: {name} has no choices", "list at least one value")
+        return Choice(tuple(value))
+    if not isinstance(value, Mapping):
+        raise RunError(
+            f"{source}: {name} must be a list of choices or a range, got {value!r}",
+            "e.g. [64, 128] or {low: 0.0001, high: 0.01, log: true}",
+        )
+    unknown = sorted(set(value) - {"low", "high", "log", "step"})
+    if unknown or "low" not in value or "high" not in value:
+        raise RunError(
+            f"{source}: range {name} must have low and high (and optionally log, step), "
+            f"got keys {sorted(value)}",
+            "e.g. {low: 0.9, high: 0.999}",
+        )
+    low, high, log, step = value["low"], value["high"], value.get("log", False), value.get("step")
+    if not (_number(low) and _number(high)):
+        raise RunError(f"{source}: {name} bounds must be numbers, got {low!r} and {high!r}")
+    if not low < high:
+        raise RunError(
+            f"{source}: impossible range for {name}: low {low} is not below high {high}",
+            "swap or fix the bounds",
+        )
+    if not isinstance(log, bool):
+        raise RunError(f"{source}: {name}.log must be true or false, got {log!r}")
+    if log and low <= 0:
+        raise RunError(
+            f"{source}: impossible range for {name}: a log range needs low > 0, got {low}",
+            "raise low, or drop log",
+        )
+    if step is not None and not (_number(step) and 0 < step <= high - low):
+        raise RunError(f"{source}: {name}.step must be a number in (0, high - low], got {step!r}")
+    if step is not None and log:
+        raise RunError(f"{source}: {name} cannot have both step and log", "drop one")
+    integer = all(isinstance(v, int) for v in (low, high)) and (
+        step is None or isinstance(step, int)
+    )
+    return Range(float(low), float(high), log, None if step is None else float(step), integer)
+
+
+def space_from_mapping(
+    data: Mapping[str, Any], algo: str, source: str = "search space"
+) -> dict[str, Param]:
+    """A checked search space for ``algo``: ``RunError`` naming an unknown hyperparameter or
+    an impossible range."""
+    from palaestra.runs.settings import hyperparameter_names
+
+    if not isinstance(data, Mapping) or not data:
+        raise RunError(f"{source} must map hyperparameter names to choices or ranges")
+    valid = {*hyperparameter_names(algo), "n_envs"}
+    space: dict[str, Param] = {}
+    for name, value in data.items():
+        head = str(name).split(".")[0]
+        if head not in valid or not all(str(name).split(".")):
+            raise RunError(
+                f"{source}: unknown {algo} hyperparameter {name!r}",
+                f"valid names: {', '.join(sorted(valid))}",
+            )
+        space[str(name)] = _parse(str(name), value, source)
+    return space
+
+
+def load_space(path: str | Path, algo: str) -> dict[str, Param]:
+    """The search space in a ``.yaml``/``.json`` file (see the module's docstring)."""
+    from palaestra.runs.settings import load_config_file
+
+    return space_from_mapping(load_config_file(str(path)), algo, f"search space {str(path)!r}")
+
+
+# -- sampling ----------------------------------------------------------------------------------
+def _distributions(space: Mapping[str, Param]) -> dict[str, Any]:
+    """Optuna distributions; choices are stored as JSON text (Optuna's categorical values are
+    scalars, and a net_arch is a list)."""
+    import optuna
+
+    out: dict[str, Any] = {}
+    for name, param in space.items():
+        if isinstance(param, Choice):
+            out[name] = optuna.distributions.CategoricalDistribution(
+                [json.dumps(v, sort_keys=True) for v in param.values]
+            )
+        elif param.integer:
+            out[name] = optuna.distributions.IntDistribution(
+                int(param.low), int(param.high), log=param.log, step=int(param.step or 1)
+            )
+        else:
+            out[name] = optuna.distributions.FloatDistribution(
+                param.low, param.high, log=param.log, step=param.step
+            )
+    return out
+
+
+def _settings(params: Mapping[str, Any], space: Mapping[str, Param]) -> dict[str, Any]:
+    """Sampled values -> nested settings overrides (``policy_kwargs.net_arch`` -> a dict)."""
+    out: dict[str, Any] = {}
+    for name, value in params.items():
+        if isinstance(space[name], Choice):
+            value = json.loads(value)
+        node = out
+        *parents, leaf = name.split(".")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = value
+    return out
+
+
+# -- one trial ---------------------------------------------------------------------------------
+def _evaluate(run: Any, episodes: int) -> float:
+    from palaestra.runs.evaluation import evaluate_run
+
+    seed = EVAL_SEED + (run.spec.seed or 0)
+    result = evaluate_run(run.run_dir, episodes, seed=seed, model=run.model, spec=run.spec)
+    return result.mean_return
+
+
+def run_trial(
+    specs_json: Sequence[str],
+    folder: str,
+    evaluations: int,
+    eval_episodes: int,
+    report: Callable[[float, int], bool] | None = None,
+) -> dict[str, Any]:
+    """Train one trial's runs (one per seed) into ``folder``/seed<s> and score them:
+    ``{"state": "complete"|"pruned", "value", "values", "seconds"}``. ``report(value, step)``
+    hears the first run's evaluations and returns False to prune the trial."""
+    import shutil
+
+    from palaestra.runs.training import open_run
+
+    start = time.perf_counter()
+    values: list[float] = []
+    for i, text in enumerate(specs_json):
+        spec = RunSpec.from_json(text)
+        run_dir = Path(folder) / f"seed{spec.seed}"
+        if run_dir.exists():  # an attempt that was killed: this trial starts again
+            shutil.rmtree(run_dir)
+        run = open_run(spec, run_dir)
+        pruned = False
+        if i == 0 and report is not None and evaluations > 0:
+            every = max(1, spec.n_timesteps // (evaluations + 1))
+
+            def check(model: Any, run: Any = run) -> bool:
+                nonlocal pruned
+                keep = report(_evaluate(run, eval_episodes), int(model.num_timesteps))
+                pruned = not keep
+                return keep
+
+            run.train(checkpoint_every=0, evaluate_every=every, on_evaluate=check)
+        else:
+            run.train(checkpoint_every=0)
+        if pruned:
+            return {"state": "pruned", "value": None, "values": values, "seconds": _since(start)}
+        values.append(_evaluate(run, eval_episodes))
+    mean = float(sum(values) / len(values))
+    return {"state": "complete", "value": mean, "values": values, "seconds": _since(start)}
+
+
+def _since(start: float) -> float:
+    return round(time.perf_counter() - start, 3)
+
+
+def _remote_trial(
+    specs_json: list[str],
+    folder: str,
+    evaluations: int,
+    eval_episodes: int,
+    storage_url: str,
+    study_name: str,
+    trial_id: int,
+    pruner: dict[str, Any],
+) -> dict[str, Any]:
+    """A trial as a Ray task: it reports to the study through the shared storage."""
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study = optuna.load_study(
+        study_name=study_name, storage=storage_url, pruner=_make_pruner(pruner)
+    )
+    trial = optuna.trial.Trial(study, trial_id)
+    return run_trial(specs_json, folder, evaluations, eval_episodes, _reporter(trial))
+
+
+def _reporter(trial: Any) -> Callable[[float, int], bool]:
+    def report(value: float, step: int) -> bool:
+        trial.report(value, step)
+        return not trial.should_prune()
+
+    return report
+
+
+def _make_pruner(settings: dict[str, Any]) -> Any:
+    import optuna
+
+    if not settings.get("enabled", True):
+        return optuna.pruners.NopPruner()
+    return optuna.pruners.MedianPruner(n_startup_trials=settings.get("startup", 3))
+
+
+# -- the study ---------------------------------------------------------------------------------
+@dataclasses.dataclass
+class SweepResult:
+    """Every trial of the study (best first), the best settings and the files written."""
+
+    folder: Path
+    trials: list[dict[str, Any]]
+    best: dict[str, Any] | None  # the best trial's row
+    best_file: Path | None
+    ran: int  # trials run by this call
+
+
+def _storage(url: str | None, folder: Path) -> tuple[Any, str]:
+    import optuna
+
+    url = url or f"sqlite:///{(folder / STUDY_FILE).resolve()}"
+    try:
+        storage = optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url))
+    except Exception as exc:  # sqlalchemy's errors: a bad URL, a missing driver, no server
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise RunError(
+            f"cannot open the study storage {url!r}: {first}",
+            "pass --storage sqlite:///PATH or a database URL the workers can reach",
+            code=1,
+        ) from None
+    return storage, url
+
+
+def _engine_kwargs(url: str) -> dict[str, Any]:
+    # Several processes write one SQLite file: wait for its lock rather than fail at once.
+    return {"connect_args": {"timeout": 60}} if url.startswith("sqlite") else {}
+
+
+def _mark_interrupted(storage: Any, study: Any) -> int:
+    """Trials a killed sweep left running: marked failed (and ``interrupted``) so that they
+    are run again; their count."""
+    from optuna.trial import TrialState
+
+    lost = study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
+    for trial in lost:
+        storage.set_trial_user_attr(trial._trial_id, "interrupted", True)
+        storage.set_trial_state_values(trial._trial_id, state=TrialState.FAIL)
+    return len(lost)
+
+
+def _finished(study: Any) -> int:
+    from optuna.trial import TrialState
+
+    done = 0
+    for trial in study.get_trials(deepcopy=False):
+        if trial.state in (TrialState.COMPLETE, TrialState.PRUNED):
+            done += 1
+        elif trial.state == TrialState.FAIL and not trial.user_attrs.get("interrupted"):
+            done += 1
+    return done
+
+
+def run_sweep(
+    space: Mapping[str, Param],
+    algo: str,
+    env_id: str,
+    trials: int,
+    seeds: int = 1,
+    out: str | Path = "sweep",
+    n_timesteps: int | None = None,
+    preset: str | None = None,
+    backend: str = "local",
+    address: str | None = None,
+    storage: str | None = None,
+    evaluations: int = 4,
+    eval_episodes: int = 10,
+    sampler_seed: int | None = 0,
+    prune: bool = True,
+    on_trial: Callable[[dict[str, Any]], None] | None = None,
+) -> SweepResult:
+    """Run the search until the study holds ``trials`` finished trials (see the module's
+    docstring); continues the study already in ``out`` (or at ``storage``)."""
+    from palaestra.error import dependency_not_installed
+
+    try:
+        import optuna
+    except ImportError:
+        raise dependency_not_installed("optuna", "sweep", "hyperparameter sweeps") from None
+    from optuna.trial import TrialState
+
+    from palaestra.runs.grid import BACKENDS, connect_ray
+
+    if backend not in BACKENDS:
+        raise RunError(f"unknown backend {backend!r}", f"choose one of {', '.join(BACKENDS)}")
+    if backend == "local" and address is not None:
+        raise RunError("--address applies to the ray backend", "add --backend ray")
+    for name, value, low in (
+        ("trials", trials, 1),
+        ("seeds", seeds, 1),
+        ("evaluations", evaluations, 0),
+    ):
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise RunError(f"{name} must be an integer >= {low}, got {value!r}")
+    base, _ = resolve_spec(algo, env_id, preset, n_timesteps=n_timesteps)
+    distributions = _distributions(space)
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    rdb, url = _storage(storage, folder)
+    study_name = f"{base.algo}-{base.env_id}"
+    pruner = {"enabled": prune, "startup": 3}
+    study = optuna.create_study(
+        study_name=study_name,
+        storage=rdb,
+        direction="maximize",
+        sampler=optuna.samplers.TPESampler(seed=sampler_seed),
+        pruner=_make_pruner(pruner),
+        load_if_exists=True,
+    )
+    _check_same_space(study, distributions)
+    _mark_interrupted(rdb, study)
+    if sampler_seed is not None:  # a continued study draws new settings, not the first ones again
+        study.sampler = optuna.samplers.TPESampler(seed=sampler_seed + len(study.trials))
+    todo = max(0, trials - _finished(study))
+
+    def specs(params: Mapping[str, Any]) -> list[str]:
+        overrides = _settings(params, space)
+        return [
+            resolve_spec(
+                base.algo,
+                base.env_id,
+                preset,
+                overrides=overrides,
+                seed=s,
+                n_timesteps=base.n_timesteps,
+            )[0].to_json()
+            for s in range(seeds)
+        ]
+
+    def tell(trial: Any, outcome: dict[str, Any]) -> None:
+        trial_row = {"number": trial.number, **outcome, "params": _settings(trial.params, space)}
+        if outcome["state"] == "complete":
+            study.tell(trial, outcome["value"])
+        elif outcome["state"] == "pruned":
+            study.tell(trial, state=TrialState.PRUNED)
+        else:
+            rdb.set_trial_user_attr(trial._trial_id, "error", outcome.get("error"))
+            study.tell(trial, state=TrialState.FAIL)
+        if on_trial is not None:
+            on_trial(trial_row)
+
+    ran = 0
+    if backend == "local":
+        for _ in range(todo):
+            trial = study.ask(distributions)
+            try:
+                outcome = run_trial(
+                    specs(trial.params),
+                    str(folder / "trials" / str(trial.number)),
+                    evaluations,
+                    eval_episodes,
+                    _reporter(trial) if prune else None,
+                )
+            except Exception as exc:  # a trial that raises is recorded; the study goes on
+                outcome = {"state": "failed", "value": None, "error": _line(exc), "seconds": 0.0}
+            tell(trial, outcome)
+            ran += 1
+    else:
+        if url.startswith("sqlite") and address is not None:
+            from palaestra.runs.files import note
+
+            note(
+                "a SQLite study file is reachable only where this folder is: on a cluster, pass "
+                "--storage with a database URL (e.g. postgresql://...)"
+            )
+        ray = connect_ray(address)
+        task = ray.remote(num_cpus=1, max_retries=2)(_remote_trial)
+        slots = max(1, int(ray.available_resources().get("CPU", 1)))
+        pending: dict[Any, Any] = {}
+        asked = 0
+        while asked < todo or pending:
+            while asked < todo and len(pending) < slots:
+                trial = study.ask(distributions)
+                ref = task.remote(
+                    specs(trial.params),
+                    str((folder / "trials" / str(trial.number)).resolve()),
+                    evaluations,
+                    eval_episodes,
+                    url,
+                    study_name,
+                    trial._trial_id,
+                    pruner,
+                )
+                pending[ref] = trial
+                asked += 1
+            done, _ = ray.wait(list(pending), num_returns=1)
+            trial = pending.pop(done[0])
+            try:
+                outcome = ray.get(done[0])
+            except Exception as exc:  # the trial raised, or its worker died past its retries
+                cause = getattr(exc, "cause", None) or exc
+                outcome = {"state": "failed", "value": None, "error": _line(cause), "seconds": 0.0}
+            tell(trial, outcome)
+            ran += 1
+    return _write_outputs(study, space, folder, base, preset, ran)
+
+
+def _check_same_space(study: Any, distributions: Mapping[str, Any]) -> None:
+    """A study continued with another space would mix incomparable trials."""
+    for trial in study.get_trials(deepcopy=False):
+        if trial.distributions and set(trial.distributions) != set(distributions):
+            raise RunError(
+                f"the study in this folder searched {sorted(trial.distributions)}, not "
+                f"{sorted(distributions)}",
+                "use another --out for a different space",
+            )
+        return
+
+
+def _line(exc: BaseException) -> str:
+    text = exc.line() if isinstance(exc, RunError) else f"{type(exc).__name__}: {exc}"
+    return " ".join(text.split())
+
+
+def _write_outputs(
+    study: Any,
+    space: Mapping[str, Param],
+    folder: Path,
+    base: RunSpec,
+    preset: str | None,
+    ran: int,
+) -> SweepResult:
+    from optuna.trial import TrialState
+
+    rows = []
+    for trial in study.get_trials(deepcopy=False):
+        if trial.state == TrialState.RUNNING:
+            continue
+        rows.append(
+            {
+                "number": trial.number,
+                "state": trial.state.name.lower(),
+                "value": trial.value,
+                "params": _settings(trial.params, space),
+                "error": trial.user_attrs.get("error"),
+            }
+        )
+    # Complete trials by value, then pruned ones (their last evaluation), then failed ones.
+    order = {"complete": 0, "pruned": 1}
+    rows.sort(key=lambda r: (order.get(r["state"], 2), -(r["value"] or 0.0), r["number"]))
+    _write_table(rows, folder / TRIALS_FILE)
+    best = next((r for r in rows if r["state"] == "complete"), None)
+    best_file = None
+    if best is not None:
+        spec = resolve_spec(
+            base.algo, base.env_id, preset, overrides=best["params"], n_timesteps=base.n_timesteps
+        )[0]
+        best_file = folder / BEST_FILE
+        _write_best(spec, best, best_file)
+    _plots(study, folder)
+    return SweepResult(folder, rows, best, best_file, ran)
+
+
+def _write_table(rows: list[dict[str, Any]], path: Path) -> None:
+    from palaestra.utils.atomic_write import atomic_write
+
+    with atomic_write(path, "w", encoding="utf-8", newline="") as file:
+        writer = csv.writer(file)
+        writer.writerow(["rank", "trial", "state", "value", "params", "error"])
+        for rank, row in enumerate(rows, 1):
+            value = "" if row["value"] is None else f"{row['value']:.4f}"
+            writer.writerow(
+                [
+                    rank,
+                    row["number"],
+                    row["state"],
+                    value,
+                    json.dumps(row["params"], sort_keys=True),
+                    row["error"] or "",
+                ]
+            )
+
+
+def _write_best(spec: RunSpec, best: dict[str, Any], path: Path) -> None:
+    """The best settings as a ``train --config`` file (YAML, or JSON without PyYAML)."""
+    from palaestra.utils.atomic_write import atomic_write
+
+    config = spec.to_config()
+    for key in ("seed", "device", "palaestra_version", "preset"):
+        config.pop(key, None)
+    header = (
+        f"# palaestra sweep: best of the trials, trial {best['number']}, mean return "
+        f"{best['value']:.2f}\n# palaestra train {spec.algo} {spec.env_id} --config {path.name}\n"
+    )
+    try:
+        import yaml
+
+        text = header + yaml.safe_dump(config, sort_keys=False)
+    except ImportError:
+        text = json.dumps(config, indent=2) + "\n"
+    with atomic_write(path, "w", encoding="utf-8") as file:
+        file.write(text)
+
+
+def _plots(study: Any, folder: Path) -> None:
+    """``history.png`` (each trial's value and the best so far) and ``importance.png``
+    (Optuna's fANOVA importances), when matplotlib is installed and the trials allow."""
+    import importlib.util
+
+    from optuna.trial import TrialState
+
+    if importlib.util.find_spec("matplotlib") is None:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from palaestra.runs.curves import _save
+
+    complete = [t for t in study.get_trials(deepcopy=False) if t.state == TrialState.COMPLETE]
+    if not complete:
+        return
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    numbers = [t.number for t in complete]
+    values = [t.value for t in complete]
+    best = [max(values[: i + 1]) for i in range(len(values))]
+    ax.scatter(numbers, values, label="trial", color="tab:blue")
+    ax.step(numbers, best, where="post", label="best so far", color="tab:orange")
+    ax.set_xlabel("trial")
+    ax.set_ylabel("mean return over seeds")
+    ax.set_title(study.study_name)
+    ax.legend()
+    _save(fig, folder / "history.png")
+    plt.close(fig)
+    if len(complete) < 2 or not complete[0].params:
+        return
+    import optuna
+
+    try:
+        importances = optuna.importance.get_param_importances(study)
+    except (RuntimeError, ValueError):  # too few distinct trials to tell
+        return
+    fig, ax = plt.subplots(figsize=(8, 0.6 * len(importances) + 1.5))
+    names = list(importances)[::-1]
+    ax.barh(names, [importances[n] for n in names], color="tab:green")
+    ax.set_xlabel("importance (fANOVA)")
+    ax.set_title(f"{study.study_name}: hyperparameter importance")
+    fig.tight_layout()
+    _save(fig, folder / "importance.png")
+    plt.close(fig)
