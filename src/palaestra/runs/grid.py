@@ -23,7 +23,6 @@ from __future__ import annotations
 import dataclasses
 import os
 import shutil
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -71,7 +70,9 @@ def _train_into(spec_json: str, run_dir: str) -> float:
 
     target = Path(run_dir)
     target.parent.mkdir(parents=True, exist_ok=True)
-    scratch = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    scratch = target.parent / f".{target.name}.partial"
+    if scratch.exists():  # left by an attempt that was killed: this one starts over
+        shutil.rmtree(scratch)
     try:
         result = train_run(RunSpec.from_json(spec_json), scratch, checkpoint_every=0)
         if target.exists():  # an earlier attempt that did not finish
@@ -100,6 +101,8 @@ def connect_ray(address: str | None, num_cpus: int | None = None) -> Any:
         kwargs["num_cpus"] = num_cpus or os.cpu_count() or 1
     # The workers import palaestra from where this process does (a source checkout works).
     kwargs["runtime_env"] = {"env_vars": {"PYTHONPATH": os.pathsep.join(_import_paths())}}
+    if address not in (None, "auto", "local"):
+        _probe(address)  # ray.init retries an unreachable address for minutes
     try:
         ray.init(address=address, **kwargs)
     except (ConnectionError, RuntimeError, ValueError, TimeoutError) as exc:
@@ -110,6 +113,28 @@ def connect_ray(address: str | None, num_cpus: int | None = None) -> Any:
             code=1,
         ) from None
     return ray
+
+
+def _probe(address: str, timeout: float = 5.0) -> None:
+    """``RunError`` unless something listens at ``address`` (``host:port`` or
+    ``ray://host:port``)."""
+    import socket
+
+    where = address.removeprefix("ray://")
+    host, sep, port = where.rpartition(":")
+    if not sep or not host or not port.isdigit():
+        raise RunError(
+            f"cannot read the Ray address {address!r}",
+            "use auto, HOST:PORT (the head's GCS, port 6379) or ray://HOST:10001",
+        )
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise RunError(
+            f"cannot reach a Ray cluster at {address!r}: {exc.strerror or exc}",
+            "start one with `ray start --head`, or drop --address for a local Ray",
+            code=1,
+        ) from None
 
 
 def _import_paths() -> list[str]:

@@ -370,6 +370,7 @@ def run_sweep(
             raise RunError(f"{name} must be an integer >= {low}, got {value!r}")
     base, _ = resolve_spec(algo, env_id, preset, n_timesteps=n_timesteps)
     distributions = _distributions(space)
+    ray = connect_ray(address) if backend == "ray" else None  # a bad address: before any file
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -440,7 +441,7 @@ def run_sweep(
                 "a SQLite study file is reachable only where this folder is: on a cluster, pass "
                 "--storage with a database URL (e.g. postgresql://...)"
             )
-        ray = connect_ray(address)
+        assert ray is not None
         task = ray.remote(num_cpus=1, max_retries=2)(_remote_trial)
         slots = max(1, int(ray.available_resources().get("CPU", 1)))
         pending: dict[Any, Any] = {}

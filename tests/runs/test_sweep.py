@@ -1,0 +1,159 @@
+"""``palaestra sweep``: the search space, a study that continues, and its bad input."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from tests.cli.conftest import run_cli
+
+from palaestra.runs import RunError
+from palaestra.runs.sweep import Choice, Range, run_sweep, space_from_mapping
+
+optuna = pytest.importorskip("optuna")
+
+SPACE = "learning_rate: {low: 1.0e-4, high: 3.0e-3, log: true}\nn_steps: [8, 16]\n"
+
+
+def test_space_forms() -> None:
+    space = space_from_mapping(
+        {
+            "learning_rate": {"low": 1e-4, "high": 1e-2, "log": True},
+            "n_steps": {"low": 8, "high": 64, "step": 8},
+            "gamma": {"low": 0.9, "high": 0.999},
+            "policy_kwargs.net_arch": [[64, 64], [128]],
+            "n_envs": [1, 4],
+        },
+        "a2c",
+    )
+    assert space["learning_rate"] == Range(1e-4, 1e-2, log=True)
+    assert space["n_steps"] == Range(8, 64, step=8, integer=True)
+    assert space["gamma"] == Range(0.9, 0.999)
+    assert space["policy_kwargs.net_arch"] == Choice(([64, 64], [128]))
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        ({"learning_rat": [0.1]}, "unknown a2c hyperparameter 'learning_rat'"),
+        (
+            {"gamma": {"low": 0.99, "high": 0.9}},
+            "impossible range for gamma: low 0.99 is not below",
+        ),
+        ({"learning_rate": {"low": 0, "high": 1, "log": True}}, "a log range needs low > 0"),
+        ({"gamma": []}, "gamma has no choices"),
+        ({"gamma": 0.9}, "gamma must be a list of choices or a range"),
+        ({"gamma": {"low": 0.9}}, "must have low and high"),
+        ({"gamma": {"low": "a", "high": 1}}, "bounds must be numbers"),
+        ({}, "must map hyperparameter names"),
+    ],
+)
+def test_bad_spaces_name_what_is_wrong(data: dict, message: str) -> None:
+    with pytest.raises(RunError, match=message.replace("(", r"\(")):
+        space_from_mapping(data, "a2c")
+
+
+def _sweep_args(space: Path, out: Path, trials: int, *extra: object) -> list[object]:
+    return ["sweep", space, "--algo", "a2c", "--env", "CartPole-v1", "--trials", trials,
+            "--seeds", 2, "--timesteps", 320, "--evaluations", 2, "--eval-episodes", 2,
+            "--out", out, *extra]  # fmt: skip
+
+
+def test_a_local_sweep_writes_a_ranked_table_and_usable_best_settings(tmp_path: Path) -> None:
+    space = tmp_path / "space.yaml"
+    space.write_text(SPACE)
+    r = run_cli(*_sweep_args(space, tmp_path / "sw", 3))
+    assert r.code == 0, r.err
+    with open(tmp_path / "sw" / "trials.csv", newline="") as file:
+        rows = list(csv.DictReader(file))
+    assert len(rows) == 3 and [row["rank"] for row in rows] == ["1", "2", "3"]
+    complete = [float(row["value"]) for row in rows if row["state"] == "complete"]
+    assert complete == sorted(complete, reverse=True) and complete
+    assert (tmp_path / "sw" / "history.png").read_bytes()[:4] == b"\x89PNG"
+    for trial in (tmp_path / "sw" / "trials").iterdir():  # each seed is a run folder
+        assert (trial / "seed0" / "config.json").is_file()
+    best = tmp_path / "sw" / "best.yaml"
+    params = json.loads(rows[0]["params"])
+    assert f"n_steps: {params['n_steps']}" in best.read_text()
+    t = run_cli("train", "a2c", "CartPole-v1", "--config", best, "--timesteps", 64,
+                "--out", tmp_path / "t", "--progress", "none", "--eval-episodes", 0)  # fmt: skip
+    assert t.code == 0, t.err
+    config = json.loads((tmp_path / "t" / "config.json").read_text())
+    assert config["hyperparams"]["n_steps"] == params["n_steps"]
+    again = run_cli(*_sweep_args(space, tmp_path / "sw", 3))
+    assert again.code == 0 and "3 trials in" in again.out and "(0 run now)" in again.out
+
+
+def test_a_killed_sweep_continues_losing_only_the_trial_in_flight(tmp_path: Path) -> None:
+    space = tmp_path / "space.yaml"
+    space.write_text(SPACE)
+    out = tmp_path / "sw"
+    argv = [str(a) for a in _sweep_args(space, out, 4)]
+    argv[argv.index("--timesteps") + 1] = "2000"  # long enough to be killed inside a trial
+    cmd = [sys.executable, "-m", "palaestra", *argv]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    storage = f"sqlite:///{out / 'study.db'}"
+    deadline = time.monotonic() + 120
+    states: list[str] = []
+    while time.monotonic() < deadline:
+        time.sleep(0.2)
+        try:
+            study = optuna.load_study(study_name="a2c-CartPole-v1", storage=storage)
+            states = [t.state.name for t in study.get_trials()]
+        except Exception:  # the study is not created yet
+            continue
+        if states.count("COMPLETE") + states.count("PRUNED") >= 1 and "RUNNING" in states:
+            break
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.communicate()
+    assert "RUNNING" in states, states
+    done_before = states.count("COMPLETE") + states.count("PRUNED")
+    r = run_cli(*[str(a) for a in argv])
+    assert r.code == 0, r.err
+    study = optuna.load_study(study_name="a2c-CartPole-v1", storage=storage)
+    trials = study.get_trials()
+    finished = [t for t in trials if t.state.name in ("COMPLETE", "PRUNED")]
+    lost = [t for t in trials if t.user_attrs.get("interrupted")]
+    assert len(finished) == 4 and len(lost) == 1
+    assert f"({4 - done_before} run now)" in r.out
+
+
+@pytest.mark.parametrize(
+    ("space", "extra", "message", "code"),
+    [
+        ("learning_rat: [0.1]\n", (), "unknown a2c hyperparameter 'learning_rat'", 2),
+        ("gamma: {low: 0.99, high: 0.9}\n", (), "impossible range for gamma", 2),
+        (
+            SPACE,
+            ("--storage", "sqlite:////no/such/folder/s.db"),
+            "cannot open the study storage",
+            1,
+        ),
+        (SPACE, ("--storage", "nosuchdb://x"), "cannot open the study storage 'nosuchdb://x'", 1),
+        (SPACE, ("--address", "auto"), "--address applies to the ray backend", 2),
+        (SPACE, ("--backend", "ray", "--address", "127.0.0.1:1"), "cannot reach a Ray cluster", 1),
+    ],
+)
+def test_bad_sweep_input_is_one_line_and_non_zero(
+    tmp_path: Path, space: str, extra: tuple[str, ...], message: str, code: int
+) -> None:
+    path = tmp_path / "space.yaml"
+    path.write_text(space)
+    r = run_cli(*_sweep_args(path, tmp_path / "sw", 2, *extra))
+    assert r.code == code and r.err.count("\n") == 1 and message in r.err, r.err
+    assert "Traceback" not in r.err
+
+
+def test_run_sweep_refuses_another_space_in_the_same_study(tmp_path: Path) -> None:
+    first = space_from_mapping({"n_steps": [8, 16]}, "a2c")
+    run_sweep(first, "a2c", "CartPole-v1", 1, 1, tmp_path, 160, evaluations=0, eval_episodes=1)
+    other = space_from_mapping({"gamma": [0.9, 0.99]}, "a2c")
+    with pytest.raises(RunError, match="searched \\['n_steps'\\]"):
+        run_sweep(other, "a2c", "CartPole-v1", 2, 1, tmp_path, 160, evaluations=0)
