@@ -143,3 +143,32 @@ def test_evaluation_during_training_does_not_change_the_run(tmp_path: Path) -> N
     assert seen == [256, 512]
     for name, value in _weights(tmp_path / "a").items():
         np.testing.assert_array_equal(value, _weights(tmp_path / "b")[name])
+
+
+DATA = Path(__file__).parent / "data"
+
+
+def test_a_run_folder_written_before_the_run_api_evaluates_and_resumes_the_same(
+    tmp_path: Path,
+) -> None:
+    """``old_ppo_run`` was written by ``palaestra train`` at commit d6d8e8f (before the run
+    API); its ``eval`` output and the weights its resume to 512 steps reached then are kept."""
+    import shutil
+
+    run = tmp_path / "run"
+    shutil.copytree(DATA / "old_ppo_run", run)
+    shown = run_cli("eval", run, "--episodes", 5, "--seed", 3)
+    expected = (
+        (DATA / "old_ppo_run_eval.txt")
+        .read_text()
+        .replace("/tmp/oldtiny/ppo/model.zip", str(run / "model.zip"))
+    )
+    assert shown.code == 0 and shown.out == expected
+    resumed = run_cli("train", "--resume", run, "--timesteps", 512, "--progress", "none",
+                      "--eval-episodes", 0)  # fmt: skip
+    assert resumed.code == 0, resumed.err
+    reference = np.load(DATA / "old_ppo_run_resumed_512.npz")
+    weights = _weights(run)
+    assert sorted(reference.files) == sorted(weights)
+    for name in reference.files:
+        np.testing.assert_array_equal(weights[name], reference[name])
