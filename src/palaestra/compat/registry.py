@@ -17,7 +17,7 @@ from palaestra.compat._optional import gymnasium_missing
 from palaestra.core import Env
 from palaestra.envs.env_spec import EnvSpec, VectorizeMode
 
-__all__ = ["GYMNASIUM_PREFIX", "make_gymnasium", "make_vec_gymnasium"]
+__all__ = ["GYMNASIUM_PREFIX", "gymnasium_spec", "make_gymnasium", "make_vec_gymnasium"]
 
 GYMNASIUM_PREFIX = "gymnasium:"
 
@@ -66,6 +66,30 @@ def make_gymnasium(
     if spec is not None:
         env = _apply_wrappers(env, spec)
     return env
+
+
+def gymnasium_spec(id: str) -> EnvSpec:
+    """The spec of ``"gymnasium:<id>"`` from Gymnasium's registry (entry point, reward
+    threshold, time limit), as ``palaestra.spec`` gives it for palaestra's own ids."""
+    try:
+        import gymnasium
+    except ImportError as exc:
+        raise gymnasium_missing(f"looking up {id!r}") from exc
+    from palaestra.compat.from_gymnasium_env import _palaestra_spec
+
+    gym_id = id[len(GYMNASIUM_PREFIX) :]
+    try:
+        found = gymnasium.spec(gym_id)
+    except gymnasium.error.UnregisteredEnv as exc:
+        cls = getattr(error, type(exc).__name__, error.UnregisteredEnv)
+        raise cls(f"{gym_id!r} is not in Gymnasium's registry: {exc}") from exc
+    except gymnasium.error.DeprecatedEnv as exc:
+        raise error.DeprecatedEnv(
+            f"{gym_id!r} is deprecated in Gymnasium's registry: {exc}"
+        ) from exc
+    spec = _palaestra_spec(found)
+    assert spec is not None
+    return spec
 
 
 def _gymnasium_spec(gymnasium: Any, spec: EnvSpec, gym_id: str) -> Any:

@@ -224,7 +224,12 @@ def register_envs(env_module: ModuleType) -> None:
 
 
 def spec(env_id: str) -> EnvSpec:
-    """The registered :class:`EnvSpec` of ``env_id``; helpful errors if there is none."""
+    """The registered :class:`EnvSpec` of ``env_id``; helpful errors if there is none.
+    ``"gymnasium:<id>"``: the spec in Gymnasium's registry (what ``make`` would build)."""
+    if env_id.startswith("gymnasium:"):
+        from palaestra.compat.registry import gymnasium_spec
+
+        return gymnasium_spec(env_id)
     env_spec = registry.get(env_id)
     if env_spec is None:
         ns, name, version = parse_env_id(env_id)
