@@ -157,3 +157,19 @@ def test_run_sweep_refuses_another_space_in_the_same_study(tmp_path: Path) -> No
     other = space_from_mapping({"gamma": [0.9, 0.99]}, "a2c")
     with pytest.raises(RunError, match="searched \\['n_steps'\\]"):
         run_sweep(other, "a2c", "CartPole-v1", 2, 1, tmp_path, 160, evaluations=0)
+
+
+def test_without_ray_or_optuna_the_commands_name_the_extra(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    space = tmp_path / "space.yaml"
+    space.write_text(SPACE)
+    monkeypatch.setitem(sys.modules, "optuna", None)  # import optuna -> ImportError
+    r = run_cli(*_sweep_args(space, tmp_path / "sw", 2))
+    assert r.code == 1 and r.err.count("\n") == 1
+    assert 'optuna is not installed, run `pip install "palaestra[sweep]"`' in r.err
+    monkeypatch.setitem(sys.modules, "ray", None)
+    c = run_cli("compare", "algos", "--env", "CartPole-v1", "--algos", "a2c", "--seeds", 0,
+                "--timesteps", 64, "--runs-dir", tmp_path / "c", "--backend", "ray")  # fmt: skip
+    assert c.code == 1 and c.err.count("\n") == 1
+    assert 'ray is not installed, run `pip install "palaestra[ray]"`' in c.err
