@@ -8,8 +8,9 @@ order enforcing and ``TimeLimit``, so palaestra adds none of its own on top.
 
 from __future__ import annotations
 
+import contextlib
 import functools
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from palaestra import error
@@ -46,13 +47,24 @@ def make_gymnasium(
             f"Expected an environment id after {GYMNASIUM_PREFIX!r}, e.g. 'gymnasium:Taxi-v4'"
         )
     target: Any = gym_id if spec is None else _gymnasium_spec(gymnasium, spec, gym_id)
-    try:
+    with _registry_errors(gymnasium, gym_id):
         gym_env = gymnasium.make(
             target,
             max_episode_steps=max_episode_steps,
             disable_env_checker=disable_env_checker,
             **kwargs,
         )
+    env = from_gymnasium(gym_env)
+    if spec is not None:
+        env = _apply_wrappers(env, spec)
+    return env
+
+
+@contextlib.contextmanager
+def _registry_errors(gymnasium: Any, gym_id: str) -> Iterator[None]:
+    """Gymnasium's registry errors as palaestra's classes of the same name."""
+    try:
+        yield
     except gymnasium.error.UnregisteredEnv as exc:
         cls = getattr(error, type(exc).__name__, error.UnregisteredEnv)
         raise cls(f"{gym_id!r} is not in Gymnasium's registry: {exc}") from exc
@@ -62,10 +74,6 @@ def make_gymnasium(
         ) from exc
     except gymnasium.error.DependencyNotInstalled as exc:
         raise error.DependencyNotInstalled(f"Gymnasium's {gym_id!r}: {exc}") from exc
-    env = from_gymnasium(gym_env)
-    if spec is not None:
-        env = _apply_wrappers(env, spec)
-    return env
 
 
 def gymnasium_spec(id: str) -> EnvSpec:
@@ -78,15 +86,8 @@ def gymnasium_spec(id: str) -> EnvSpec:
     from palaestra.compat.from_gymnasium_env import _palaestra_spec
 
     gym_id = id[len(GYMNASIUM_PREFIX) :]
-    try:
+    with _registry_errors(gymnasium, gym_id):
         found = gymnasium.spec(gym_id)
-    except gymnasium.error.UnregisteredEnv as exc:
-        cls = getattr(error, type(exc).__name__, error.UnregisteredEnv)
-        raise cls(f"{gym_id!r} is not in Gymnasium's registry: {exc}") from exc
-    except gymnasium.error.DeprecatedEnv as exc:
-        raise error.DeprecatedEnv(
-            f"{gym_id!r} is deprecated in Gymnasium's registry: {exc}"
-        ) from exc
     spec = _palaestra_spec(found)
     assert spec is not None
     return spec

@@ -28,11 +28,11 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from palaestra.runs.errors import RunError
+from palaestra.runs.errors import RunError, first_line, one_line
 from palaestra.runs.files import CONFIG_FILE, STATUS_FILE, read_json
 from palaestra.runs.spec import RunSpec
 
-__all__ = ["GridRun", "Outcome", "connect_ray", "is_finished", "run_grid"]
+__all__ = ["GridRun", "Outcome", "check_backend", "connect_ray", "is_finished", "run_grid"]
 
 BACKENDS = ("local", "ray")
 
@@ -106,9 +106,8 @@ def connect_ray(address: str | None, num_cpus: int | None = None) -> Any:
     try:
         ray.init(address=address, **kwargs)
     except (ConnectionError, RuntimeError, ValueError, TimeoutError) as exc:
-        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise RunError(
-            f"cannot reach a Ray cluster at {address!r}: {why}",
+            f"cannot reach a Ray cluster at {address!r}: {first_line(exc)}",
             "start one with `ray start --head`, or drop --address for a local Ray",
             code=1,
         ) from None
@@ -143,6 +142,16 @@ def _import_paths() -> list[str]:
     src = str(Path(palaestra.__file__).resolve().parents[1])
     existing = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     return [src, *[p for p in existing if p != src]]
+
+
+def check_backend(backend: str, address: str | None) -> None:
+    """``RunError`` unless ``backend`` is one of ``BACKENDS`` and ``address`` goes with Ray."""
+    if backend not in BACKENDS:
+        raise RunError(f"unknown backend {backend!r}", f"choose one of {', '.join(BACKENDS)}")
+    if backend == "local" and address is not None:
+        raise RunError(
+            "--address applies to the ray backend", "add --backend ray, or drop --address"
+        )
 
 
 def run_grid(
@@ -193,16 +202,11 @@ def _train_local(run: GridRun, event: Callable[..., None]) -> Outcome:
     try:
         seconds = _train_into(run.spec.to_json(), str(run.run_dir))
     except Exception as exc:  # a run that raises is reported; the others go on
-        outcome = Outcome(run, "failed", time.perf_counter() - start, _one_line(exc))
+        outcome = Outcome(run, "failed", time.perf_counter() - start, one_line(exc))
     else:
         outcome = Outcome(run, "trained", seconds)
     event("done", run, outcome)
     return outcome
-
-
-def _one_line(exc: BaseException) -> str:
-    text = exc.line() if isinstance(exc, RunError) else f"{type(exc).__name__}: {exc}"
-    return " ".join(text.split())
 
 
 def _train_ray(
@@ -229,7 +233,7 @@ def _train_ray(
             Exception
         ) as exc:  # RayTaskError (the run raised), WorkerCrashedError (retries spent)
             cause = getattr(exc, "cause", None) or exc
-            out[i] = Outcome(run, "failed", 0.0, _one_line(cause))
+            out[i] = Outcome(run, "failed", 0.0, one_line(cause))
         else:
             out[i] = Outcome(run, "trained", seconds)
         event("done", run, out[i])

@@ -131,15 +131,10 @@ class RunSpec:
         usable types, an Atari recipe only on an Atari id, wrappers that are wrapper classes
         (the constructor then checks the hyperparameters; :meth:`from_config` also holds a
         description read from elsewhere to the limits of a run folder)."""
-        import palaestra
-        from palaestra import error
         from palaestra.runs import settings
 
         settings.check_algo(self.algo)
-        try:
-            palaestra.spec(self.env_id)
-        except (error.UnregisteredEnv, error.DeprecatedEnv) as exc:
-            raise RunError(str(exc), "run `palaestra envs` to list the ids") from None
+        _check_env_id(self.env_id)
         settings.check_settings(self.to_config(), self.env_id)
 
 
@@ -155,15 +150,10 @@ def resolve_spec(
 ) -> tuple[RunSpec, list[str]]:
     """:meth:`RunSpec.from_preset` with ``assignments`` (``"key=value"`` strings, as ``--set``
     takes them) and the notes for the user (e.g. that no preset exists); validated."""
-    import palaestra
-    from palaestra import error
     from palaestra.runs import settings
 
     algo = settings.check_algo(algo)
-    try:
-        palaestra.spec(env_id)  # an unknown id fails here, with Gymnasium's "did you mean"
-    except (error.UnregisteredEnv, error.DeprecatedEnv) as exc:
-        raise RunError(str(exc), "run `palaestra envs` to list the ids") from None
+    _check_env_id(env_id)
     resolved, used, notes = settings.resolve_settings(
         algo, env_id, preset, config, assignments, overrides
     )
@@ -178,3 +168,14 @@ def resolve_spec(
     spec = RunSpec(algo=algo, env_id=env_id, preset=used, device=device, **resolved)
     spec.validate()
     return spec, notes
+
+
+def _check_env_id(env_id: str) -> None:
+    """``RunError`` for an id no registry holds, with Gymnasium's "did you mean"."""
+    import palaestra
+    from palaestra import error
+
+    try:
+        palaestra.spec(env_id)
+    except (error.UnregisteredEnv, error.DeprecatedEnv) as exc:
+        raise RunError(str(exc), "run `palaestra envs` to list the ids") from None

@@ -33,7 +33,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from palaestra.runs.errors import RunError
+from palaestra.runs.errors import RunError, first_line, one_line
 from palaestra.runs.spec import RunSpec, resolve_spec
 
 __all__ = ["Choice", "Range", "SweepResult", "load_space", "run_sweep", "space_from_mapping"]
@@ -289,9 +289,8 @@ def _storage(url: str | None, folder: Path) -> tuple[Any, str]:
     try:
         storage = optuna.storages.RDBStorage(url, engine_kwargs=_engine_kwargs(url))
     except Exception as exc:  # sqlalchemy's errors: a bad URL, a missing driver, no server
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise RunError(
-            f"cannot open the study storage {url!r}: {first}",
+            f"cannot open the study storage {url!r}: {first_line(exc)}",
             "pass --storage sqlite:///PATH or a database URL the workers can reach",
             code=1,
         ) from None
@@ -355,12 +354,9 @@ def run_sweep(
         raise dependency_not_installed("optuna", "sweep", "hyperparameter sweeps") from None
     from optuna.trial import TrialState
 
-    from palaestra.runs.grid import BACKENDS, connect_ray
+    from palaestra.runs.grid import check_backend, connect_ray
 
-    if backend not in BACKENDS:
-        raise RunError(f"unknown backend {backend!r}", f"choose one of {', '.join(BACKENDS)}")
-    if backend == "local" and address is not None:
-        raise RunError("--address applies to the ray backend", "add --backend ray")
+    check_backend(backend, address)
     for name, value, low in (
         ("trials", trials, 1),
         ("seeds", seeds, 1),
@@ -430,7 +426,7 @@ def run_sweep(
                     _reporter(trial) if prune else None,
                 )
             except Exception as exc:  # a trial that raises is recorded; the study goes on
-                outcome = {"state": "failed", "value": None, "error": _line(exc), "seconds": 0.0}
+                outcome = {"state": "failed", "value": None, "error": one_line(exc), "seconds": 0.0}
             tell(trial, outcome)
             ran += 1
     else:
@@ -467,7 +463,12 @@ def run_sweep(
                 outcome = ray.get(done[0])
             except Exception as exc:  # the trial raised, or its worker died past its retries
                 cause = getattr(exc, "cause", None) or exc
-                outcome = {"state": "failed", "value": None, "error": _line(cause), "seconds": 0.0}
+                outcome = {
+                    "state": "failed",
+                    "value": None,
+                    "error": one_line(cause),
+                    "seconds": 0.0,
+                }
             tell(trial, outcome)
             ran += 1
     return _write_outputs(study, space, folder, base, preset, ran)
@@ -483,11 +484,6 @@ def _check_same_space(study: Any, distributions: Mapping[str, Any]) -> None:
                 "use another --out for a different space",
             )
         return
-
-
-def _line(exc: BaseException) -> str:
-    text = exc.line() if isinstance(exc, RunError) else f"{type(exc).__name__}: {exc}"
-    return " ".join(text.split())
 
 
 def _write_outputs(
