@@ -441,8 +441,13 @@ class BaseAlgorithm:
 
     # -- persistence: see saving.py ------------------------------------------------------------
     def save(self, path: Any, exclude: Any = None, include: Any = None) -> None:
-        """Write the model (hyperparameters, spaces, weights, optimizer, counters) as a zip."""
-        saving.save_model(self, path)
+        """Write the model (hyperparameters, spaces, weights, optimizer, counters) as a zip.
+
+        ``exclude``: attribute names to leave out (SB3's ``save``: hyperparameters such as
+        ``"verbose"``, schedules, counters, ``"policy_kwargs"``...; a loaded model gets the
+        constructor's defaults for them); ``include`` takes names back out of ``exclude``.
+        Weights and optimizer states are always written."""
+        saving.save_model(self, path, exclude, include)
 
     @classmethod
     def load(
@@ -471,7 +476,12 @@ class BaseAlgorithm:
     def set_parameters(
         self, load_path_or_dict: Any, exact_match: bool = True, device: torch.device | str = "auto"
     ) -> None:
-        """Load parameters from ``get_parameters()`` output or from a model file."""
+        """Load parameters from ``get_parameters()`` output or from a model file.
+
+        With ``exact_match`` (SB3's default) every object of ``get_parameters()`` must be
+        given, and each module's parameters exactly: ``ValueError`` otherwise, raised before
+        anything is changed. A name that is not an object of the model is always a
+        ``ValueError``."""
         saving.set_parameters(self, load_path_or_dict, exact_match)
 
     def _uses_images(self) -> bool:
