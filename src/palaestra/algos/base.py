@@ -43,6 +43,7 @@ from palaestra.algos.eager_optimizer import build_optimizer
 from palaestra.algos.learners import Group, Learner, Net, build_learner
 from palaestra.algos.logger import HumanOutputFormat, Logger, configure
 from palaestra.algos.policies import extractor_class
+from palaestra.algos.preprocessing import check_for_nested_spaces
 from palaestra.algos.schedules import Schedule
 from palaestra.algos.spaces_util import is_image_space, is_vectorized_observation
 from palaestra.core import Env, Wrapper
@@ -150,6 +151,15 @@ class BaseAlgorithm:
                 self.env.action_space,
             )
             self.n_envs = self.env.num_envs
+            check_for_nested_spaces(self.observation_space)
+            # SB3 catches the common mistake the same way (a Dict would flatten to nonsense)
+            if policy in ("MlpPolicy", "CnnPolicy") and isinstance(
+                self.observation_space, spaces.Dict
+            ):
+                raise ValueError(
+                    "You must use `MultiInputPolicy` when working with dict observation space, "
+                    f"not {policy}"
+                )
             if not isinstance(self.action_space, self.supported_action_spaces):
                 names = ", ".join(s.__name__ for s in self.supported_action_spaces)
                 raise TypeError(
