@@ -51,7 +51,7 @@ from palaestra.core import Env, Wrapper
 __all__ = ["BaseAlgorithm", "resolve_device"]
 
 
-def resolve_device(device: torch.device | str, policy: str) -> torch.device:
+def resolve_device(device: torch.device | str, policy: str | type) -> torch.device:
     """``"auto"``: cuda for CNN policies when available, else the CPU; anything else as given."""
     if device == "auto":
         # CNNs gain from a GPU; small MLPs are faster on the CPU (no transfers per step).
@@ -69,6 +69,8 @@ class BaseAlgorithm:
     implement ``learn`` and ``_predict``."""
 
     supported_action_spaces: tuple[type, ...] = ()
+    # Policy classes the algorithm takes in place of a name (PPO/A2C: ActorCriticPolicy)
+    _policy_class_base: type | None = None
     _extra_counters: tuple[str, ...] = ()
     lr_schedule: Schedule
     learner: Learner
@@ -108,7 +110,7 @@ class BaseAlgorithm:
 
     def _init_common(
         self,
-        policy: str,
+        policy: str | type,
         env: Any,
         policy_kwargs: dict[str, Any] | None,
         verbose: int,
@@ -118,6 +120,19 @@ class BaseAlgorithm:
         num_threads: int | None,
         stats_window_size: int = 100,
     ) -> None:
+        if isinstance(policy, type):
+            base = self._policy_class_base
+            if base is None or not issubclass(policy, base):
+                takes = (
+                    "a policy name"
+                    if base is None
+                    else f"a policy name or an {base.__name__} subclass"
+                )
+                raise ValueError(
+                    f"{type(self).__name__} takes {takes} ('MlpPolicy', 'CnnPolicy', "
+                    f"'MultiInputPolicy'), got the class {policy.__name__}; custom networks "
+                    "go in policy_kwargs (features_extractor_class=..., net_arch=...)"
+                )
         extractor_class(policy)  # unknown names fail here, before any env work
         self.policy_name, self.policy_kwargs = policy, dict(policy_kwargs or {})
         self.verbose, self.seed, self.tensorboard_log = verbose, seed, tensorboard_log
@@ -246,7 +261,7 @@ class BaseAlgorithm:
         return build_optimizer(optimizer_class, params, lr=lr, **kwargs)
 
     # -- device, seeding ---------------------------------------------------------------------
-    def _resolve_device(self, device: torch.device | str, policy: str) -> torch.device:
+    def _resolve_device(self, device: torch.device | str, policy: str | type) -> torch.device:
         return resolve_device(device, policy)
 
     def set_random_seed(self, seed: int | None = None) -> None:

@@ -139,7 +139,7 @@ def save_model(model: Any, path: Any, exclude: Any = None, include: Any = None) 
         "algo": type(model).__name__,
         "palaestra_version": palaestra.__version__,
         "torch_version": torch.__version__,
-        "policy": model.policy_name,
+        "policy": encode_classes(model.policy_name),  # a name, or a policy class reference
         "policy_kwargs": encode_classes(model.policy_kwargs),
         "observation_space": space_to_json(model.observation_space),
         "action_space": space_to_json(model.action_space),
@@ -253,7 +253,10 @@ def load_model(
         observation_space = space_from_json(meta["observation_space"])
         action_space = space_from_json(meta["action_space"])
         n_envs, counters = int(meta.get("n_envs", 1)), dict(meta["counters"])
-        policy = str(meta["policy"])
+        policy = meta["policy"]
+        if isinstance(policy, dict):  # a custom policy class: through custom_objects only
+            policy = custom.get("policy_class") or decode_classes(policy, custom)
+        policy = policy if isinstance(policy, type) else str(policy)
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         if isinstance(exc, ModelFileError):
             raise
