@@ -128,3 +128,26 @@ def test_load_replay_buffer_when_none_as_sb3(tmp_path: Path) -> None:
         model.load_replay_buffer(tmp_path / f"{lib}_rb{suffix}")
         assert model.replay_buffer is not None and model.replay_buffer.size() == size, lib
         model.learn(8, reset_num_timesteps=False)  # trains on the loaded buffer
+
+
+def test_get_vec_normalize_env_as_sb3(tmp_path: Path) -> None:
+    from stable_baselines3.common.vec_env import DummyVecEnv as SB3DummyVecEnv
+    from stable_baselines3.common.vec_env import VecNormalize as SB3VecNormalize
+
+    import palaestra
+    from palaestra.vec_env import DummyVecEnv, VecNormalize, make_vec_env
+
+    normalized = VecNormalize(make_vec_env("CartPole-v1", n_envs=2))
+    sb3_normalized = SB3VecNormalize(SB3DummyVecEnv([lambda: gymnasium.make("CartPole-v1")] * 2))
+    cases = [
+        (algos.PPO, normalized, DummyVecEnv([lambda: palaestra.make("CartPole-v1")] * 2)),
+        (sb3.PPO, sb3_normalized, SB3DummyVecEnv([lambda: gymnasium.make("CartPole-v1")] * 2)),
+    ]
+    for cls, layer, plain in cases:
+        model = cls("MlpPolicy", layer, n_steps=16, batch_size=16)
+        assert model.get_vec_normalize_env() is layer
+        model.save(tmp_path / "m")
+        assert cls.load(tmp_path / "m").get_vec_normalize_env() is None  # no env
+        assert cls.load(tmp_path / "m", env=layer).get_vec_normalize_env() is layer
+        model.set_env(plain)
+        assert model.get_vec_normalize_env() is None

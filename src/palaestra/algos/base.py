@@ -211,6 +211,13 @@ class BaseAlgorithm:
         """The VecEnv being trained on (None for a model loaded without one)."""
         return self.env
 
+    def get_vec_normalize_env(self) -> Any:
+        """The ``VecNormalize`` layer of the training env, or None (SB3's
+        ``get_vec_normalize_env``: e.g. to save its statistics next to the model)."""
+        from palaestra.vec_env import unwrap_vec_normalize
+
+        return None if self.env is None else unwrap_vec_normalize(self.env)
+
     def set_env(self, env: Any, force_reset: bool = True) -> None:
         """Train on another env with the same spaces (SB3: ``ValueError`` when they differ)."""
         venv = self._wrap_env(env)
