@@ -59,7 +59,7 @@ def test_conversions_equal_gymnasium(returns: tuple[Any, ...], vector: bool, new
 
 
 def test_bad_returns() -> None:
-    with pytest.raises(ValueError, match="must have 4 items .* or 5 .* got 3"):
+    with pytest.raises(ValueError, match=r"must have 4 items .* or 5 .* got 3"):
         ours.step_api_compatibility((0, 1.0, {}))
     with pytest.raises(TypeError, match="expects `infos` to be a list or dict"):
         ours.convert_to_terminated_truncated_step_api((0, 0, np.array([F]), "info"), True)
