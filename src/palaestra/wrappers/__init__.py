@@ -29,6 +29,7 @@ _LAZY: dict[str, str] = {
     "ReshapeObservation": "transform_observation",
     "RescaleObservation": "transform_observation",
     "DtypeObservation": "transform_observation",
+    "AddRenderObservation": "transform_observation",
     "DiscretizeObservation": "discretize",
     "ResizeObservation": "resize",
     "DelayObservation": "stateful_observation",
