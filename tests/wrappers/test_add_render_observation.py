@@ -86,5 +86,5 @@ def test_bad_render_modes() -> None:
         def render(self) -> Any:
             return [[0]]
 
-    with pytest.raises(TypeError, match="expects env.render.. to return a numpy array"):
+    with pytest.raises(TypeError, match=r"expects env.render\(\) to return a numpy array"):
         AddRenderObservation(NoFrame())
