@@ -51,10 +51,8 @@ NOT_YET = {
     "gymnasium.wrappers.vector": {
         "HumanRendering",
         "RecordVideo",
-        "ArrayConversion",
-        "JaxToNumpy",
+        "JaxToNumpy",  # palaestra has no jax dependency
         "JaxToTorch",
-        "NumpyToTorch",
     },
     "stable_baselines3.common.callbacks": {"LogEveryNTimesteps"},
 }

@@ -1,4 +1,9 @@
-"""Wrappers for vector environments (``gymnasium.wrappers.vector``)."""
+"""Wrappers for vector environments (``gymnasium.wrappers.vector``).
+
+``ArrayConversion`` and ``NumpyToTorch`` are loaded on first use (they may import torch).
+"""
+
+from typing import Any
 
 from palaestra.vector.wrappers.episode_stats import DictInfoToList, RecordEpisodeStatistics
 from palaestra.vector.wrappers.normalize import NormalizeObservation, NormalizeReward
@@ -24,6 +29,7 @@ from palaestra.vector.wrappers.vectorize import (
 )
 
 __all__ = [
+    "ArrayConversion",
     "ClipAction",
     "ClipReward",
     "DictInfoToList",
@@ -33,6 +39,7 @@ __all__ = [
     "GrayscaleObservation",
     "NormalizeObservation",
     "NormalizeReward",
+    "NumpyToTorch",
     "RecordEpisodeStatistics",
     "RescaleAction",
     "RescaleObservation",
@@ -45,3 +52,14 @@ __all__ = [
     "VectorizeTransformObservation",
     "VectorizeTransformReward",
 ]
+
+
+LAZY_NAMES = ("ArrayConversion", "NumpyToTorch")
+
+
+def __getattr__(name: str) -> Any:  # PEP 562: keep torch out of `import palaestra.vector`
+    if name in LAZY_NAMES:
+        from palaestra.vector.wrappers import array_conversion
+
+        return getattr(array_conversion, name)
+    raise AttributeError(f"module 'palaestra.vector.wrappers' has no attribute {name!r}")
