@@ -49,8 +49,6 @@ def test_readme_import_map_path_resolves(path):
 NOT_YET = {
     "stable_baselines3.common.vec_env": {"VecEnvWrapperT"},
     "gymnasium.wrappers.vector": {
-        "HumanRendering",
-        "RecordVideo",
         "JaxToNumpy",  # palaestra has no jax dependency
         "JaxToTorch",
     },

@@ -7,6 +7,7 @@ from typing import Any
 
 from palaestra.vector.wrappers.episode_stats import DictInfoToList, RecordEpisodeStatistics
 from palaestra.vector.wrappers.normalize import NormalizeObservation, NormalizeReward
+from palaestra.vector.wrappers.rendering import HumanRendering, RecordVideo
 from palaestra.vector.wrappers.transforms import (
     ClipReward,
     TransformAction,
@@ -37,10 +38,12 @@ __all__ = [
     "FilterObservation",
     "FlattenObservation",
     "GrayscaleObservation",
+    "HumanRendering",
     "NormalizeObservation",
     "NormalizeReward",
     "NumpyToTorch",
     "RecordEpisodeStatistics",
+    "RecordVideo",
     "RescaleAction",
     "RescaleObservation",
     "ReshapeObservation",
