@@ -152,7 +152,7 @@ def test_record_video_writes_files(tmp_path: Path) -> None:
 
 
 def test_bad_render_modes() -> None:
-    with pytest.raises(ValueError, match="Expected env.render_mode to be one of"):
+    with pytest.raises(ValueError, match=r"Expected env\.render_mode to be one of"):
         HumanRendering(SyncVectorEnv([lambda: gym.make("CartPole-v1")]))
     with pytest.raises(ValueError, match="incompatible with RecordVideo"):
         RecordVideo(SyncVectorEnv([lambda: gym.make("CartPole-v1")]), "unused")
