@@ -52,7 +52,6 @@ NOT_YET = {
         "JaxToNumpy",  # palaestra has no jax dependency
         "JaxToTorch",
     },
-    "stable_baselines3.common.callbacks": {"LogEveryNTimesteps"},
 }
 
 

@@ -200,7 +200,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
             self._collected_episodes += 1
             self._episode_num += 1
             if log_interval is not None and self._episode_num % log_interval == 0:
-                self._dump_logs()
+                self.dump_logs()
         return running
 
     def _on_env_reset(self, restart: bool) -> None:
@@ -230,7 +230,9 @@ class OffPolicyAlgorithm(BaseAlgorithm):
                 next_obs[idx] = terminal
         return next_obs, timeouts
 
-    def _dump_logs(self) -> None:
+    def dump_logs(self) -> None:
+        """Write the episode count and statistics, fps and what was recorded since the last
+        dump (SB3's ``dump_logs``)."""
         self.logger.record("time/episodes", self._episode_num, exclude="tensorboard")
         self._record_episode_stats()
         self.logger.dump(step=self.num_timesteps)

@@ -152,12 +152,18 @@ class OnPolicyAlgorithm(BaseAlgorithm):
                 iteration += 1
                 self._update_progress()
                 if log_interval is not None and iteration % log_interval == 0:
-                    self.logger.record("time/iterations", iteration, exclude="tensorboard")
-                    self._record_episode_stats()
-                    self.logger.dump(step=self.num_timesteps)
+                    self.dump_logs(iteration)
                 self.train()
                 self.rollout_buffer.reset()
         callback.on_training_end()
+
+    def dump_logs(self, iteration: int = 0) -> None:
+        """Write the episode statistics, fps and what was recorded since the last dump
+        (SB3's ``dump_logs``; ``iteration > 0`` also logs ``time/iterations``)."""
+        if iteration > 0:
+            self.logger.record("time/iterations", iteration, exclude="tensorboard")
+        self._record_episode_stats()
+        self.logger.dump(step=self.num_timesteps)
 
     def _on_env_reset(self, restart: bool) -> None:
         self.rollout_buffer.reset()  # a partial rollout only continues its own episodes
