@@ -99,10 +99,11 @@ def excluded_names(exclude: Any, include: Any) -> set[str]:
             raise TypeError(f"{what} must be a list of attribute names, got {value!r:.80}")
         names.append(set(value))
     dropped, kept = names
-    for name in sorted(kept & set(_NEVER_SAVED)):
+    unsavable = sorted(kept & set(_NEVER_SAVED))
+    if unsavable:
         raise ValueError(
-            f"include={sorted(kept)!r}: palaestra model files never hold {_NEVER_SAVED[name]}; "
-            "they are JSON and arrays, never pickled objects"
+            f"include={sorted(kept)!r}: palaestra model files never hold "
+            f"{_NEVER_SAVED[unsavable[0]]}; they are JSON and arrays, never pickled objects"
         )
     return {_ALIASES.get(n, n) for n in dropped - kept}
 
