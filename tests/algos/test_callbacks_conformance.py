@@ -230,3 +230,39 @@ def test_event_callback_triggers_its_child_as_sb3():
 
 def _sb3_count():
     return type("C", (sb3_callbacks.BaseCallback,), {"_on_step": lambda self: True})()
+
+
+@pytest.mark.parametrize("algo", ["PPO", "DQN"])
+def test_log_every_n_timesteps_dumps_as_sb3(tmp_path, algo):
+    """SB3's ``LogEveryNTimesteps``: ``model.dump_logs()`` every n env steps (the rows of a
+    CSV logger with the algorithm's own dumps switched off)."""
+    import csv
+
+    import gymnasium
+    import stable_baselines3 as sb3
+    from stable_baselines3.common.callbacks import LogEveryNTimesteps as SB3Log
+    from stable_baselines3.common.logger import configure as sb3_configure
+
+    from palaestra import algos
+    from palaestra.algos.callbacks import LogEveryNTimesteps
+    from palaestra.algos.logger import configure
+
+    kwargs = (
+        {"n_steps": 32, "batch_size": 32, "n_epochs": 1}
+        if algo == "PPO"
+        else {"learning_starts": 50, "buffer_size": 500}
+    )
+    rows = []
+    for lib, env, callback, make_logger in [
+        (algos, "CartPole-v1", LogEveryNTimesteps(50), configure),
+        (sb3, gymnasium.make("CartPole-v1"), SB3Log(50), sb3_configure),
+    ]:
+        model = getattr(lib, algo)("MlpPolicy", env, seed=0, **kwargs)
+        folder = tmp_path / lib.__name__
+        model.set_logger(make_logger(str(folder), ["csv"]))
+        model.learn(256, callback=callback, log_interval=None)
+        with open(folder / "progress.csv") as f:
+            table = list(csv.DictReader(f))
+        rows.append((len(table), [int(r["time/total_timesteps"]) for r in table]))
+    assert rows[0] == rows[1]
+    assert rows[0][0] >= 4

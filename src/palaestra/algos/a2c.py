@@ -33,7 +33,7 @@ class A2C(OnPolicyAlgorithm):
 
     def __init__(
         self,
-        policy: str,
+        policy: str | type,
         env: Any,
         learning_rate: float | Schedule = 7e-4,
         n_steps: int = 5,

@@ -43,6 +43,7 @@ from palaestra.algos.eager_optimizer import build_optimizer
 from palaestra.algos.learners import Group, Learner, Net, build_learner
 from palaestra.algos.logger import HumanOutputFormat, Logger, configure
 from palaestra.algos.policies import extractor_class
+from palaestra.algos.preprocessing import check_for_nested_spaces
 from palaestra.algos.schedules import Schedule
 from palaestra.algos.spaces_util import is_image_space, is_vectorized_observation
 from palaestra.core import Env, Wrapper
@@ -50,7 +51,7 @@ from palaestra.core import Env, Wrapper
 __all__ = ["BaseAlgorithm", "resolve_device"]
 
 
-def resolve_device(device: torch.device | str, policy: str) -> torch.device:
+def resolve_device(device: torch.device | str, policy: str | type) -> torch.device:
     """``"auto"``: cuda for CNN policies when available, else the CPU; anything else as given."""
     if device == "auto":
         # CNNs gain from a GPU; small MLPs are faster on the CPU (no transfers per step).
@@ -68,6 +69,8 @@ class BaseAlgorithm:
     implement ``learn`` and ``_predict``."""
 
     supported_action_spaces: tuple[type, ...] = ()
+    # Policy classes the algorithm takes in place of a name (PPO/A2C: ActorCriticPolicy)
+    _policy_class_base: type | None = None
     _extra_counters: tuple[str, ...] = ()
     lr_schedule: Schedule
     learner: Learner
@@ -107,7 +110,7 @@ class BaseAlgorithm:
 
     def _init_common(
         self,
-        policy: str,
+        policy: str | type,
         env: Any,
         policy_kwargs: dict[str, Any] | None,
         verbose: int,
@@ -117,6 +120,19 @@ class BaseAlgorithm:
         num_threads: int | None,
         stats_window_size: int = 100,
     ) -> None:
+        if isinstance(policy, type):
+            base = self._policy_class_base
+            if base is None or not issubclass(policy, base):
+                takes = (
+                    "a policy name"
+                    if base is None
+                    else f"a policy name or an {base.__name__} subclass"
+                )
+                raise ValueError(
+                    f"{type(self).__name__} takes {takes} ('MlpPolicy', 'CnnPolicy', "
+                    f"'MultiInputPolicy'), got the class {policy.__name__}; custom networks "
+                    "go in policy_kwargs (features_extractor_class=..., net_arch=...)"
+                )
         extractor_class(policy)  # unknown names fail here, before any env work
         self.policy_name, self.policy_kwargs = policy, dict(policy_kwargs or {})
         self.verbose, self.seed, self.tensorboard_log = verbose, seed, tensorboard_log
@@ -150,6 +166,15 @@ class BaseAlgorithm:
                 self.env.action_space,
             )
             self.n_envs = self.env.num_envs
+            check_for_nested_spaces(self.observation_space)
+            # SB3 catches the common mistake the same way (a Dict would flatten to nonsense)
+            if policy in ("MlpPolicy", "CnnPolicy") and isinstance(
+                self.observation_space, spaces.Dict
+            ):
+                raise ValueError(
+                    "You must use `MultiInputPolicy` when working with dict observation space, "
+                    f"not {policy}"
+                )
             if not isinstance(self.action_space, self.supported_action_spaces):
                 names = ", ".join(s.__name__ for s in self.supported_action_spaces)
                 raise error.UnsupportedSpace(
@@ -185,6 +210,13 @@ class BaseAlgorithm:
     def get_env(self) -> Any:
         """The VecEnv being trained on (None for a model loaded without one)."""
         return self.env
+
+    def get_vec_normalize_env(self) -> Any:
+        """The ``VecNormalize`` layer of the training env, or None (SB3's
+        ``get_vec_normalize_env``: e.g. to save its statistics next to the model)."""
+        from palaestra.vec_env import unwrap_vec_normalize
+
+        return None if self.env is None else unwrap_vec_normalize(self.env)
 
     def set_env(self, env: Any, force_reset: bool = True) -> None:
         """Train on another env with the same spaces (SB3: ``ValueError`` when they differ)."""
@@ -236,7 +268,7 @@ class BaseAlgorithm:
         return build_optimizer(optimizer_class, params, lr=lr, **kwargs)
 
     # -- device, seeding ---------------------------------------------------------------------
-    def _resolve_device(self, device: torch.device | str, policy: str) -> torch.device:
+    def _resolve_device(self, device: torch.device | str, policy: str | type) -> torch.device:
         return resolve_device(device, policy)
 
     def set_random_seed(self, seed: int | None = None) -> None:
@@ -441,8 +473,13 @@ class BaseAlgorithm:
 
     # -- persistence: see saving.py ------------------------------------------------------------
     def save(self, path: Any, exclude: Any = None, include: Any = None) -> None:
-        """Write the model (hyperparameters, spaces, weights, optimizer, counters) as a zip."""
-        saving.save_model(self, path)
+        """Write the model (hyperparameters, spaces, weights, optimizer, counters) as a zip.
+
+        ``exclude``: attribute names to leave out (SB3's ``save``: hyperparameters such as
+        ``"verbose"``, schedules, counters, ``"policy_kwargs"``...; a loaded model gets the
+        constructor's defaults for them); ``include`` takes names back out of ``exclude``.
+        Weights and optimizer states are always written."""
+        saving.save_model(self, path, exclude, include)
 
     @classmethod
     def load(
@@ -471,7 +508,12 @@ class BaseAlgorithm:
     def set_parameters(
         self, load_path_or_dict: Any, exact_match: bool = True, device: torch.device | str = "auto"
     ) -> None:
-        """Load parameters from ``get_parameters()`` output or from a model file."""
+        """Load parameters from ``get_parameters()`` output or from a model file.
+
+        With ``exact_match`` (SB3's default) every object of ``get_parameters()`` must be
+        given, and each module's parameters exactly: ``ValueError`` otherwise, raised before
+        anything is changed. A name that is not an object of the model is always a
+        ``ValueError``."""
         saving.set_parameters(self, load_path_or_dict, exact_match)
 
     def _uses_images(self) -> bool:

@@ -26,6 +26,7 @@ __all__ = [
     "EvalCallback",
     "EventCallback",
     "EveryNTimesteps",
+    "LogEveryNTimesteps",
     "ProgressBarCallback",
     "StopTrainingOnMaxEpisodes",
     "StopTrainingOnNoModelImprovement",
@@ -214,6 +215,17 @@ class EveryNTimesteps(BaseCallback):
 
     def update_child_locals(self, locals_: dict[str, Any]) -> None:
         self.callback.update_locals(locals_)
+
+
+class LogEveryNTimesteps(EveryNTimesteps):
+    """Dump the model's logs every ``n_steps`` env steps (``model.dump_logs()``, as SB3)."""
+
+    def __init__(self, n_steps: int) -> None:
+        super().__init__(n_steps, callback=convert_callback(self._log_data))
+
+    def _log_data(self, _locals: dict[str, Any], _globals: dict[str, Any]) -> bool:
+        self.model.dump_logs()
+        return True
 
 
 class StopTrainingOnMaxEpisodes(BaseCallback):

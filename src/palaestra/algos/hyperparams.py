@@ -430,7 +430,7 @@ def check_model_file(algo: str, meta: Any, source: str) -> None:
             )
         _check_schedule(name, data, SCHEDULES[algo][name], source)
     _check_policy_kwargs(algo, meta.get("policy_kwargs", {}), source)
-    problem = _integer(1, MAX_N_ENVS)(meta.get("n_envs"))
+    problem = _integer(1, MAX_N_ENVS)(meta.get("n_envs", 1))  # absent: save(exclude=...)
     if problem is not None:
         raise ModelFileError(
             f"{source}: n_envs={_short(meta.get('n_envs'))} is refused: expected {problem}"

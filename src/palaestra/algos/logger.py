@@ -17,6 +17,7 @@ when the ``tensorboard`` package is installed.
 
 from __future__ import annotations
 
+import json
 import os
 import sys
 import tempfile
@@ -29,9 +30,83 @@ import numpy as np
 from palaestra.error import dependency_not_installed
 from palaestra.utils.atomic_write import atomic_write, complete_text
 
-__all__ = ["CSVOutputFormat", "HumanOutputFormat", "Logger", "TensorBoardOutputFormat", "configure"]
+__all__ = [
+    "CSVOutputFormat",
+    "Figure",
+    "FormatUnsupportedError",
+    "HParam",
+    "HumanOutputFormat",
+    "Image",
+    "JSONOutputFormat",
+    "Logger",
+    "TensorBoardOutputFormat",
+    "Video",
+    "configure",
+    "make_output_format",
+]
 
 Exclude = str | tuple[str, ...] | None
+
+
+# -- values only TensorBoard shows (SB3's classes): record them with
+# ``exclude=("stdout", "log", "json", "csv")``, the other outputs refuse them ------------------
+class Video:
+    """Frames ``[N, T, C, H, W]`` (a tensor) shown at ``fps`` (TensorBoard's ``add_video``)."""
+
+    def __init__(self, frames: Any, fps: float) -> None:
+        self.frames, self.fps = frames, fps
+
+
+class Figure:
+    """A matplotlib figure; ``close``: close it once logged."""
+
+    def __init__(self, figure: Any, close: bool) -> None:
+        self.figure, self.close = figure, close
+
+
+class Image:
+    """An image array or tensor with its layout (``"HWC"`` for env frames, ``"CHW"`` ...)."""
+
+    def __init__(self, image: Any, dataformats: str) -> None:
+        self.image, self.dataformats = image, dataformats
+
+
+class HParam:
+    """Hyperparameters and the metrics TensorBoard's HPARAMS tab shows beside them."""
+
+    def __init__(self, hparam_dict: dict[str, Any], metric_dict: dict[str, float]) -> None:
+        if not metric_dict:
+            # SB3 raises a bare Exception with these words; a ValueError is still one
+            raise ValueError(
+                "`metric_dict` must not be empty to display hyperparameters to the HPARAMS "
+                "tensorboard tab."
+            )
+        self.hparam_dict, self.metric_dict = hparam_dict, metric_dict
+
+
+_RICH = {Video: "video", Figure: "figure", Image: "image", HParam: "hparam"}
+
+
+class FormatUnsupportedError(NotImplementedError):
+    """An output cannot show a recorded value (SB3's error and words)."""
+
+    def __init__(self, unsupported_formats: list[str], value_description: str) -> None:
+        if len(unsupported_formats) > 1:
+            where = f"formats {', '.join(unsupported_formats)} are"
+        else:
+            where = f"format {unsupported_formats[0]} is"
+        super().__init__(
+            f"The {where} not supported for the {value_description} value logged.\n"
+            "You can exclude formats via the `exclude` parameter of the logger's `record` "
+            "function."
+        )
+
+
+def _refuse_rich(values: dict[str, Any], formats: list[str]) -> None:
+    for key in sorted(values):
+        kind = _RICH.get(type(values[key]))
+        if kind is not None:
+            raise FormatUnsupportedError(formats, kind)
 
 
 class HumanOutputFormat:
@@ -46,6 +121,7 @@ class HumanOutputFormat:
         return text if len(text) <= self.max_length else text[: self.max_length - 3] + "..."
 
     def write(self, values: dict[str, Any], step: int) -> None:
+        _refuse_rich(values, ["stdout", "log"])
         rows: list[tuple[str, str]] = []
         tag = ""
         for key in sorted(values):
@@ -92,6 +168,7 @@ class CSVOutputFormat:
         self.keys: list[str] = []
 
     def write(self, values: dict[str, Any], step: int) -> None:
+        _refuse_rich(values, ["csv"])
         extra = [k for k in values if k not in self.keys]
         if extra:
             self.keys.extend(extra)
@@ -120,8 +197,36 @@ class CSVOutputFormat:
         self.file.close()
 
 
+class JSONOutputFormat:
+    """``progress.json``: one JSON object per dump (numpy values as numbers or lists)."""
+
+    def __init__(self, filename: str) -> None:
+        with atomic_write(filename, "w", encoding="utf-8"):
+            pass  # a fresh, empty file; rows are appended and flushed, as the CSV's
+        self.file = open(filename, "a", encoding="utf-8")
+
+    def write(self, values: dict[str, Any], step: int) -> None:
+        _refuse_rich(values, ["json"])
+        row = {k: _json_value(v) for k, v in values.items()}
+        self.file.write(json.dumps(row) + "\n")
+        self.file.flush()
+
+    def close(self) -> None:
+        self.file.close()
+
+
+def _json_value(value: Any) -> Any:
+    """numpy scalars and one-element arrays as numbers, other arrays as (nested) lists."""
+    if hasattr(value, "dtype"):
+        array = np.asarray(value)
+        return float(array.item()) if array.size == 1 else array.tolist()
+    return value
+
+
 class TensorBoardOutputFormat:
-    """Scalars to TensorBoard through ``torch.utils.tensorboard`` (needs ``tensorboard``)."""
+    """Scalars, text, histograms (arrays, tensors) and SB3's ``Video``/``Figure``/``Image``/
+    ``HParam`` values to TensorBoard through ``torch.utils.tensorboard`` (needs
+    ``tensorboard``)."""
 
     def __init__(self, folder: str) -> None:
         try:
@@ -131,19 +236,40 @@ class TensorBoardOutputFormat:
         self.writer = SummaryWriter(log_dir=folder)
 
     def write(self, values: dict[str, Any], step: int) -> None:
-        for key, value in values.items():
-            if isinstance(value, (int, float, np.number)) and not isinstance(value, bool):
+        import torch
+
+        for key in sorted(values):
+            value = values[key]
+            if isinstance(value, str):
+                self.writer.add_text(key, value, step)
+            elif isinstance(value, (int, float, np.generic)):  # SB3: bools too
                 self.writer.add_scalar(key, value, step)
+            elif isinstance(value, (np.ndarray, torch.Tensor)):
+                self.writer.add_histogram(key, torch.as_tensor(value), step)
+            elif isinstance(value, Video):
+                self.writer.add_video(key, value.frames, step, value.fps)
+            elif isinstance(value, Figure):
+                self.writer.add_figure(key, value.figure, step, close=value.close)
+            elif isinstance(value, Image):
+                self.writer.add_image(key, value.image, step, dataformats=value.dataformats)
+            elif isinstance(value, HParam):
+                # written into this run's folder (add_hparams would open a sub-folder)
+                from torch.utils.tensorboard.summary import hparams
+
+                file_writer: Any = self.writer.file_writer
+                for summary in hparams(value.hparam_dict, metric_dict=value.metric_dict):
+                    file_writer.add_summary(summary)
         self.writer.flush()
 
     def close(self) -> None:
         self.writer.close()
 
 
-OutputFormat = HumanOutputFormat | CSVOutputFormat | TensorBoardOutputFormat
+OutputFormat = HumanOutputFormat | CSVOutputFormat | JSONOutputFormat | TensorBoardOutputFormat
 _FORMAT_NAMES = {
     HumanOutputFormat: "stdout",
     CSVOutputFormat: "csv",
+    JSONOutputFormat: "json",
     TensorBoardOutputFormat: "tensorboard",
 }
 
@@ -196,24 +322,30 @@ class Logger:
             fmt.close()
 
 
+def make_output_format(_format: str, log_dir: str, log_suffix: str = "") -> OutputFormat:
+    """One output (SB3's ``make_output_format``): ``stdout``, ``log`` (``log{suffix}.txt``),
+    ``json``/``csv`` (``progress{suffix}.json``/``.csv``) or ``tensorboard``, in ``log_dir``."""
+    os.makedirs(log_dir, exist_ok=True)
+    if _format == "stdout":
+        return HumanOutputFormat(sys.stdout)
+    if _format == "log":
+        return HumanOutputFormat(os.path.join(log_dir, f"log{log_suffix}.txt"))
+    if _format == "json":
+        return JSONOutputFormat(os.path.join(log_dir, f"progress{log_suffix}.json"))
+    if _format == "csv":
+        return CSVOutputFormat(os.path.join(log_dir, f"progress{log_suffix}.csv"))
+    if _format == "tensorboard":
+        return TensorBoardOutputFormat(log_dir)
+    raise ValueError(f"Unknown format specified: {_format!r} (stdout, log, json, csv, tensorboard)")
+
+
 def configure(folder: str | None = None, format_strings: list[str] | None = None) -> Logger:
-    """SB3's ``configure``: outputs among ``stdout``, ``csv``, ``tensorboard`` (``log`` is
-    ``log.txt``) in ``folder`` (default: a fresh temp dir)."""
+    """SB3's ``configure``: outputs among ``stdout``, ``log``, ``json``, ``csv``,
+    ``tensorboard`` in ``folder`` (default: a fresh temp dir)."""
     if format_strings is None:
         format_strings = ["stdout", "log", "csv"]
     if folder is None:
         folder = os.path.join(tempfile.gettempdir(), time.strftime("palaestra-%Y-%m-%d-%H-%M-%S"))
+    formats = [make_output_format(name, folder) for name in filter(None, format_strings)]
     os.makedirs(folder, exist_ok=True)
-    formats: list[Any] = []
-    for name in filter(None, format_strings):
-        if name == "stdout":
-            formats.append(HumanOutputFormat(sys.stdout))
-        elif name == "log":
-            formats.append(HumanOutputFormat(os.path.join(folder, "log.txt")))
-        elif name == "csv":
-            formats.append(CSVOutputFormat(os.path.join(folder, "progress.csv")))
-        elif name == "tensorboard":
-            formats.append(TensorBoardOutputFormat(folder))
-        else:
-            raise ValueError(f"Unknown format specified: {name!r} (stdout, log, csv, tensorboard)")
     return Logger(folder, formats)

@@ -20,7 +20,9 @@ __all__ = [
     "BaseFeaturesExtractor",
     "CombinedExtractor",
     "FlattenExtractor",
+    "MlpExtractor",
     "NatureCNN",
+    "extractor_space",
     "mlp",
     "preprocess_obs",
     "preprocessed_dim",
@@ -65,12 +67,72 @@ def preprocessed_dim(space: spaces.Space[Any]) -> int:
 
 
 class BaseFeaturesExtractor(nn.Module):
-    """Maps a preprocessed observation batch to ``[B, features_dim]``."""
+    """Maps a preprocessed observation batch to ``[B, features_dim]``.
 
-    def __init__(self, observation_space: spaces.Space[Any], features_dim: int) -> None:
+    SB3's base class: a subclass may set ``self._features_dim`` after ``__init__`` (SB3's
+    custom-policy guide does), ``features_dim`` reads it. Images reach ``forward`` as CHW
+    floats and ``observation_space`` describes them so (SB3's ``VecTransposeImage`` view),
+    whatever layout the env has (see ``extractor_space``)."""
+
+    def __init__(self, observation_space: spaces.Space[Any], features_dim: int = 0) -> None:
         super().__init__()
+        if isinstance(features_dim, bool) or not isinstance(features_dim, int) or features_dim < 1:
+            raise ValueError(f"features_dim must be a positive integer, got {features_dim!r}")
         self.observation_space = observation_space
-        self.features_dim = features_dim
+        self._features_dim = features_dim
+
+    @property
+    def features_dim(self) -> int:
+        """The width of the features this extractor outputs."""
+        return self._features_dim
+
+
+def extractor_space(space: spaces.Space[Any]) -> spaces.Space[Any]:
+    """The space a features extractor is built for: channel-last image boxes as CHW (the
+    layout ``preprocess_obs`` hands the extractor, and what SB3's ``VecTransposeImage`` shows
+    SB3's extractors), Dict spaces key by key, anything else as it is."""
+    if isinstance(space, spaces.Dict):
+        return spaces.Dict({k: extractor_space(s) for k, s in space.spaces.items()})
+    if isinstance(space, spaces.Box) and is_image_space(space):
+        if not is_image_space_channels_first(space):
+            order = (2, 0, 1)
+            low, high = space.low.transpose(order), space.high.transpose(order)
+            return spaces.Box(low, high, low.shape, space.dtype)
+    return space
+
+
+class MlpExtractor(nn.Module):
+    """SB3's actor and critic MLPs over the features: ``net_arch`` a list (both) or
+    ``dict(pi=[...], vf=[...])``; ``latent_dim_pi``/``latent_dim_vf`` are their widths
+    (the features' width where a list is empty)."""
+
+    def __init__(
+        self,
+        feature_dim: int,
+        net_arch: list[int] | dict[str, list[int]],
+        activation_fn: type[nn.Module],
+        device: torch.device | str = "auto",
+    ) -> None:
+        super().__init__()
+        if isinstance(net_arch, dict):
+            pi_arch, vf_arch = list(net_arch.get("pi", [])), list(net_arch.get("vf", []))
+        else:
+            pi_arch = vf_arch = list(net_arch)
+        self.policy_net = mlp(feature_dim, pi_arch, activation_fn)
+        self.value_net = mlp(feature_dim, vf_arch, activation_fn)
+        self.latent_dim_pi = pi_arch[-1] if pi_arch else feature_dim
+        self.latent_dim_vf = vf_arch[-1] if vf_arch else feature_dim
+        if device != "auto":
+            self.to(device)
+
+    def forward(self, features: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        return self.forward_actor(features), self.forward_critic(features)
+
+    def forward_actor(self, features: torch.Tensor) -> torch.Tensor:
+        return self.policy_net(features)
+
+    def forward_critic(self, features: torch.Tensor) -> torch.Tensor:
+        return self.value_net(features)
 
 
 class FlattenExtractor(BaseFeaturesExtractor):

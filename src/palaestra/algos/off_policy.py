@@ -200,7 +200,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
             self._collected_episodes += 1
             self._episode_num += 1
             if log_interval is not None and self._episode_num % log_interval == 0:
-                self._dump_logs()
+                self.dump_logs()
         return running
 
     def _on_env_reset(self, restart: bool) -> None:
@@ -230,7 +230,9 @@ class OffPolicyAlgorithm(BaseAlgorithm):
                 next_obs[idx] = terminal
         return next_obs, timeouts
 
-    def _dump_logs(self) -> None:
+    def dump_logs(self) -> None:
+        """Write the episode count and statistics, fps and what was recorded since the last
+        dump (SB3's ``dump_logs``)."""
         self.logger.record("time/episodes", self._episode_num, exclude="tensorboard")
         self._record_episode_stats()
         self.logger.dump(step=self.num_timesteps)
@@ -238,7 +240,8 @@ class OffPolicyAlgorithm(BaseAlgorithm):
     # -- persistence ---------------------------------------------------------------------------
     def save_replay_buffer(self, path: Any) -> None:
         """Write the replay buffer (pickle-free zip, like model files)."""
-        assert self.replay_buffer is not None
+        if self.replay_buffer is None:
+            raise ValueError("this model has no replay buffer to save (replay_buffer is None)")
         meta, arrays = self.replay_buffer.state()
         model_io.write_archive(path, "replay_buffer", meta, arrays)
 
@@ -248,7 +251,11 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         """Restore a buffer written by ``save_replay_buffer`` (its n_envs must match).
 
         A file may hold at most what this model's buffer holds (``max_bytes`` overrides that
-        bound): a crafted file cannot make the reader allocate more than the buffer itself."""
+        bound): a crafted file cannot make the reader allocate more than the buffer itself.
+        A model whose ``replay_buffer`` is None (set so to free memory) gets a new one with
+        its settings first, as SB3 sets the loaded buffer."""
+        if self.replay_buffer is None:
+            self._make_replay_buffer()
         assert self.replay_buffer is not None
         limit = self.replay_buffer.nbytes() + (1 << 20) if max_bytes is None else max_bytes
         meta, arrays = model_io.read_archive(path, "replay_buffer", max_bytes=limit)

@@ -20,7 +20,7 @@ from palaestra.algos.action_noise import (
 )
 from palaestra.algos.continuous_policies import ContinuousCritic, split_net_arch
 from palaestra.algos.learners import Net
-from palaestra.algos.networks import BaseFeaturesExtractor
+from palaestra.algos.networks import BaseFeaturesExtractor, extractor_space
 from palaestra.algos.off_policy import OffPolicyAlgorithm
 from palaestra.algos.policies import _numpy_input_problem, extractor_class
 
@@ -129,7 +129,7 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
 
     def _new_extractor(self) -> BaseFeaturesExtractor:
         _, cls, kwargs, *_ = self._parts()
-        extractor: BaseFeaturesExtractor = cls(self.observation_space, **kwargs)
+        extractor: BaseFeaturesExtractor = cls(extractor_space(self.observation_space), **kwargs)
         return extractor
 
     def _critic(self, shared: BaseFeaturesExtractor | None) -> ContinuousCritic:

@@ -17,7 +17,7 @@ import torch
 from palaestra import spaces
 from palaestra.algos.base import BaseAlgorithm
 from palaestra.algos.learners import Group, Net
-from palaestra.algos.policies import ActorCritic, extractor_class
+from palaestra.algos.policies import ActorCritic, ActorCriticPolicy, extractor_class
 from palaestra.algos.rollout_buffer import RolloutBuffer
 
 __all__ = ["OnPolicyAlgorithm"]
@@ -36,6 +36,7 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         spaces.MultiDiscrete,
         spaces.MultiBinary,
     )
+    _policy_class_base = ActorCriticPolicy
     policy: ActorCritic
     n_steps: int
     gamma: float
@@ -57,7 +58,15 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         optimizer_class, optimizer_kwargs = self._optimizer_choice(kwargs)
         backend = kwargs.pop("backend", "auto")
         kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
-        policy = ActorCritic(self.observation_space, self.action_space, **kwargs).to(self.device)
+        policy: ActorCritic
+        if isinstance(self.policy_name, type):  # an ActorCriticPolicy subclass (SB3's guide)
+            policy_class: Any = self.policy_name
+            policy = policy_class(
+                self.observation_space, self.action_space, self.lr_schedule, **kwargs
+            )
+        else:
+            policy = ActorCritic(self.observation_space, self.action_space, **kwargs)
+        policy = policy.to(self.device)
         params = list(policy.parameters())
         optimizer = self._make_optimizer(params, optimizer_class, optimizer_kwargs)
         pi_modules, vf_modules, why = policy.mlp_modules()
@@ -143,12 +152,18 @@ class OnPolicyAlgorithm(BaseAlgorithm):
                 iteration += 1
                 self._update_progress()
                 if log_interval is not None and iteration % log_interval == 0:
-                    self.logger.record("time/iterations", iteration, exclude="tensorboard")
-                    self._record_episode_stats()
-                    self.logger.dump(step=self.num_timesteps)
+                    self.dump_logs(iteration)
                 self.train()
                 self.rollout_buffer.reset()
         callback.on_training_end()
+
+    def dump_logs(self, iteration: int = 0) -> None:
+        """Write the episode statistics, fps and what was recorded since the last dump
+        (SB3's ``dump_logs``; ``iteration > 0`` also logs ``time/iterations``)."""
+        if iteration > 0:
+            self.logger.record("time/iterations", iteration, exclude="tensorboard")
+        self._record_episode_stats()
+        self.logger.dump(step=self.num_timesteps)
 
     def _on_env_reset(self, restart: bool) -> None:
         self.rollout_buffer.reset()  # a partial rollout only continues its own episodes

@@ -15,13 +15,21 @@ from palaestra.algos.networks import (
     BaseFeaturesExtractor,
     CombinedExtractor,
     FlattenExtractor,
+    MlpExtractor,
     NatureCNN,
+    extractor_space,
     mlp,
     preprocess_obs,
 )
 from palaestra.algos.spaces_util import is_image_space
 
-__all__ = ["POLICY_EXTRACTORS", "ActorCritic", "QNetwork", "extractor_class"]
+__all__ = [
+    "POLICY_EXTRACTORS",
+    "ActorCritic",
+    "ActorCriticPolicy",
+    "QNetwork",
+    "extractor_class",
+]
 
 POLICY_EXTRACTORS: dict[str, type[BaseFeaturesExtractor]] = {
     "MlpPolicy": FlattenExtractor,
@@ -31,7 +39,10 @@ POLICY_EXTRACTORS: dict[str, type[BaseFeaturesExtractor]] = {
 
 
 def extractor_class(policy: Any) -> type[BaseFeaturesExtractor]:
-    """The default features extractor of a policy name; ``ValueError`` for anything else."""
+    """The default features extractor of a policy name (``FlattenExtractor`` for an
+    ``ActorCriticPolicy`` subclass, as SB3's); ``ValueError`` for anything else."""
+    if isinstance(policy, type) and issubclass(policy, ActorCriticPolicy):
+        return FlattenExtractor
     if not isinstance(policy, str) or policy not in POLICY_EXTRACTORS:
         raise ValueError(
             f"Policy {policy!r} unknown: use one of {', '.join(map(repr, POLICY_EXTRACTORS))}"
@@ -56,7 +67,7 @@ class QNetwork(nn.Module):
         super().__init__()
         self.observation_space, self.normalize_images = observation_space, normalize_images
         self.features_extractor = features_extractor_class(
-            observation_space, **(features_extractor_kwargs or {})
+            extractor_space(observation_space), **(features_extractor_kwargs or {})
         )
         if net_arch is None:
             net_arch = [] if features_extractor_class is NatureCNN else [64, 64]
@@ -129,32 +140,55 @@ class ActorCritic(nn.Module):
         normalize_images: bool = True,
     ) -> None:
         super().__init__()
-        self.observation_space, self.normalize_images = observation_space, normalize_images
+        self.observation_space, self.action_space = observation_space, action_space
+        self.normalize_images, self.ortho_init = normalize_images, ortho_init
+        self.net_arch, self.activation_fn = net_arch, activation_fn
         kwargs = features_extractor_kwargs or {}
-        self.features_extractor = features_extractor_class(observation_space, **kwargs)
+        space = extractor_space(observation_space)
+        self.features_extractor = features_extractor_class(space, **kwargs)
         self.vf_features_extractor = (
-            None
-            if share_features_extractor
-            else features_extractor_class(observation_space, **kwargs)
+            None if share_features_extractor else features_extractor_class(space, **kwargs)
         )
-        pi_arch, vf_arch = _split_arch(net_arch, features_extractor_class)
-        dim = self.features_extractor.features_dim
-        self.pi_net = mlp(dim, pi_arch, activation_fn)
-        self.vf_net = mlp(dim, vf_arch, activation_fn)
-        self.action_head = ActionHead(action_space, pi_arch[-1] if pi_arch else dim, log_std_init)
-        self.value_head = nn.Linear(vf_arch[-1] if vf_arch else dim, 1)
+        self.features_dim = self.features_extractor.features_dim
+        self._features_extractor_class = features_extractor_class
+        self._build_mlp_extractor()
+        latent_pi, latent_vf = self._latent_dims()
+        self.action_head = ActionHead(action_space, latent_pi, log_std_init)
+        self.value_head = nn.Linear(latent_vf, 1)
         if ortho_init:
             # Gains from SB3 / baselines: sqrt(2) body, 0.01 policy output, 1 value output.
             for part, gain in [
                 (self.features_extractor, math.sqrt(2)),
                 (self.vf_features_extractor, math.sqrt(2)),
-                (self.pi_net, math.sqrt(2)),
-                (self.vf_net, math.sqrt(2)),
+                *[(body, math.sqrt(2)) for body in self._bodies()],
                 (self.action_head.net, 0.01),
                 (self.value_head, 1.0),
             ]:
                 if part is not None:
                     _ortho_init(part, gain)
+
+    # -- the actor and critic bodies between the features and the heads (SB3's
+    # ``mlp_extractor``; ``ActorCriticPolicy`` builds them SB3's way) ----------------------
+    def _build_mlp_extractor(self) -> None:
+        pi_arch, vf_arch = _split_arch(self.net_arch, self._features_extractor_class)
+        self.pi_net = mlp(self.features_dim, pi_arch, self.activation_fn)
+        self.vf_net = mlp(self.features_dim, vf_arch, self.activation_fn)
+        self._latent = (
+            pi_arch[-1] if pi_arch else self.features_dim,
+            vf_arch[-1] if vf_arch else self.features_dim,
+        )
+
+    def _latent_dims(self) -> tuple[int, int]:
+        return self._latent
+
+    def _bodies(self) -> list[nn.Module]:
+        return [self.pi_net, self.vf_net]
+
+    def _pi_latent(self, features: torch.Tensor) -> torch.Tensor:
+        return self.pi_net(features)
+
+    def _vf_latent(self, features: torch.Tensor) -> torch.Tensor:
+        return self.vf_net(features)
 
     def mlp_modules(self) -> tuple[list[nn.Module] | None, list[nn.Module] | None, str]:
         """``(pi modules, vf modules, why)``: what the numpy learner reads as the actor and
@@ -174,7 +208,7 @@ class ActorCritic(nn.Module):
     def pi_out(self, obs: Any) -> torch.Tensor:
         """The action head's outputs (logits, or the Gaussian's mean) for a raw obs batch."""
         x = preprocess_obs(obs, self.observation_space, self.normalize_images)
-        return self.action_head.net(self.pi_net(self.features_extractor(x)))
+        return self.action_head.net(self._pi_latent(self.features_extractor(x)))
 
     def vf_out(self, obs: Any) -> torch.Tensor:
         """``V(obs)`` as ``[B, 1]``."""
@@ -191,7 +225,7 @@ class ActorCritic(nn.Module):
         vf_features = (
             features if self.vf_features_extractor is None else self.vf_features_extractor(x)
         )
-        return self.pi_net(features), self.vf_net(vf_features)
+        return self._pi_latent(features), self._vf_latent(vf_features)
 
     def evaluate_actions(
         self, obs: Any, actions: torch.Tensor
@@ -209,3 +243,80 @@ class ActorCritic(nn.Module):
     def predict_values(self, obs: Any) -> torch.Tensor:
         """``V(obs)`` ``[B]``."""
         return self.value_head(self._latents(obs)[1]).squeeze(1)
+
+
+class ActorCriticPolicy(ActorCritic):
+    """SB3's ``ActorCriticPolicy`` face, for subclasses written by SB3's custom-policy guide:
+    the constructor takes ``(observation_space, action_space, lr_schedule, **SB3 kwargs)``,
+    the bodies are ``self.mlp_extractor`` (an ``MlpExtractor`` unless ``_build_mlp_extractor``
+    is overridden with any module having ``latent_dim_pi``/``latent_dim_vf`` and
+    ``forward_actor``/``forward_critic``), over ``self.features_dim`` features.
+
+    ``PPO(MyPolicy, env)`` or ``A2C(...)`` trains it on the torch learner (the numpy learner
+    runs only palaestra's own MLP policy). The optimizer stays the algorithm's to build, from
+    ``optimizer_class``/``optimizer_kwargs`` in ``policy_kwargs`` as for ``"MlpPolicy"``."""
+
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
+        lr_schedule: Any = None,
+        net_arch: Any = None,
+        activation_fn: type[nn.Module] = nn.Tanh,
+        ortho_init: bool = True,
+        use_sde: bool = False,
+        log_std_init: float = 0.0,
+        full_std: bool = True,
+        use_expln: bool = False,
+        squash_output: bool = False,
+        features_extractor_class: type[BaseFeaturesExtractor] = FlattenExtractor,
+        features_extractor_kwargs: dict[str, Any] | None = None,
+        share_features_extractor: bool = True,
+        normalize_images: bool = True,
+        optimizer_class: Any = None,
+        optimizer_kwargs: dict[str, Any] | None = None,
+    ) -> None:
+        if use_sde or squash_output:
+            raise NotImplementedError("use_sde and squash_output are not supported yet")
+        self.lr_schedule = lr_schedule
+        super().__init__(
+            observation_space,
+            action_space,
+            features_extractor_class,
+            features_extractor_kwargs,
+            net_arch,
+            activation_fn,
+            ortho_init,
+            log_std_init,
+            share_features_extractor,
+            normalize_images,
+        )
+
+    def _build_mlp_extractor(self) -> None:
+        """SB3's default: ``MlpExtractor`` with ``net_arch`` (None: ``[64, 64]`` for both,
+        none after ``NatureCNN``)."""
+        pi_arch, vf_arch = _split_arch(self.net_arch, self._features_extractor_class)
+        arch = {"pi": pi_arch, "vf": vf_arch}
+        self.mlp_extractor = MlpExtractor(self.features_dim, arch, self.activation_fn)
+
+    def _latent_dims(self) -> tuple[int, int]:
+        for name in ("latent_dim_pi", "latent_dim_vf", "forward_actor", "forward_critic"):
+            if not hasattr(self.mlp_extractor, name):
+                raise TypeError(
+                    f"{type(self).__name__}.mlp_extractor ({type(self.mlp_extractor).__name__}) "
+                    f"has no {name}: the actor/critic body needs latent_dim_pi, latent_dim_vf, "
+                    "forward_actor and forward_critic (see MlpExtractor)"
+                )
+        return int(self.mlp_extractor.latent_dim_pi), int(self.mlp_extractor.latent_dim_vf)
+
+    def _bodies(self) -> list[nn.Module]:
+        return [self.mlp_extractor]
+
+    def _pi_latent(self, features: torch.Tensor) -> torch.Tensor:
+        return self.mlp_extractor.forward_actor(features)
+
+    def _vf_latent(self, features: torch.Tensor) -> torch.Tensor:
+        return self.mlp_extractor.forward_critic(features)
+
+    def mlp_modules(self) -> tuple[list[nn.Module] | None, list[nn.Module] | None, str]:
+        return None, None, f"the policy is a custom {type(self).__name__}"

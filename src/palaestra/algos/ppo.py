@@ -31,7 +31,7 @@ class PPO(OnPolicyAlgorithm):
 
     def __init__(
         self,
-        policy: str,
+        policy: str | type,
         env: Any,
         learning_rate: float | Schedule = 3e-4,
         n_steps: int = 2048,

@@ -65,15 +65,82 @@ def forget_env_token(env: Any) -> None:
         _ENV_TOKENS.pop(env, None)
 
 
-def save_model(model: Any, path: Any) -> None:
-    """Everything needed to predict and to resume training, as JSON + arrays."""
+# What SB3's ``save(exclude=..., include=...)`` may name that a palaestra file never holds
+# (SB3 pickles these objects when included; palaestra files hold no objects).
+_NEVER_SAVED = {
+    "env": "the env (pass env= to load(), or save a VecNormalize with its own save())",
+    "replay_buffer": "the replay buffer (use save_replay_buffer())",
+    "rollout_buffer": "the rollout buffer (a partial rollout is kept in the run state)",
+    "_vec_normalize_env": "the VecNormalize wrapper (use its save())",
+    "_logger": "the logger",
+    "_custom_logger": "the logger",
+    "device": "the device (pass device= to load())",
+    "tensorboard_log": "where learn() writes (a file may not choose it)",
+}
+# SB3 attribute names whose entry in a palaestra file has another name.
+_ALIASES = {
+    "_current_progress_remaining": "_progress_remaining",
+    "_stats_window_size": "stats_window_size",
+    "_np_random": "rng",
+    "_rng": "rng",
+}
+
+
+def excluded_names(exclude: Any, include: Any) -> set[str]:
+    """SB3's rule: ``exclude`` minus ``include`` (both lists of attribute names). Unknown
+    names are ignored, as in SB3; ``include`` of an object palaestra never stores (the env,
+    a buffer, the logger) is a ``ValueError`` saying where that object is saved instead."""
+    names: list[set[str]] = []
+    for what, value in (("exclude", exclude), ("include", include)):
+        if value is None:
+            names.append(set())
+            continue
+        if isinstance(value, (str, bytes)) or not all(isinstance(v, str) for v in value):
+            raise TypeError(f"{what} must be a list of attribute names, got {value!r:.80}")
+        names.append(set(value))
+    dropped, kept = names
+    unsavable = sorted(kept & set(_NEVER_SAVED))
+    if unsavable:
+        raise ValueError(
+            f"include={sorted(kept)!r}: palaestra model files never hold "
+            f"{_NEVER_SAVED[unsavable[0]]}; they are JSON and arrays, never pickled objects"
+        )
+    return {_ALIASES.get(n, n) for n in dropped - kept}
+
+
+def _drop(meta: dict[str, Any], arrays: dict[str, np.ndarray], names: set[str]) -> None:
+    """Remove what ``names`` (SB3 attribute names, see ``excluded_names``) stand for."""
+    for section in ("hyperparameters", "schedules", "counters"):
+        for name in names & set(meta[section]):
+            del meta[section][name]
+    for name in names & {"policy_kwargs", "observation_space", "action_space", "n_envs", "rng"}:
+        del meta[name]
+    run = meta["run"]
+    if names & {"_last_obs", "_last_episode_starts", "n_envs"} and run["env_token"] is not None:
+        # no observations to continue from: the loaded model starts new episodes (SB3 too)
+        run.update(env_token=None, obs_keys=None, loop={})
+        for key in [k for k in arrays if k.startswith("run/") and k != "run/torch_rng"]:
+            del arrays[key]
+    if "ep_info_buffer" in names:
+        run["episodes"] = []
+    if "ep_success_buffer" in names:
+        run["successes"] = []
+
+
+def save_model(model: Any, path: Any, exclude: Any = None, include: Any = None) -> None:
+    """Everything needed to predict and to resume training, as JSON + arrays, less the
+    attributes ``exclude`` names (SB3's ``save``: hyperparameters, schedules, counters,
+    ``policy_kwargs``, spaces, episode statistics, ``_last_obs``); the parameters and
+    optimizer states are always written, as in SB3."""
     import palaestra
+
+    dropped = excluded_names(exclude, include)
 
     meta: dict[str, Any] = {
         "algo": type(model).__name__,
         "palaestra_version": palaestra.__version__,
         "torch_version": torch.__version__,
-        "policy": model.policy_name,
+        "policy": encode_classes(model.policy_name),  # a name, or a policy class reference
         "policy_kwargs": encode_classes(model.policy_kwargs),
         "observation_space": space_to_json(model.observation_space),
         "action_space": space_to_json(model.action_space),
@@ -92,6 +159,7 @@ def save_model(model: Any, path: Any) -> None:
         arrays.update(opt_arrays)
     meta["run"], run_arrays = _run_state(model)
     arrays.update(run_arrays)
+    _drop(meta, arrays, dropped)
     write_archive(path, "model", meta, arrays)
     if meta["run"]["env_token"] is not None:
         bind_env_token(model.env, meta["run"]["env_token"])
@@ -172,15 +240,24 @@ def load_model(
     if algo != cls.__name__:
         raise ModelFileError(f"{path} holds a {algo} model; load it with {algo}.load()")
     check_model_file(algo, meta, str(path))  # types, ranges, allowed keys: before any use
+    if "observation_space" not in meta or "action_space" not in meta:
+        # saved with exclude=["observation_space"] or ["action_space"]: SB3's error and words
+        raise KeyError(
+            f"{path}: the observation_space and action_space were not saved "
+            "(save(exclude=...) dropped them), can't verify new environments"
+        )
     try:
         hyper = dict(meta["hyperparameters"])
         for name, sched in meta["schedules"].items():
             hyper[name] = None if sched is None else schedule_from_json(sched)
-        policy_kwargs = decode_classes(meta["policy_kwargs"], custom)
+        policy_kwargs = decode_classes(meta.get("policy_kwargs", {}), custom)
         observation_space = space_from_json(meta["observation_space"])
         action_space = space_from_json(meta["action_space"])
-        n_envs, counters = int(meta["n_envs"]), dict(meta["counters"])
-        policy = str(meta["policy"])
+        n_envs, counters = int(meta.get("n_envs", 1)), dict(meta["counters"])
+        policy = meta["policy"]
+        if isinstance(policy, dict):  # a custom policy class: through custom_objects only
+            policy = custom.get("policy_class") or decode_classes(policy, custom)
+        policy = policy if isinstance(policy, type) else str(policy)
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         if isinstance(exc, ModelFileError):
             raise
@@ -209,7 +286,8 @@ def load_model(
         if name in (*COUNTERS, *model._extra_counters):
             setattr(model, name, _counter(name, value, str(path)))
     try:
-        model._rng.bit_generator.state = meta["rng"]
+        if "rng" in meta:  # absent: saved with exclude=["_rng"]; the seed's generator stays
+            model._rng.bit_generator.state = meta["rng"]
     except (TypeError, ValueError, KeyError) as exc:
         raise ModelFileError(f"{path}: malformed generator state") from exc
     _load_run_state(model, meta.get("run"), arrays, str(path))
@@ -290,7 +368,7 @@ def _check_run_array(
     """A learn-loop array fits the model: observations and episode starts of the saved
     ``n_envs`` envs, a rollout no longer than the buffer's, a torch generator state of a few
     KiB. (``n_envs`` is the file's: the model may be loaded with another number of envs.)"""
-    n = int(meta["n_envs"])
+    n = int(meta.get("n_envs", 1))  # absent (excluded): the file holds no observations
     space = model.observation_space
     if name == "run/torch_rng":
         fits = math.prod(shape) <= 1 << 16
@@ -338,20 +416,60 @@ def _load_policy(model: Any, arrays: dict[str, np.ndarray], exact_match: bool, s
 
 
 def set_parameters(model: Any, source: Any, exact_match: bool) -> None:
-    """From ``get_parameters()`` output or a model file path."""
-    if isinstance(source, dict):
-        if "policy" not in source:
-            raise ValueError(
-                f"expected keys 'policy' (and 'policy.optimizer'), got {sorted(source)}"
-            )
-        model.policy.load_state_dict(source["policy"], strict=exact_match)
-        for _, (name, optimizer) in model._optimizers().items():
-            if name in source:
-                optimizer.load_state_dict(source[name])
+    """From ``get_parameters()`` output or a model file path (SB3's rules, see
+    ``BaseAlgorithm.set_parameters``)."""
+    if not isinstance(source, dict):
+        meta, arrays = read_archive(source, "model", expect=_fits(model, exact_match, str(source)))
+        _load_policy(model, arrays, exact_match, str(source))
+        _load_optimizers(model, meta, arrays, str(source), required=exact_match)
         return
-    meta, arrays = read_archive(source, "model", expect=_fits(model, exact_match, str(source)))
-    _load_policy(model, arrays, exact_match, str(source))
-    _load_optimizers(model, meta, arrays, str(source), required=False)
+    optimizers = {name: optimizer for _, (name, optimizer) in model._optimizers().items()}
+    targets = {name: optimizers.get(name) or _object_named(model, name) for name in source}
+    expected = {"policy", *optimizers}
+    if exact_match and set(source) != expected:
+        raise ValueError(
+            "Names of parameters do not match agents' parameters: "
+            f"expected {sorted(expected)}, got {sorted(source)}"
+        )
+    if exact_match:  # check every module before changing any
+        for name, target in targets.items():
+            if isinstance(target, torch.nn.Module):
+                _check_state_dict_keys(name, target, source[name])
+    for name, target in targets.items():
+        if isinstance(target, torch.optim.Optimizer):
+            target.load_state_dict(source[name])  # SB3: optimizers take no strict flag
+        else:
+            target.load_state_dict(source[name], strict=exact_match)
+
+
+def _object_named(model: Any, name: Any) -> Any:
+    """The module ``name`` stands for (``"policy"``, ``"q_net"``, ``"policy.q_net"``...), read
+    as SB3's ``recursive_getattr`` does; ``ValueError`` for anything else."""
+    target: Any = model
+    try:
+        for part in str(name).split("."):
+            target = getattr(target, part)
+    except AttributeError:
+        target = None
+    if not isinstance(name, str) or not isinstance(target, torch.nn.Module):
+        raise ValueError(
+            f"Key {name!r} is an invalid object name: expected 'policy', an optimizer name "
+            "from get_parameters() or a module attribute of the model"
+        )
+    return target
+
+
+def _check_state_dict_keys(name: str, module: torch.nn.Module, state: Any) -> None:
+    """torch's strict ``load_state_dict`` check (its ``RuntimeError``, which SB3 lets through),
+    made before any module is changed: torch raises only after loading the matching keys."""
+    if not isinstance(state, dict):
+        raise TypeError(f"parameters for {name!r} must be a state_dict, got {type(state)}")
+    want, got = set(module.state_dict()), set(state)
+    if want != got:
+        raise RuntimeError(
+            f"Error(s) in loading state_dict for {name!r}: missing keys "
+            f"{sorted(want - got)[:5]}, unexpected keys {sorted(got - want)[:5]}"
+        )
 
 
 def _load_optimizers(

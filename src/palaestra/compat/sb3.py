@@ -76,14 +76,22 @@ def from_sb3(
     }
     settings.update(kwargs)
     env = _palaestra_env(env)
-    model: Any = cls(
-        "MlpPolicy",
-        env,
-        device=device,
-        policy_kwargs=policy_kwargs,
-        _init_setup_model=False,
-        **settings,
-    )
+    try:
+        model: Any = cls(
+            "MlpPolicy",
+            env,
+            device=device,
+            policy_kwargs=policy_kwargs,
+            _init_setup_model=False,
+            **settings,
+        )
+    except ValueError as exc:  # a Dict env: the model file's MlpPolicy cannot take it
+        if "MultiInputPolicy" not in str(exc):
+            raise
+        raise ModelFileError(
+            f"{file.name}: the env has Dict observations; from_sb3 reads MlpPolicy models "
+            "(Box, Discrete, MultiDiscrete or MultiBinary observations), not MultiInputPolicy ones"
+        ) from exc
     obs_space, act_space = _spaces(file, model if env is not None else None)
     model.observation_space, model.action_space = obs_space, act_space
     if env is None:
@@ -91,7 +99,8 @@ def from_sb3(
     _check_widths(file, obs_space, act_space, state)
     model._setup_model()
     tensors = {k: torch.from_numpy(np.ascontiguousarray(v)) for k, v in state.items()}
-    model.set_parameters({"policy": tensors}, exact_match=True)
+    # every policy parameter, exactly (an SB3 file's optimizer state is not read)
+    model.policy.load_state_dict(tensors, strict=True)
     for name in ("num_timesteps", "_episode_num", "_n_updates", "exploration_rate", "_n_calls"):
         value = plain_value(file.data.get(name, MISSING))
         if isinstance(value, (int, float)) and hasattr(model, name):

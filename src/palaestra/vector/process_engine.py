@@ -39,7 +39,12 @@ from palaestra.vector.engine import (
     check_action_spaces,
     check_actions_batch,
 )
-from palaestra.vector.shared_memory import create_shared_memory, read_from_shared_memory
+from palaestra.vector.shared_memory import (
+    create_shared_memory,
+    decode_views,
+    needs_decoding,
+    shared_views,
+)
 from palaestra.vector.worker import STEP, Payload, decode, run_worker
 
 _ARRAY_SPACES = (Box, Discrete, MultiDiscrete, MultiBinary)
@@ -178,11 +183,15 @@ class ProcessEngine:
                 "terminated": ctx.Array("b", n, lock=False),
                 "truncated": ctx.Array("b", n, lock=False),
             }
-            self.obs = read_from_shared_memory(self.single_observation_space, buffers["obs"], n)
+            # Text/OneOf rows are decoded into the batch after each gather (_refresh_obs);
+            # array spaces are read through the views themselves
+            self._obs_views = shared_views(self.single_observation_space, buffers["obs"], n)
+            self._decode = needs_decoding(self.single_observation_space)
+            self.obs = decode_views(self.single_observation_space, self._obs_views)
             self._actions = (
                 None
                 if buffers["actions"] is None
-                else read_from_shared_memory(single_act, buffers["actions"], n)
+                else shared_views(single_act, buffers["actions"], n)
             )
             self._rewards = np.frombuffer(buffers["rewards"], dtype=np.float64, count=n)
             self._terminated = np.frombuffer(buffers["terminated"], dtype=np.bool_, count=n)
@@ -332,9 +341,16 @@ class ProcessEngine:
                 infos[i] = answer
             else:
                 self._env_obs[i], infos[i] = answer
+        self._refresh_obs()
+        return infos
+
+    def _refresh_obs(self) -> None:
+        """The batch after a gather: concatenated from the pipes, or decoded from shared
+        memory where views alone do not hold it (Text, OneOf)."""
         if not self.shared:
             self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
-        return infos
+        elif self._decode:
+            self.obs = decode_views(self.single_observation_space, self._obs_views)
 
     def step_send(self, actions: Any, reset_mask: np.ndarray | None) -> None:
         """Send each worker its action (through shared memory for array action spaces)."""
@@ -370,8 +386,7 @@ class ProcessEngine:
                 obs, reward, term, trunc, infos[i] = answer
                 self._env_obs[i] = obs
                 self._rewards[i], self._terminated[i], self._truncated[i] = reward, term, trunc
-        if not self.shared:
-            self.obs = concatenate(self.single_observation_space, self._env_obs, self.obs)
+        self._refresh_obs()
         return self._rewards, self._terminated, self._truncated, infos
 
     def final_observations(self, rows: np.ndarray) -> list[Any] | None:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.vector.engine import call_env, is_wrapped
-from palaestra.vector.shared_memory import read_from_shared_memory, write_row
+from palaestra.vector.shared_memory import shared_views, write_row
 
 STEP = b"s"  # step with the action in shared memory
 EMPTY_OK = b""  # (True, {}) without pickling
@@ -94,10 +94,10 @@ class _Shared:
 
     def __init__(self, buffers: dict[str, Any], spaces: tuple[Any, Any], n: int) -> None:
         self.obs_space, act_space = spaces
-        self.obs = read_from_shared_memory(self.obs_space, buffers["obs"], n=n)
+        self.obs = shared_views(self.obs_space, buffers["obs"], n=n)
         self.actions = None
         if buffers.get("actions") is not None:
-            self.actions = read_from_shared_memory(act_space, buffers["actions"], n=n)
+            self.actions = shared_views(act_space, buffers["actions"], n=n)
         self.rewards = np.frombuffer(buffers["rewards"], dtype=np.float64, count=n)
         self.terminated = np.frombuffer(buffers["terminated"], dtype=np.bool_, count=n)
         self.truncated = np.frombuffer(buffers["truncated"], dtype=np.bool_, count=n)

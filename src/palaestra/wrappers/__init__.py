@@ -29,6 +29,7 @@ _LAZY: dict[str, str] = {
     "ReshapeObservation": "transform_observation",
     "RescaleObservation": "transform_observation",
     "DtypeObservation": "transform_observation",
+    "AddRenderObservation": "transform_observation",
     "DiscretizeObservation": "discretize",
     "ResizeObservation": "resize",
     "DelayObservation": "stateful_observation",
@@ -49,6 +50,9 @@ _LAZY: dict[str, str] = {
     "TransformReward": "transform_reward",
     "ClipReward": "transform_reward",
     "NormalizeReward": "stateful_reward",
+    # array modules (torch imported on first use)
+    "ArrayConversion": "array_conversion",
+    "NumpyToTorch": "array_conversion",
     # rendering
     "RecordVideo": "record_video",
     "RenderCollection": "rendering",

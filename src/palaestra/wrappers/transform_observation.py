@@ -18,6 +18,7 @@ from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.wrappers.utils import rescale_box
 
 __all__ = [
+    "AddRenderObservation",
     "DtypeObservation",
     "FilterObservation",
     "FlattenObservation",
@@ -264,3 +265,52 @@ class DtypeObservation(
         self.dtype = dtype
         cast = new_space.dtype.type
         TransformObservation.__init__(self, env=env, func=cast, observation_space=new_space)  # type: ignore[misc]
+
+
+class AddRenderObservation(
+    TransformObservation[WrapperObsType, ActType, ObsType], RecordConstructorArgs
+):
+    """The rendered frame as the observation (``render_only``, the default), or added to it:
+    ``{obs_key: obs, render_key: frame}``, or the frame as one more key of a ``Dict``
+    observation (Gymnasium's wrapper, once ``PixelObservationWrapper``)."""
+
+    def __init__(
+        self,
+        env: Env[ObsType, ActType],
+        render_only: bool = True,
+        render_key: str = "pixels",
+        obs_key: str = "state",
+    ) -> None:
+        RecordConstructorArgs.__init__(
+            self, render_only=render_only, render_key=render_key, obs_key=obs_key
+        )
+        if env.render_mode is None or env.render_mode == "human":
+            raise ValueError(
+                "AddRenderObservation requires render_mode to be not None and not 'human', "
+                f"got {env.render_mode}"
+            )
+        env.reset()  # a frame to size the space from (Gymnasium resets here too)
+        pixels = env.render()
+        if not isinstance(pixels, np.ndarray):
+            raise TypeError(
+                "AddRenderObservation expects env.render() to return a numpy array, got "
+                f"{type(pixels)}"
+            )
+        pixel_space = Box(low=0, high=255, shape=pixels.shape, dtype=np.uint8)
+        inner = env.observation_space
+        space: Any
+        func: Callable[[Any], Any]
+        if render_only:
+            space, func = pixel_space, lambda _: self.render()
+        elif isinstance(inner, Dict):
+            if render_key in inner.spaces:
+                raise ValueError(
+                    f"AddRenderObservation render_key {render_key!r} already exists in the "
+                    "observation space"
+                )
+            space = Dict({render_key: pixel_space, **inner.spaces}, sort_keys=inner.sort_keys)
+            func = lambda obs: {render_key: self.render(), **obs}  # noqa: E731
+        else:
+            space = Dict({obs_key: inner, render_key: pixel_space})
+            func = lambda obs: {obs_key: obs, render_key: self.render()}  # noqa: E731
+        TransformObservation.__init__(self, env, func, space)

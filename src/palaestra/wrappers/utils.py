@@ -13,7 +13,20 @@ from typing import Any
 import numpy as np
 
 from palaestra.error import CustomSpaceError
-from palaestra.spaces import Box, Dict, Discrete, MultiBinary, MultiDiscrete, Space, Tuple
+from palaestra.spaces import (
+    Box,
+    Dict,
+    Discrete,
+    Graph,
+    GraphInstance,
+    MultiBinary,
+    MultiDiscrete,
+    OneOf,
+    Sequence,
+    Space,
+    Text,
+    Tuple,
+)
 from palaestra.wrappers.running_mean_std import RunningMeanStd, update_mean_var_count_from_moments
 
 __all__ = [
@@ -69,6 +82,34 @@ def _zero_tuple(space: Tuple) -> tuple[Any, ...]:
 @create_zero_array.register(Dict)
 def _zero_dict(space: Dict) -> dict[str, Any]:
     return {key: create_zero_array(sub) for key, sub in space.spaces.items()}
+
+
+@create_zero_array.register(Sequence)
+def _zero_sequence(space: Sequence) -> Any:
+    # Gymnasium's: a stacked sequence's zero is its stacked space's; otherwise empty
+    return create_zero_array(space.stacked_feature_space) if space.stack else ()
+
+
+@create_zero_array.register(Text)
+def _zero_text(space: Text) -> str:
+    return space.characters[0] * space.min_length
+
+
+@create_zero_array.register(Graph)
+def _zero_graph(space: Graph) -> GraphInstance:
+    """One node (and, with an edge space, one self-edge of node 0), each at its zero."""
+    from palaestra.spaces.batching import batch_space
+
+    nodes = create_zero_array(batch_space(space.node_space, 1))
+    if space.edge_space is None:
+        return GraphInstance(nodes=nodes, edges=None, edge_links=None)
+    edges = create_zero_array(batch_space(space.edge_space, 1))
+    return GraphInstance(nodes=nodes, edges=edges, edge_links=np.zeros((1, 2), dtype=np.int64))
+
+
+@create_zero_array.register(OneOf)
+def _zero_oneof(space: OneOf) -> tuple[int, Any]:
+    return 0, create_zero_array(space.spaces[0])
 
 
 def _as_bound(value: Any, shape: tuple[int, ...], name: str) -> np.ndarray:

@@ -1,7 +1,13 @@
-"""Wrappers for vector environments (``gymnasium.wrappers.vector``)."""
+"""Wrappers for vector environments (``gymnasium.wrappers.vector``).
+
+``ArrayConversion`` and ``NumpyToTorch`` are loaded on first use (they may import torch).
+"""
+
+from typing import Any
 
 from palaestra.vector.wrappers.episode_stats import DictInfoToList, RecordEpisodeStatistics
 from palaestra.vector.wrappers.normalize import NormalizeObservation, NormalizeReward
+from palaestra.vector.wrappers.rendering import HumanRendering, RecordVideo
 from palaestra.vector.wrappers.transforms import (
     ClipReward,
     TransformAction,
@@ -24,6 +30,7 @@ from palaestra.vector.wrappers.vectorize import (
 )
 
 __all__ = [
+    "ArrayConversion",
     "ClipAction",
     "ClipReward",
     "DictInfoToList",
@@ -31,9 +38,12 @@ __all__ = [
     "FilterObservation",
     "FlattenObservation",
     "GrayscaleObservation",
+    "HumanRendering",
     "NormalizeObservation",
     "NormalizeReward",
+    "NumpyToTorch",
     "RecordEpisodeStatistics",
+    "RecordVideo",
     "RescaleAction",
     "RescaleObservation",
     "ReshapeObservation",
@@ -45,3 +55,14 @@ __all__ = [
     "VectorizeTransformObservation",
     "VectorizeTransformReward",
 ]
+
+
+LAZY_NAMES = ("ArrayConversion", "NumpyToTorch")
+
+
+def __getattr__(name: str) -> Any:  # PEP 562: keep torch out of `import palaestra.vector`
+    if name in LAZY_NAMES:
+        from palaestra.vector.wrappers import array_conversion
+
+        return getattr(array_conversion, name)
+    raise AttributeError(f"module 'palaestra.vector.wrappers' has no attribute {name!r}")
