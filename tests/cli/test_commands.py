@@ -172,7 +172,7 @@ def _bad(tmp_path: Path) -> dict[str, tuple[list[object], int, str | re.Pattern[
             re.escape(e + "argument COMMAND: invalid choice: 'fly' (choose from ")
             + ".*envs.*bench.*" + re.escape(") (see palaestra --help)"))),
         "no command": ([], 2, e + "no command given (choose one of envs, train, eval, record, "
-                       "compare, bench)"),
+                       "compare, sweep, bench)"),
         "bench unknown env": (["bench", "--envs", "Nope-v0"], 2,
                               e + "Environment `Nope` doesn't exist. "
                               "(run `palaestra envs` to list the ids)"),
