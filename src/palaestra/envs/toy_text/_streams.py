@@ -254,3 +254,22 @@ class HalfWordStreams(RowStreams):
     def consume(self, peek: Peek, used: np.ndarray) -> None:
         """Advance each row of ``peek`` past its first ``used`` 32-bit values."""
         self._advance(peek.rows, peek.offset + used)
+
+    def window(self, width: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every row's place and next ``width`` 32-bit values, not consumed: ``(q [N],
+        values [width, N] uint64)`` (value j of every row is one contiguous line);
+        :meth:`advance_all` then moves each row to its new place. Every row must be live (a
+        batch steps only once all rows were reset)."""
+        words = width // 2 + 1
+        if self._budget < words:
+            self._top_up()
+        self._budget -= words
+        q = 2 * self._pos - self._has_half  # [N]
+        places = q + np.arange(width)[:, None]  # [W, N]
+        w = self._flat.take((places >> 1) * len(self._cols) + self._cols)
+        return q, (w >> ((places & 1) << 5).astype(np.uint64)) & _LOW32
+
+    def advance_all(self, q: np.ndarray) -> None:
+        """Set every row's place (half-words consumed) to ``q`` (int ``[N]``)."""
+        np.right_shift(q + 1, 1, out=self._pos)
+        self._has_half[:] = q & 1
