@@ -11,12 +11,9 @@ from palaestra import presets
 pytest.importorskip("Box2D")
 pytest.importorskip("torch")
 
-CASES = [
-    ("ppo", "LunarLander-v3"),
-    ("dqn", "LunarLander-v3"),
-    ("sac", "LunarLanderContinuous-v3"),
-    ("td3", "LunarLanderContinuous-v3"),
-]
+# DQN on LunarLander-v3 and SAC/TD3 on LunarLanderContinuous-v3 are not shipped yet: their
+# measurements did not fit this machine's time (BENCHMARKS.md, Box2D).
+CASES = [("ppo", "LunarLander-v3")]
 
 
 @pytest.mark.parametrize(("algo", "env_id"), CASES, ids=[f"{a}-{e}" for a, e in CASES])
@@ -39,8 +36,7 @@ def test_preset_builds_its_algorithm(algo: str, env_id: str) -> None:
 @pytest.mark.parametrize(("algo", "env_id"), CASES, ids=[f"{a}-{e}" for a, e in CASES])
 def test_measured_block_is_consistent(algo: str, env_id: str) -> None:
     measured = presets.get_preset(algo, env_id).get("measured")
-    if measured is None:
-        pytest.skip(f"{algo} {env_id}: not measured yet")
+    assert measured is not None, f"{algo} {env_id}: a shipped preset carries its measurement"
     assert measured["target"] == palaestra.spec(env_id).reward_threshold == 200
     meeting = sum(r >= measured["target"] for r in measured["mean_return"])
     assert measured["seeds_meeting_target"] == meeting
