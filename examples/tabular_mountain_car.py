@@ -127,7 +127,9 @@ def main() -> None:
     """Train, evaluate, and write the plot and GIF."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=4_000_000, help="environment steps")
-    parser.add_argument("--out", type=Path, default=Path("runs/tabular_mountain_car"), help="output folder")
+    parser.add_argument(
+        "--out", type=Path, default=Path("runs/tabular_mountain_car"), help="output folder"
+    )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--quick", action="store_true", help="200k steps, for the tests")
     args = parser.parse_args()

@@ -228,9 +228,11 @@ def test_vector_env_rejects_bad_actions_by_row() -> None:
 
 
 def test_blackjack_slow_path_draws_the_same(monkeypatch: pytest.MonkeyPatch) -> None:
-    """With no values read beyond the cards, resets take the one-at-a-time path (the one a
-    rejected draw would take): rows still equal single envs."""
+    """The two-part step (what runs when the one-pass step gives up), with no values read
+    beyond the cards, so that resets also take the one-at-a-time path (the one a rejected
+    draw would take): rows still equal single envs."""
     batch = toy_text.BlackjackBatch(N)
+    monkeypatch.setattr(batch, "_step_all", lambda actions, resetting: None)
     streams = batch._streams
     exact = type(streams).peek_bounded
     monkeypatch.setattr(streams, "peek_bounded", lambda *a, **k: exact(streams, *a, slack=0))
@@ -252,6 +254,100 @@ def test_blackjack_slow_path_draws_the_same(monkeypatch: pytest.MonkeyPatch) -> 
     assert [s.dealer_top_card_suit for s in singles] == [
         toy_text.blackjack.SUITS[k] for k in batch._suit
     ]
+
+
+def _blackjack_against_singles(
+    batch: toy_text.BlackjackBatch, steps: int, seed: int, autoreset: bool
+) -> None:
+    """Step ``batch`` with random actions (resetting ended rows in the step when
+    ``autoreset``, else by ``reset(mask=...)``) and compare every row with a single env."""
+    n = batch.num_envs
+    kwargs = {"natural": batch.natural, "sab": batch.sab}
+    singles = [toy_text.BlackjackEnv(**kwargs) for _ in range(n)]
+    obs = batch.reset(seed=seed)
+    assert _rows(obs) == [env.reset(seed=seed + i)[0] for i, env in enumerate(singles)]
+    rng = np.random.default_rng(seed)
+    ended = np.zeros(n, dtype=bool)
+    for t in range(steps):
+        actions = rng.integers(0, 2, n)
+        if autoreset:
+            obs, reward, terminated = batch.step(actions, ended)
+        else:
+            if ended.any():
+                batch.reset(mask=ended)
+            obs, reward, terminated = batch.step(actions)
+        want = []
+        for i, env in enumerate(singles):
+            if ended[i] and autoreset:
+                want.append((env.reset()[0], 0.0, False))
+                continue
+            if ended[i]:
+                env.reset()
+            want.append(env.step(int(actions[i]))[:3])
+        assert _rows(obs) == [w[0] for w in want], f"step {t}"
+        np.testing.assert_array_equal(reward, [w[1] for w in want], err_msg=f"step {t}")
+        np.testing.assert_array_equal(terminated, [w[2] for w in want], err_msg=f"step {t}")
+        ended = terminated.copy()
+    assert [s.dealer_top_card_suit for s in singles] == [
+        toy_text.blackjack.SUITS[k] for k in batch._suit
+    ]
+    tens = [s.dealer[0] == 10 for s in singles]
+    faces = [s.dealer_top_card_value_str for s, ten in zip(singles, tens) if ten]
+    assert faces == [toy_text.blackjack.FACES[k] for k in batch._face[np.array(tens)]]
+
+
+@pytest.mark.parametrize("kwargs", [{}, {"natural": True}, {"sab": True}])
+@pytest.mark.parametrize("autoreset", [True, False])
+def test_blackjack_one_pass_step_at_many_rows(kwargs: dict[str, bool], autoreset: bool) -> None:
+    """The one-pass step (every step here unless a rare fallback) at 256 rows, with the
+    deal in the step (autoreset) or by a masked reset."""
+    batch = toy_text.BlackjackBatch(256, **kwargs)
+    calls = []
+    one_pass = batch._step_all
+
+    def counted(actions: np.ndarray, resetting: np.ndarray | None) -> Any:
+        out = one_pass(actions, resetting)
+        calls.append(out is not None)
+        return out
+
+    batch._step_all = counted  # type: ignore[method-assign]
+    _blackjack_against_singles(batch, 40, seed=7, autoreset=autoreset)
+    assert sum(calls) >= 39  # fallbacks are rare: one step in thousands at this size
+
+
+def test_blackjack_one_pass_step_falls_back_exactly(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Allowing a dealer one draw in the one-pass step makes it give up whenever a dealer
+    needs two (about 1 in 5 hands): steps then alternate between the two paths, and every
+    row still equals its single env."""
+    batch = toy_text.BlackjackBatch(16)
+    monkeypatch.setattr(batch, "max_dealer_draws", 1)
+    calls = []
+    one_pass = batch._step_all
+
+    def counted(actions: np.ndarray, resetting: np.ndarray | None) -> Any:
+        out = one_pass(actions, resetting)
+        calls.append(out is not None)
+        return out
+
+    monkeypatch.setattr(batch, "_step_all", counted)
+    _blackjack_against_singles(batch, 300, seed=11, autoreset=True)
+    assert 30 < sum(calls) < 270, sum(calls)  # both paths ran, many times
+
+
+def test_blackjack_dealer_tables_match_the_rules() -> None:
+    """The dealer's code tables against the hand rules: a code draws iff its total is below
+    17, and a card adds its value (an ace sets the flag)."""
+    bj = toy_text.blackjack
+    for code in range(bj._DEALER_CODES):
+        raw, ace = code >> 1, bool(code & 1)
+        assert bj._DEALER_DRAWS[code] == (bj.total(bj.SCALAR, raw, ace) < 17)
+        for card in range(1, 11):
+            nxt = bj._DEALER_NEXT[11 * code + card]
+            if bj._DEALER_DRAWS[code]:
+                assert (nxt >> 1, bool(nxt & 1)) == (raw + card, ace or card == 1)
+            else:
+                assert nxt == code
+    assert not bj._DEALER_DRAWS[bj._DEALER_STOPPED]
 
 
 def test_disabled_autoreset_and_partial_resets_report_reset_infos() -> None:

@@ -128,3 +128,5 @@ def test_half_word_streams_refuse_doubles() -> None:
     streams = HalfWordStreams([np.random.default_rng(0)])
     with pytest.raises(TypeError, match="32-bit values only"):
         streams.doubles(None)
+    with pytest.raises(TypeError, match="32-bit values only"):
+        streams.words(None)

@@ -166,7 +166,13 @@ class ToyTextBatch:
             mask = np.asarray(reset_mask)
             if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
                 raise ValueError(f"reset_mask must be a bool array of shape ({self.num_envs},)")
-            stepping, resetting = (~mask).nonzero()[0], mask
+            resetting = mask
+        fused = self._step_all(act, resetting)
+        if fused is not None:
+            self._infos = None
+            return self._obs, *fused
+        if resetting is not None:
+            stepping = (~resetting).nonzero()[0]
         reward, terminated = self._step_rows(stepping, act[stepping])
         step_infos = self._infos = self._step_infos(stepping)
         if resetting is not None:
@@ -192,6 +198,14 @@ class ToyTextBatch:
         """Step ``rows`` with their actions; write their obs; return ``(reward, terminated)``
         as ``[N]`` arrays (entries of other rows are overwritten by the caller)."""
         raise NotImplementedError
+
+    def _step_all(
+        self, actions: np.ndarray, resetting: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """Step and reset every row in one pass, or None to take the two-part path
+        (:meth:`_step_rows`, then :meth:`_reset_rows`). Only for batches whose infos are
+        all empty: a fused step reports none."""
+        return None
 
     def _step_infos(self, rows: np.ndarray) -> Any:
         """The step infos of ``rows`` (every row, or all but the ones being reset)."""

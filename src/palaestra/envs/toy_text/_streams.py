@@ -57,6 +57,8 @@ class RowStreams:
     """
 
     RUN_STATE = ("_words", "_pos", "_half", "_has_half", "_live", "_budget")
+    # Row i's stream is column i of ``[per, N]`` words (False) or row i of ``[N, per]`` (True).
+    row_major = False
 
     def __init__(self, rngs: list[np.random.Generator | None]) -> None:
         n = len(rngs)
@@ -65,9 +67,12 @@ class RowStreams:
         # Row i's stream is column i: rows that draw in step (a tabular env draws one word
         # per row per step, reset or not) read one contiguous line of this array. A layout
         # with each row's block contiguous scatters a step's N reads over the whole buffer:
-        # measured 39 us against ~6 us for 1024 rows.
-        self._words = np.zeros((self.per, n), dtype=np.uint64)  # [per, N]
-        self._flat = self._words.reshape(-1)  # a view: word (p, i) is flat[p * N + i]
+        # measured 39 us against ~6 us for 1024 rows. (Rows that drift apart prefer the
+        # other layout: HalfWordStreams.)
+        shape = (n, self.per) if self.row_major else (self.per, n)
+        self._words = np.zeros(shape, dtype=np.uint64)  # [per, N] (row-major: [N, per])
+        # A view: word p of row i is flat[p * N + i] (row-major: flat[i * per + p]).
+        self._flat = self._words.reshape(-1)
         self._cols = np.arange(n, dtype=np.int64)  # [N]
         self._pos = np.full(n, self.per, dtype=np.int64)  # [N] next unused word; per: empty
         self._half = np.zeros(n, dtype=np.uint64)  # [N] the kept high half-word
@@ -197,7 +202,7 @@ class RowStreams:
             assert rng is not None
             back = int(self._has_half[i] and self._pos[i] > 0)
             k = int(left[i]) + back  # words kept: the unused ones (and the half-used one)
-            column = self._words[:, i]
+            column = self._words[i] if self.row_major else self._words[:, i]
             column[:k] = column[per - k :].copy()  # to the front (k <= per/2 + 1)
             column[k:] = rng.bit_generator.random_raw(per - k)
             self._pos[i] = back
@@ -212,7 +217,22 @@ class HalfWordStreams(RowStreams):
     word before ``_pos``, so a row's place is one number, ``q = 2 * pos - has_half`` in
     half-words, and reading the next values is a gather at ``q, q + 1, ...``: a few array
     operations instead of the general bookkeeping.
+
+    Rows draw different numbers of values per step (a dealer draws to 17, a deal takes up to
+    six), so their places drift apart: each row's block is contiguous (``[N, per]``), and
+    reading a row's next few values touches one or two cache lines, not one per word with
+    ``8 N`` bytes (two pages at 1024 rows) between them.
     """
+
+    row_major = True
+
+    def __init__(self, rngs: list[np.random.Generator | None]) -> None:
+        super().__init__(rngs)
+        self._starts = self._cols * self.per  # [N] where each row's block starts in _flat
+
+    def words(self, rows: np.ndarray | None) -> np.ndarray:
+        """Not available: 64-bit draws break the half-word model."""
+        raise TypeError("HalfWordStreams draws 32-bit values only; use RowStreams")
 
     def doubles(self, rows: np.ndarray | None) -> np.ndarray:
         """Not available: a double between 32-bit draws breaks the half-word model."""
@@ -223,9 +243,8 @@ class HalfWordStreams(RowStreams):
 
     def _read(self, rows: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The 32-bit values at half-word places ``q`` (``[R]`` or ``[R, W]``) of ``rows``."""
-        n = len(self._cols)
-        cols = rows if q.ndim == 1 else rows[:, None]
-        w = self._flat.take((q >> 1) * n + cols)
+        starts = self._starts[rows]
+        w = self._flat.take((q >> 1) + (starts if q.ndim == 1 else starts[:, None]))
         return (w >> ((q & 1) << 5).astype(np.uint64)) & _LOW32
 
     def _advance(self, rows: np.ndarray, q: np.ndarray) -> None:
@@ -254,3 +273,22 @@ class HalfWordStreams(RowStreams):
     def consume(self, peek: Peek, used: np.ndarray) -> None:
         """Advance each row of ``peek`` past its first ``used`` 32-bit values."""
         self._advance(peek.rows, peek.offset + used)
+
+    def window(self, width: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every row's place and next ``width`` 32-bit values, not consumed: ``(q [N],
+        values [width, N] uint64)`` (value j of every row is one contiguous line);
+        :meth:`advance_all` then moves each row to its new place. Every row must be live (a
+        batch steps only once all rows were reset)."""
+        words = width // 2 + 1
+        if self._budget < words:
+            self._top_up()
+        self._budget -= words
+        q = 2 * self._pos - self._has_half  # [N]
+        places = q + np.arange(width)[:, None]  # [W, N]
+        w = self._flat.take((places >> 1) + self._starts)
+        return q, (w >> ((places & 1) << 5).astype(np.uint64)) & _LOW32
+
+    def advance_all(self, q: np.ndarray) -> None:
+        """Set every row's place (half-words consumed) to ``q`` (int ``[N]``)."""
+        np.right_shift(q + 1, 1, out=self._pos)
+        self._has_half[:] = q & 1
