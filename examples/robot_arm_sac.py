@@ -18,7 +18,7 @@ step cost ~0.1; at three such stalled states the minimum of the two critics rate
 still 0.04-0.18 above the pseudo-inverse move towards the target (which reached it in one of
 them), while the two critics disagreed by up to 0.7. Two changes fixed it: a cost of 1 per
 step short of the target (a minimum-time task, so a step of delay costs at least 1: 73%), and
-a shorter horizon (values bounded by ``-(1 + 1.8) / (1 - gamma)``: -180 at 0.99, -14 at 0.8,
+a shorter horizon (values bounded by ``-(1 + 1.8) / (1 - gamma)``: -280 at 0.99, -14 at 0.8,
 so that cost stands out of the critics' error: 86% at ``gamma=0.9``, 93% at 0.8). The
 observation also gives the elbow and wrist positions, which make the arm's Jacobian linear in
 it (with the step cost alone: 65% with them, 73% without; one seed each, no clear effect).
