@@ -1,4 +1,4 @@
-"""Does training learn? palaestra's DQN, PPO and A2C against Stable-Baselines3's, seed by seed.
+"""Does training learn? palaestra against Stable-Baselines3, seed by seed: DQN, PPO, A2C, SAC, TD3.
 
 Run from the repository root::
 
@@ -6,6 +6,7 @@ Run from the repository root::
     .venv/bin/python benchmarks/learning.py --algo ppo --lib palaestra
     .venv/bin/python benchmarks/learning.py --algo dqn --lib sb3 --seeds 0 1 --jobs 2
     .venv/bin/python benchmarks/learning.py --algo a2c
+    .venv/bin/python benchmarks/learning.py --algo continuous         # sac and td3
 
 * ``dqn``: MountainCar-v0, the tutorial settings (``learning_rate=1e-3, buffer_size=50000,
   learning_starts=1000, batch_size=128, tau=1.0, gamma=0.99, train_freq=4,
@@ -21,6 +22,11 @@ Run from the repository root::
   ``learning_rate=7e-4``, ``gae_lambda=1``, ``ent_coef=0``; RL-Zoo's CartPole setting but for
   its budget), ``--a2c-steps`` env steps (default 200k). Reported: mean return over 100
   deterministic episodes.
+* ``sac`` / ``td3``: Pendulum-v1, one env, SB3's defaults but ``learning_rate=1e-3`` (the
+  issue's speed and learning setting: 256x256 nets for SAC, 400x300 for TD3, batch 256,
+  ``learning_starts=100``, one gradient step per env step, no action noise for TD3),
+  ``--continuous-steps`` env steps (default 10k). Reported: mean return over 100 deterministic
+  episodes, and per library the mean over seeds with a 95% t-interval.
 
 Both libraries run with ``torch.set_num_threads(1)`` and the same env construction: SB3 gets
 ``gymnasium.make`` / SB3's ``make_vec_env``, palaestra gets ``palaestra.make`` /
@@ -32,6 +38,7 @@ Both libraries run with ``torch.set_num_threads(1)`` and the same env constructi
 from __future__ import annotations
 
 import argparse
+import math
 import statistics
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -43,6 +50,9 @@ from tutorial_settings import DQN_KWARGS  # benchmarks/ is on sys.path when run 
 PPO_N_ENVS = 8
 A2C_N_ENVS = 8
 EVAL_EPISODES = 100
+CONTINUOUS = ("sac", "td3")
+# Two-sided 95% Student t quantiles by degrees of freedom (n - 1 seeds).
+T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306, 9: 2.262}
 
 
 @dataclass
@@ -110,7 +120,10 @@ def evaluate(model: Any, env: Any, seed: int, episodes: int) -> tuple[float, flo
         length, total, done = 0, 0.0, False
         while not done:
             action, _ = model.predict(obs, deterministic=True)
-            obs, reward, terminated, truncated, _ = env.step(int(action))
+            # Discrete envs take a Python int; Box envs the predicted float32 array as is.
+            obs, reward, terminated, truncated, _ = env.step(
+                action if action.shape else int(action)
+            )
             length += 1
             total += float(reward)
             done = terminated or truncated
@@ -127,6 +140,9 @@ def build(algo: str, lib: str, seed: int) -> tuple[Any, str]:
         env_id = "MountainCar-v0"
         model = cls("MlpPolicy", make_env(lib, env_id), seed=seed, **DQN_KWARGS)
         return model, env_id
+    if algo in CONTINUOUS:
+        env_id = "Pendulum-v1"
+        return cls("MlpPolicy", make_env(lib, env_id), learning_rate=1e-3, seed=seed), env_id
     env_id = "CartPole-v1"
     if algo == "a2c":
         return cls("MlpPolicy", make_vec(lib, env_id, A2C_N_ENVS, seed), seed=seed), env_id
@@ -162,9 +178,35 @@ def _run_task(task: tuple[str, str, int, int]) -> Result:
     return run_one(*task)
 
 
+def mean_ci95(values: list[float]) -> tuple[float, float]:
+    """Mean and half-width of its two-sided 95% Student-t confidence interval."""
+    mean = statistics.fmean(values)
+    if len(values) < 2:
+        return mean, math.nan
+    half = T95.get(len(values) - 1, 1.96) * statistics.stdev(values) / math.sqrt(len(values))
+    return mean, half
+
+
+def compare_continuous(results: list[Result]) -> None:
+    """Per SAC/TD3: each library's mean and 95% CI, and whether palaestra is not worse."""
+    for algo in CONTINUOUS:
+        ours = [r.mean_return for r in results if r.algo == algo and r.lib == "palaestra"]
+        theirs = [r.mean_return for r in results if r.algo == algo and r.lib == "sb3"]
+        if not ours or not theirs:
+            continue
+        our_mean, our_half = mean_ci95(ours)
+        sb3_mean, sb3_half = mean_ci95(theirs)
+        # "Not worse": our mean at or above the lower end of SB3's interval.
+        verdict = "not worse" if our_mean >= sb3_mean - sb3_half else "WORSE"
+        print(
+            f"{algo}: palaestra {our_mean:.1f} +- {our_half:.1f}, "
+            f"sb3 {sb3_mean:.1f} +- {sb3_half:.1f} (95% CI): palaestra {verdict}"
+        )
+
+
 def summarise(results: list[Result]) -> None:
     print("\nsummary (median over seeds)")
-    for algo in ("dqn", "ppo", "a2c"):
+    for algo in ("dqn", "ppo", "a2c", *CONTINUOUS):
         for lib in ("palaestra", "sb3"):
             rows = [r for r in results if r.algo == algo and r.lib == lib]
             if not rows:
@@ -175,12 +217,17 @@ def summarise(results: list[Result]) -> None:
                 rates = [r.success for r in rows]
                 per_seed = "/".join(f"{x:.0%}" for x in rates)
                 score = f"median success {statistics.median(rates):.0%} ({per_seed})"
+            elif algo in CONTINUOUS:
+                rets = [r.mean_return for r in rows]
+                per_seed = "/".join(f"{x:.1f}" for x in rets)
+                score = f"median return {statistics.median(rets):.1f} ({per_seed})"
             else:
                 rets = [r.mean_return for r in rows]
                 good = sum(x >= 475 for x in rets)
                 per_seed = "/".join(f"{x:.1f}" for x in rets)
                 score = f"{good}/{len(rets)} seeds >= 475 ({per_seed})"
             print(f"{algo} {lib:9s} seeds {seeds}: {score}; median train wall {wall:.1f}s")
+    compare_continuous(results)
 
 
 def parse_args() -> argparse.Namespace:
@@ -190,10 +237,13 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument("--ppo-steps", type=int, default=100_000, help="PPO env steps")
     parser.add_argument("--a2c-steps", type=int, default=200_000, help="A2C env steps")
     parser.add_argument(
+        "--continuous-steps", type=int, default=10_000, help="SAC and TD3 env steps"
+    )
+    parser.add_argument(
         "--algo",
-        choices=["dqn", "ppo", "a2c", "both", "all"],
+        choices=["dqn", "ppo", "a2c", "sac", "td3", "both", "continuous", "all"],
         default="both",
-        help="both: dqn and ppo; all: dqn, ppo and a2c",
+        help="both: dqn and ppo; continuous: sac and td3; all: every algorithm",
     )
     parser.add_argument("--lib", choices=["palaestra", "sb3", "both"], default="both")
     parser.add_argument("--jobs", type=int, default=1, help="processes (seeds in parallel)")
@@ -202,9 +252,19 @@ def parse_args() -> argparse.Namespace:
 
 def main() -> None:
     args = parse_args()
-    algos = {"both": ["dqn", "ppo"], "all": ["dqn", "ppo", "a2c"]}.get(args.algo, [args.algo])
+    algos = {
+        "both": ["dqn", "ppo"],
+        "continuous": list(CONTINUOUS),
+        "all": ["dqn", "ppo", "a2c", *CONTINUOUS],
+    }.get(args.algo, [args.algo])
     libs = ["palaestra", "sb3"] if args.lib == "both" else [args.lib]
-    budget = {"dqn": args.steps, "ppo": args.ppo_steps, "a2c": args.a2c_steps}
+    budget = {
+        "dqn": args.steps,
+        "ppo": args.ppo_steps,
+        "a2c": args.a2c_steps,
+        "sac": args.continuous_steps,
+        "td3": args.continuous_steps,
+    }
     tasks = [
         (algo, lib, seed, budget[algo]) for algo in algos for seed in args.seeds for lib in libs
     ]

@@ -7,6 +7,7 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -97,22 +98,42 @@ def test_robot_arm_sac() -> None:
     ), out
 
 
-def test_reaching_arm_passes_check_env_and_rewards_reaching() -> None:
+def _robot_arm() -> Any:
     sys.path.insert(0, str(EXAMPLES))
     try:
-        from robot_arm_sac import ReachingArm
+        import robot_arm_sac
     finally:
         sys.path.remove(str(EXAMPLES))
+    return robot_arm_sac
+
+
+def test_reaching_arm_passes_check_env_and_rewards_reaching() -> None:
     from palaestra.utils.env_checker import check_env
 
-    env = ReachingArm()
+    env = _robot_arm().ReachingArm()
     check_env(env)
     env.reset(seed=0)
-    env.angles[:] = 0.0  # arm stretched along x: the tip at (0.9, 0)
+    env.angles[:] = 0.0  # arm stretched along x: elbow (0.4, 0), wrist (0.7, 0), tip (0.9, 0)
+    env.target[:] = (0.5, 0.3)
+    obs, reward, terminated, truncated, info = env.step(np.zeros(3, np.float32))
+    np.testing.assert_allclose(obs[6:12], [0.4, 0, 0.7, 0, 0.9, 0], atol=1e-7)
+    np.testing.assert_allclose(obs[12:], [0.5, 0.3, -0.4, 0.3], atol=1e-7)
+    assert not terminated and not truncated and not info["is_success"]
+    assert reward == pytest.approx(-(1.0 + 0.5))  # the step cost plus the distance
     env.target[:] = (0.9, 0.02)
     _, reward, terminated, truncated, info = env.step(np.zeros(3, np.float32))
-    assert terminated and not truncated and info["is_success"]
-    assert reward == pytest.approx(1.0 - 0.02)
+    assert terminated and not truncated and info["is_success"] and reward == 0.0
+
+
+@pytest.mark.slow
+def test_robot_arm_sac_reaches_the_target() -> None:
+    """The example's full run: SAC's deterministic policy reaches >= 90% of 100 test targets."""
+    arm = _robot_arm()
+    model = arm.train(arm.STEPS)
+    rate = arm.success_rate(lambda obs: model.predict(obs, deterministic=True)[0], 100, 10_000)
+    rng = np.random.default_rng(0)
+    random_rate = arm.success_rate(lambda _: rng.uniform(-1, 1, 3), 100, 10_000)
+    assert rate >= 0.9 and random_rate <= 0.1, (rate, random_rate)
 
 
 def test_tabular_q_learning(tmp_path: Path) -> None:

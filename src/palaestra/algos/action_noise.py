@@ -168,7 +168,15 @@ def noise_to_json(noise: ActionNoise | None) -> dict[str, Any] | None:
 
 
 def noise_from_json(data: Any, depth: int = 0) -> ActionNoise:
-    """Inverse of ``noise_to_json``; ``ValueError`` naming what is malformed."""
+    """Inverse of ``noise_to_json``; ``ValueError`` naming what is malformed.
+
+    A preset writes only ``type``, ``mean`` and ``sigma``: an Ornstein-Uhlenbeck noise's
+    ``theta``, ``dt`` and ``initial_noise`` then take SB3's constructor defaults and its state
+    starts at ``initial_noise`` (zeros), as a new noise does.
+
+    >>> noise_from_json({"type": "OrnsteinUhlenbeckActionNoise", "mean": [0.0], "sigma": [0.5]})
+    OrnsteinUhlenbeckActionNoise(mu=[0.], sigma=[0.5])
+    """
     if not isinstance(data, dict) or depth > 1:
         raise ValueError(f"action_noise must be a saved noise mapping, got {data!r:.80}")
     kind = data.get("type")
@@ -187,19 +195,24 @@ def noise_from_json(data: Any, depth: int = 0) -> ActionNoise:
         if kind == "NormalActionNoise":
             return NormalActionNoise(mean, sigma)
         if kind == "OrnsteinUhlenbeckActionNoise":
-            initial = data["initial_noise"]
+            initial = data.get("initial_noise")
             ou = OrnsteinUhlenbeckActionNoise(
                 mean,
                 sigma,
-                float(data["theta"]),
-                float(data["dt"]),
+                float(data.get("theta", 0.15)),
+                float(data.get("dt", 1e-2)),
                 None if initial is None else np.asarray(initial, dtype=np.float64),
             )
-            prev = np.asarray(data["noise_prev"], dtype=np.float64)
-            if prev.shape != mean.shape:
-                raise ValueError(f"noise_prev {prev.shape} does not match mean {mean.shape}")
-            ou.noise_prev = prev
+            if "noise_prev" in data:  # a saved noise continues where it stopped
+                prev = np.asarray(data["noise_prev"], dtype=np.float64)
+                if prev.shape != mean.shape:
+                    raise ValueError(f"noise_prev {prev.shape} does not match mean {mean.shape}")
+                ou.noise_prev = prev
+            elif ou.noise_prev.shape != mean.shape:
+                raise ValueError(f"initial_noise does not match mean {mean.shape}")
             return ou
-    except (KeyError, TypeError, ValueError) as exc:
+    except KeyError as exc:
+        raise ValueError(f"malformed action_noise {kind!r}: missing key {exc}") from exc
+    except (TypeError, ValueError) as exc:
         raise ValueError(f"malformed action_noise {kind!r}: {exc}") from exc
     raise ValueError(f"unknown action_noise type {kind!r}")

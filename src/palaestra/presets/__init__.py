@@ -1,10 +1,13 @@
 """Tuned hyperparameters per (algorithm, env id), shipped as ``presets.json``.
 
 A preset is plain data: the policy name, the number of envs, the training budget and the
-algorithm's constructor kwargs. Two string forms stand for objects JSON cannot hold:
-``"lin_<x>"`` is a linear schedule from ``x`` to 0, and ``policy_kwargs.activation_fn`` names a
-torch activation (``"relu"``, ``"tanh"``, …). :func:`resolve` turns them into the objects; the
-rest of the data passes through unchanged, so what ``config.json`` records is what was trained.
+algorithm's constructor kwargs. Three forms stand for objects JSON cannot hold:
+``"lin_<x>"`` is a linear schedule from ``x`` to 0, ``policy_kwargs.activation_fn`` names a
+torch activation (``"relu"``, ``"tanh"``, …), and ``action_noise`` is a mapping such as
+``{"type": "OrnsteinUhlenbeckActionNoise", "mean": [0.0], "sigma": [0.5]}`` (one mean and sigma
+per action dimension; the form a model file saves a noise in, its state left out).
+:func:`resolve` turns them into the objects; the rest of the data passes through unchanged, so
+what ``config.json`` records is what was trained.
 
 >>> preset = get_preset("ppo", "CartPole-v1")
 >>> preset["n_envs"], preset["hyperparams"]["n_steps"]
@@ -124,7 +127,8 @@ def merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
 
 
 def resolve(hyperparams: dict[str, Any]) -> dict[str, Any]:
-    """Constructor kwargs with ``"lin_<x>"`` schedules and activation names turned into objects."""
+    """Constructor kwargs with ``"lin_<x>"`` schedules, activation names and action-noise
+    mappings turned into objects."""
     from palaestra.algos.schedules import LinearSchedule
 
     out: dict[str, Any] = {}
@@ -133,6 +137,8 @@ def resolve(hyperparams: dict[str, Any]) -> dict[str, Any]:
             out[key] = LinearSchedule(_lin_start(key, value), 0.0)
         elif key == "policy_kwargs" and isinstance(value, dict):
             out[key] = _resolve_policy_kwargs(value)
+        elif key == "action_noise" and value is not None:
+            out[key] = _resolve_action_noise(value)
         else:
             out[key] = value
     return out
@@ -159,3 +165,18 @@ def _resolve_policy_kwargs(policy_kwargs: dict[str, Any]) -> dict[str, Any]:
 
         out["activation_fn"] = getattr(torch.nn, ACTIVATIONS[name.lower()])
     return out
+
+
+def _resolve_action_noise(value: Any) -> Any:
+    from palaestra.algos.action_noise import ActionNoise, noise_from_json
+
+    if isinstance(value, ActionNoise):  # a --set from Python code, already an object
+        return value
+    try:
+        return noise_from_json(value)
+    except ValueError as exc:
+        raise PresetError(
+            f"action_noise={value!r} is not an action noise ({exc}); write e.g. "
+            '{"type": "OrnsteinUhlenbeckActionNoise", "mean": [0.0], "sigma": [0.5]} or '
+            '{"type": "NormalActionNoise", "mean": [0.0], "sigma": [0.1]}'
+        ) from None
