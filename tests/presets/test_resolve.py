@@ -85,7 +85,7 @@ def _presets_with_noise() -> list[tuple[str, str, str]]:
 
 @pytest.mark.parametrize(("algo", "env_id", "name"), _presets_with_noise())
 def test_shipped_noise_presets_build(algo: str, env_id: str, name: str) -> None:
-    from palaestra.cli.settings import algo_class
+    from palaestra.runs.settings import algo_class
 
     preset = presets.get_preset(algo, env_id, name)
     model = algo_class(algo)("MlpPolicy", env_id, **presets.resolve(preset["hyperparams"]))
