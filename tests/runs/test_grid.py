@@ -156,7 +156,8 @@ def test_a_sweep_runs_its_trials_as_ray_tasks(local_ray: Path, tmp_path: Path) -
     """Trials report their evaluations to the study through the SQLite file while they run
     in Ray workers; the driver tells the study how each ended."""
     pytest.importorskip("optuna")
-    from palaestra.runs.sweep import run_sweep, space_from_mapping
+    from palaestra.runs.space import space_from_mapping
+    from palaestra.runs.sweep import run_sweep
 
     space = space_from_mapping({"n_steps": [8, 16], "gamma": {"low": 0.9, "high": 0.99}}, "a2c")
     result = run_sweep(space, "a2c", "CartPole-v1", trials=4, seeds=2, out=tmp_path,

@@ -15,7 +15,8 @@ import pytest
 from tests.cli.conftest import run_cli
 
 from palaestra.runs import RunError
-from palaestra.runs.sweep import Choice, Range, run_sweep, space_from_mapping
+from palaestra.runs.space import Choice, Range, space_from_mapping
+from palaestra.runs.sweep import run_sweep
 
 optuna = pytest.importorskip("optuna")
 

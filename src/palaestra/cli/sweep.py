@@ -71,7 +71,8 @@ def add_parser(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """The ``sweep`` command."""
     from palaestra.runs.settings import check_algo
-    from palaestra.runs.sweep import load_space, run_sweep
+    from palaestra.runs.space import load_space
+    from palaestra.runs.sweep import run_sweep
 
     algo = check_algo(args.algo)
     if args.eval_episodes < 1:

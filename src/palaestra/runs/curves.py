@@ -42,6 +42,7 @@ __all__ = [
     "plot_learning_curve",
     "read_episodes",
     "rolling_mean",
+    "save_figure",
 ]
 
 LEARNING_CURVE_FILE = "learning_curve.png"
@@ -149,7 +150,7 @@ def plot_learning_curve(episodes: Episodes, path: Path, title: str) -> None:
     ax.legend(loc="best")
     fig.tight_layout()
     try:
-        _save(fig, path)
+        save_figure(fig, path)
     finally:
         plt.close(fig)
 
@@ -199,7 +200,7 @@ def draw_main(argv: list[str]) -> int:
     return 0
 
 
-def _save(fig: Any, path: Path) -> None:
+def save_figure(fig: Any, path: Path) -> None:
     """``fig.savefig``, written atomically (a crash mid-draw keeps the previous plot)."""
     with atomic_write(path, "wb") as file:
         fig.savefig(file, dpi=100, format=path.suffix.lstrip(".") or "png")
@@ -260,6 +261,6 @@ def plot_compare(
         ax.legend(loc="best")
     fig.tight_layout()
     try:
-        _save(fig, path)
+        save_figure(fig, path)
     finally:
         plt.close(fig)

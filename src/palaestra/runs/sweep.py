@@ -1,8 +1,9 @@
 """Hyperparameter search with Optuna, each trial scored over several seeds, locally or on Ray.
 
-A search space maps hyperparameter names (the algorithm's constructor keywords, or ``n_envs``;
-dotted names reach inside dicts: ``policy_kwargs.net_arch``) to a list of choices or to a range
-``{low: ..., high: ..., log: true|false, step: ...}`` (integer bounds give an integer range)::
+A search space (:mod:`palaestra.runs.space`) maps hyperparameter names (the algorithm's
+constructor keywords, or ``n_envs``; dotted names reach inside dicts:
+``policy_kwargs.net_arch``) to a list of choices or to a range ``{low: ..., high: ..., log:
+true|false, step: ...}`` (integer bounds give an integer range)::
 
     learning_rate: {low: 1.0e-4, high: 3.0e-3, log: true}
     n_steps: [64, 128, 256]
@@ -24,158 +25,20 @@ ALGO ENV --config best.yaml``), ``history.png`` and ``importance.png``.
 
 from __future__ import annotations
 
-import csv
 import dataclasses
-import json
-import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from palaestra.runs.errors import RunError, first_line, one_line
+from palaestra.runs.space import Param, distributions, settings_of
 from palaestra.runs.spec import RunSpec, resolve_spec
 
-__all__ = ["Choice", "Range", "SweepResult", "load_space", "run_sweep", "space_from_mapping"]
+__all__ = ["SweepResult", "run_sweep", "run_trial"]
 
 STUDY_FILE = "study.db"
-TRIALS_FILE = "trials.csv"
-BEST_FILE = "best.yaml"
 EVAL_SEED = 10_000  # evaluation episodes of seed s start from EVAL_SEED + s
-
-
-@dataclasses.dataclass(frozen=True)
-class Choice:
-    """One of ``values`` (JSON values: numbers, strings, lists, mappings, null)."""
-
-    values: tuple[Any, ...]
-
-
-@dataclasses.dataclass(frozen=True)
-class Range:
-    """A number in ``[low, high]``: an integer when both bounds are, log-uniform with
-    ``log``, on a grid of ``step`` when given."""
-
-    low: float
-    high: float
-    log: bool = False
-    step: float | None = None
-    integer: bool = False
-
-
-Param = Choice | Range
-
-
-def _number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
-def _parse(name: str, value: Any, source: str) -> Param:
-    if isinstance(value, list):
-        if not value:
-            raise RunError(f"{source}: {name} has no choices", "list at least one value")
-        return Choice(tuple(value))
-    if not isinstance(value, Mapping):
-        raise RunError(
-            f"{source}: {name} must be a list of choices or a range, got {value!r}",
-            "e.g. [64, 128] or {low: 0.0001, high: 0.01, log: true}",
-        )
-    unknown = sorted(set(value) - {"low", "high", "log", "step"})
-    if unknown or "low" not in value or "high" not in value:
-        raise RunError(
-            f"{source}: range {name} must have low and high (and optionally log, step), "
-            f"got keys {sorted(value)}",
-            "e.g. {low: 0.9, high: 0.999}",
-        )
-    low, high, log, step = value["low"], value["high"], value.get("log", False), value.get("step")
-    if not (_number(low) and _number(high)):
-        raise RunError(f"{source}: {name} bounds must be numbers, got {low!r} and {high!r}")
-    if not low < high:
-        raise RunError(
-            f"{source}: impossible range for {name}: low {low} is not below high {high}",
-            "swap or fix the bounds",
-        )
-    if not isinstance(log, bool):
-        raise RunError(f"{source}: {name}.log must be true or false, got {log!r}")
-    if log and low <= 0:
-        raise RunError(
-            f"{source}: impossible range for {name}: a log range needs low > 0, got {low}",
-            "raise low, or drop log",
-        )
-    if step is not None and not (_number(step) and 0 < step <= high - low):
-        raise RunError(f"{source}: {name}.step must be a number in (0, high - low], got {step!r}")
-    if step is not None and log:
-        raise RunError(f"{source}: {name} cannot have both step and log", "drop one")
-    integer = all(isinstance(v, int) for v in (low, high)) and (
-        step is None or isinstance(step, int)
-    )
-    return Range(float(low), float(high), log, None if step is None else float(step), integer)
-
-
-def space_from_mapping(
-    data: Mapping[str, Any], algo: str, source: str = "search space"
-) -> dict[str, Param]:
-    """A checked search space for ``algo``: ``RunError`` naming an unknown hyperparameter or
-    an impossible range."""
-    from palaestra.runs.settings import hyperparameter_names
-
-    if not isinstance(data, Mapping) or not data:
-        raise RunError(f"{source} must map hyperparameter names to choices or ranges")
-    valid = {*hyperparameter_names(algo), "n_envs"}
-    space: dict[str, Param] = {}
-    for name, value in data.items():
-        head = str(name).split(".")[0]
-        if head not in valid or not all(str(name).split(".")):
-            raise RunError(
-                f"{source}: unknown {algo} hyperparameter {name!r}",
-                f"valid names: {', '.join(sorted(valid))}",
-            )
-        space[str(name)] = _parse(str(name), value, source)
-    return space
-
-
-def load_space(path: str | Path, algo: str) -> dict[str, Param]:
-    """The search space in a ``.yaml``/``.json`` file (see the module's docstring)."""
-    from palaestra.runs.settings import load_config_file
-
-    return space_from_mapping(load_config_file(str(path)), algo, f"search space {str(path)!r}")
-
-
-# -- sampling ----------------------------------------------------------------------------------
-def _distributions(space: Mapping[str, Param]) -> dict[str, Any]:
-    """Optuna distributions; choices are stored as JSON text (Optuna's categorical values are
-    scalars, and a net_arch is a list)."""
-    import optuna
-
-    out: dict[str, Any] = {}
-    for name, param in space.items():
-        if isinstance(param, Choice):
-            out[name] = optuna.distributions.CategoricalDistribution(
-                [json.dumps(v, sort_keys=True) for v in param.values]
-            )
-        elif param.integer:
-            out[name] = optuna.distributions.IntDistribution(
-                int(param.low), int(param.high), log=param.log, step=int(param.step or 1)
-            )
-        else:
-            out[name] = optuna.distributions.FloatDistribution(
-                param.low, param.high, log=param.log, step=param.step
-            )
-    return out
-
-
-def _settings(params: Mapping[str, Any], space: Mapping[str, Param]) -> dict[str, Any]:
-    """Sampled values -> nested settings overrides (``policy_kwargs.net_arch`` -> a dict)."""
-    out: dict[str, Any] = {}
-    for name, value in params.items():
-        if isinstance(space[name], Choice):
-            value = json.loads(value)
-        node = out
-        *parents, leaf = name.split(".")
-        for part in parents:
-            node = node.setdefault(part, {})
-        node[leaf] = value
-    return out
 
 
 # -- one trial ---------------------------------------------------------------------------------
@@ -365,7 +228,7 @@ def run_sweep(
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
             raise RunError(f"{name} must be an integer >= {low}, got {value!r}")
     base, _ = resolve_spec(algo, env_id, preset, n_timesteps=n_timesteps)
-    distributions = _distributions(space)
+    searched = distributions(space)
     ray = connect_ray(address) if backend == "ray" else None  # a bad address: before any file
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
@@ -381,14 +244,14 @@ def run_sweep(
         pruner=_make_pruner(pruner),
         load_if_exists=True,
     )
-    _check_same_space(study, distributions)
+    _check_same_space(study, searched)
     _mark_interrupted(rdb, study)
     if sampler_seed is not None:  # a continued study draws new settings, not the first ones again
         study.sampler = optuna.samplers.TPESampler(seed=sampler_seed + len(study.trials))
     todo = max(0, trials - _finished(study))
 
     def specs(params: Mapping[str, Any]) -> list[str]:
-        overrides = _settings(params, space)
+        overrides = settings_of(params, space)
         return [
             resolve_spec(
                 base.algo,
@@ -402,7 +265,7 @@ def run_sweep(
         ]
 
     def tell(trial: Any, outcome: dict[str, Any]) -> None:
-        trial_row = {"number": trial.number, **outcome, "params": _settings(trial.params, space)}
+        trial_row = {"number": trial.number, **outcome, "params": settings_of(trial.params, space)}
         if outcome["state"] == "complete":
             study.tell(trial, outcome["value"])
         elif outcome["state"] == "pruned":
@@ -416,7 +279,7 @@ def run_sweep(
     ran = 0
     if backend == "local":
         for _ in range(todo):
-            trial = study.ask(distributions)
+            trial = study.ask(searched)
             try:
                 outcome = run_trial(
                     specs(trial.params),
@@ -444,7 +307,7 @@ def run_sweep(
         asked = 0
         while asked < todo or pending:
             while asked < todo and len(pending) < slots:
-                trial = study.ask(distributions)
+                trial = study.ask(searched)
                 ref = task.remote(
                     specs(trial.params),
                     str((folder / "trials" / str(trial.number)).resolve()),
@@ -471,145 +334,19 @@ def run_sweep(
                 }
             tell(trial, outcome)
             ran += 1
-    return _write_outputs(study, space, folder, base, preset, ran)
+    from palaestra.runs.sweep_report import write_outputs
 
-
-def _check_same_space(study: Any, distributions: Mapping[str, Any]) -> None:
-    """A study continued with another space would mix incomparable trials."""
-    for trial in study.get_trials(deepcopy=False):
-        if trial.distributions and set(trial.distributions) != set(distributions):
-            raise RunError(
-                f"the study in this folder searched {sorted(trial.distributions)}, not "
-                f"{sorted(distributions)}",
-                "use another --out for a different space",
-            )
-        return
-
-
-def _write_outputs(
-    study: Any,
-    space: Mapping[str, Param],
-    folder: Path,
-    base: RunSpec,
-    preset: str | None,
-    ran: int,
-) -> SweepResult:
-    from optuna.trial import TrialState
-
-    rows = []
-    for trial in study.get_trials(deepcopy=False):
-        if trial.state == TrialState.RUNNING:
-            continue
-        rows.append(
-            {
-                "number": trial.number,
-                "state": trial.state.name.lower(),
-                "value": trial.value,
-                "params": _settings(trial.params, space),
-                "error": trial.user_attrs.get("error"),
-            }
-        )
-    # Complete trials by value, then pruned ones (their last evaluation), then failed ones.
-    order = {"complete": 0, "pruned": 1}
-    rows.sort(key=lambda r: (order.get(r["state"], 2), -(r["value"] or 0.0), r["number"]))
-    _write_table(rows, folder / TRIALS_FILE)
-    best = next((r for r in rows if r["state"] == "complete"), None)
-    best_file = None
-    if best is not None:
-        spec = resolve_spec(
-            base.algo, base.env_id, preset, overrides=best["params"], n_timesteps=base.n_timesteps
-        )[0]
-        best_file = folder / BEST_FILE
-        _write_best(spec, best, best_file)
-    _plots(study, folder)
+    rows, best, best_file = write_outputs(study, space, folder, base, preset)
     return SweepResult(folder, rows, best, best_file, ran)
 
 
-def _write_table(rows: list[dict[str, Any]], path: Path) -> None:
-    from palaestra.utils.atomic_write import atomic_write
-
-    with atomic_write(path, "w", encoding="utf-8", newline="") as file:
-        writer = csv.writer(file)
-        writer.writerow(["rank", "trial", "state", "value", "params", "error"])
-        for rank, row in enumerate(rows, 1):
-            value = "" if row["value"] is None else f"{row['value']:.4f}"
-            writer.writerow(
-                [
-                    rank,
-                    row["number"],
-                    row["state"],
-                    value,
-                    json.dumps(row["params"], sort_keys=True),
-                    row["error"] or "",
-                ]
+def _check_same_space(study: Any, searched: Mapping[str, Any]) -> None:
+    """A study continued with another space would mix incomparable trials."""
+    for trial in study.get_trials(deepcopy=False):
+        if trial.distributions and set(trial.distributions) != set(searched):
+            raise RunError(
+                f"the study in this folder searched {sorted(trial.distributions)}, not "
+                f"{sorted(searched)}",
+                "use another --out for a different space",
             )
-
-
-def _write_best(spec: RunSpec, best: dict[str, Any], path: Path) -> None:
-    """The best settings as a ``train --config`` file (YAML, or JSON without PyYAML)."""
-    from palaestra.utils.atomic_write import atomic_write
-
-    config = spec.to_config()
-    for key in ("seed", "device", "palaestra_version", "preset"):
-        config.pop(key, None)
-    header = (
-        f"# palaestra sweep: best of the trials, trial {best['number']}, mean return "
-        f"{best['value']:.2f}\n# palaestra train {spec.algo} {spec.env_id} --config {path.name}\n"
-    )
-    try:
-        import yaml
-
-        text = header + yaml.safe_dump(config, sort_keys=False)
-    except ImportError:
-        text = json.dumps(config, indent=2) + "\n"
-    with atomic_write(path, "w", encoding="utf-8") as file:
-        file.write(text)
-
-
-def _plots(study: Any, folder: Path) -> None:
-    """``history.png`` (each trial's value and the best so far) and ``importance.png``
-    (Optuna's fANOVA importances), when matplotlib is installed and the trials allow."""
-    import importlib.util
-
-    from optuna.trial import TrialState
-
-    if importlib.util.find_spec("matplotlib") is None:
         return
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from palaestra.runs.curves import _save
-
-    complete = [t for t in study.get_trials(deepcopy=False) if t.state == TrialState.COMPLETE]
-    if not complete:
-        return
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    numbers = [t.number for t in complete]
-    values = [t.value for t in complete]
-    best = [max(values[: i + 1]) for i in range(len(values))]
-    ax.scatter(numbers, values, label="trial", color="tab:blue")
-    ax.step(numbers, best, where="post", label="best so far", color="tab:orange")
-    ax.set_xlabel("trial")
-    ax.set_ylabel("mean return over seeds")
-    ax.set_title(study.study_name)
-    ax.legend()
-    _save(fig, folder / "history.png")
-    plt.close(fig)
-    if len(complete) < 2 or not complete[0].params:
-        return
-    import optuna
-
-    try:
-        importances = optuna.importance.get_param_importances(study)
-    except (RuntimeError, ValueError):  # too few distinct trials to tell
-        return
-    fig, ax = plt.subplots(figsize=(8, 0.6 * len(importances) + 1.5))
-    names = list(importances)[::-1]
-    ax.barh(names, [importances[n] for n in names], color="tab:green")
-    ax.set_xlabel("importance (fANOVA)")
-    ax.set_title(f"{study.study_name}: hyperparameter importance")
-    fig.tight_layout()
-    _save(fig, folder / "importance.png")
-    plt.close(fig)
