@@ -40,6 +40,7 @@ import palaestra
 from palaestra import presets
 from palaestra.runs.files import is_goal_env
 from palaestra.runs.settings import ALGOS, parse_value
+from palaestra.utils.atomic_write import atomic_write
 
 PRESETS_JSON = Path(__file__).resolve().parents[1] / "src/palaestra/presets/presets.json"
 EVAL_EPISODES = 100
@@ -99,28 +100,27 @@ class NormalizedPolicy:
         return self.model.predict(self.venv.normalize_obs(obs), **kwargs)
 
 
-def run_one(algo: str, env_id: str, name: str, preset: dict[str, Any], seed: int) -> Run:
-    """Train ``preset`` with ``seed`` the way the CLI does, then evaluate it."""
-    import torch
-
+def evaluate(
+    model: Any,
+    venv: Any,
+    algo: str,
+    env_id: str,
+    name: str,
+    preset: dict[str, Any],
+    seed: int,
+    wall: float,
+) -> Run:
+    """100 deterministic episodes on a fresh env reset once with ``EVAL_SEED + seed``."""
     from palaestra.algos import evaluate_policy
-    from palaestra.runs.settings import algo_class
 
-    torch.set_num_threads(1)
-    venv = make_training_env(env_id, preset, seed)
-    cls = algo_class(algo)
-    model = cls(
-        preset["policy"], venv, seed=seed, verbose=0, **presets.resolve(preset["hyperparams"])
-    )
-    start = time.perf_counter()
-    model.learn(preset["n_timesteps"])
-    wall = time.perf_counter() - start
     policy = NormalizedPolicy(model, venv) if preset.get("normalize") else model
     env = palaestra.make(env_id, **(preset.get("env_kwargs") or {}))
     env.reset(seed=EVAL_SEED + seed)
     returns, lengths = evaluate_policy(
         policy, env, n_eval_episodes=EVAL_EPISODES, deterministic=True, return_episode_rewards=True
     )
+    if preset.get("normalize"):
+        venv.training = True  # evaluation paused training; it goes on normalising as before
     success = None
     if is_goal_env(env_id):
         limit = env.spec.max_episode_steps if env.spec is not None else None
@@ -138,6 +138,57 @@ def run_one(algo: str, env_id: str, name: str, preset: dict[str, Any], seed: int
         wall,
         int(model.num_timesteps),
     )
+
+
+def run_one(
+    algo: str,
+    env_id: str,
+    name: str,
+    preset: dict[str, Any],
+    seed: int,
+    eval_at: list[int] | None = None,
+) -> Run:
+    """Train ``preset`` with ``seed`` the way the CLI does, then evaluate it.
+
+    ``eval_at``: also evaluate (and print a row) when training passes each of these step
+    counts. Evaluating plays a separate env with the deterministic policy, which touches
+    neither the model's nor the training env's state, so the row at N is what a preset with
+    ``n_timesteps=N`` gives when nothing is scheduled on the total (constant learning rate,
+    no exploration schedule), and its wall time is the training time up to N alone.
+    """
+    import torch
+
+    from palaestra.algos.callbacks import BaseCallback
+    from palaestra.runs.settings import algo_class
+
+    torch.set_num_threads(1)
+    venv = make_training_env(env_id, preset, seed)
+    cls = algo_class(algo)
+    model = cls(
+        preset["policy"], venv, seed=seed, verbose=0, **presets.resolve(preset["hyperparams"])
+    )
+    marks = sorted(m for m in (eval_at or []) if m < preset["n_timesteps"])
+    paused = [0.0]
+
+    class EvalAt(BaseCallback):
+        def _on_step(self) -> bool:
+            # Past the mark, not at it: an off-policy learner trains after the steps it has
+            # collected, so the policy that learn(N) returns exists from step N + 1 on.
+            if marks and self.num_timesteps > marks[0]:
+                mark = marks.pop(0)
+                begin = time.perf_counter()
+                done = evaluate(
+                    model, venv, algo, env_id, name, preset, seed, begin - start - paused[0]
+                )
+                done.steps = mark
+                print(row(done), flush=True)
+                paused[0] += time.perf_counter() - begin
+            return True
+
+    start = time.perf_counter()
+    model.learn(preset["n_timesteps"], callback=EvalAt() if marks else None)
+    wall = time.perf_counter() - start - paused[0]
+    return evaluate(model, venv, algo, env_id, name, preset, seed, wall)
 
 
 # -- output ------------------------------------------------------------------------------------
@@ -203,7 +254,8 @@ def write_measured(measured: dict[tuple[str, str, str], dict[str, Any]]) -> None
     table = json.loads(PRESETS_JSON.read_text(encoding="utf-8"))
     for (algo, env_id, name), record in measured.items():
         table[algo][env_id][name]["measured"] = record
-    PRESETS_JSON.write_text(compact_json(table) + "\n", encoding="utf-8")
+    with atomic_write(PRESETS_JSON, "w", encoding="utf-8") as fh:
+        fh.write(compact_json(table) + "\n")
 
 
 def machine() -> str:
@@ -256,6 +308,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="try a change, e.g. n_envs=4 or hyperparams.learning_rate=0.002 (not with --update)",
     )
     parser.add_argument("--update", action="store_true", help="write 'measured' into presets.json")
+    parser.add_argument(
+        "--eval-at",
+        type=int,
+        nargs="+",
+        default=[],
+        metavar="STEPS",
+        help="also evaluate at these step counts during training (to choose n_timesteps)",
+    )
     args = parser.parse_args(argv)
     if args.update and args.assignments:
         parser.error("--update records the presets as shipped; drop --set")
@@ -281,7 +341,7 @@ def main(argv: list[str] | None = None) -> None:
         preset = overridden(presets.get_preset(algo, env_id, name), args.assignments)
         runs = []
         for seed in args.seeds:
-            runs.append(run_one(algo, env_id, name, preset, seed))
+            runs.append(run_one(algo, env_id, name, preset, seed, args.eval_at))
             print(row(runs[-1]), flush=True)
         lines.append(summary_line(runs))
         measured[(algo, env_id, name)] = {
