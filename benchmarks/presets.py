@@ -12,14 +12,16 @@ Run from the repository root::
 Each run is built exactly as ``palaestra train ALGO ENV --preset NAME --seed S`` builds it:
 ``make_vec_env(env_id, n_envs, seed=S, env_kwargs)`` (under ``VecNormalize`` when the preset
 says ``normalize``), ``ALGO(policy, env, seed=S, **resolve(hyperparams))``, then
-``learn(n_timesteps)`` with ``torch.set_num_threads(1)``. Only ``learn`` is timed (wall clock).
+``learn(n_timesteps)`` with ``torch.set_num_threads(1)``. Only ``learn`` is timed, in wall-clock
+and in process CPU seconds (the second is what other jobs on a shared machine do not inflate).
 The trained model then plays 100 deterministic episodes with ``evaluate_policy`` on a fresh
 ``palaestra.make(env_id)`` reset once with seed ``10_000 + S`` (later resets continue its
 generator). Goal envs (MountainCar, Acrobot) also report the success rate: episodes that end
 before the time limit. One row per (preset, seed) as it finishes, then per preset the medians
 and how many seeds reach the env's target (the env spec's ``reward_threshold``; -200 for
 Pendulum-v1, which has none). Run one training at a time on a quiet machine: wall times are
-the point. Atari presets (``"atari"`` in the preset) are left to ``benchmarks/atari_presets.py``.
+the point; where the machine is shared, the CPU seconds say what an idle core would take.
+Atari presets (``"atari"`` in the preset) are left to ``benchmarks/atari_presets.py``.
 """
 
 from __future__ import annotations
@@ -62,6 +64,7 @@ class Run:
     success: float | None  # goal envs only: fraction of episodes ending before the time limit
     wall_s: float
     steps: int
+    cpu_s: float = float("nan")  # process CPU time of training: what load does not inflate
 
 
 def target(env_id: str) -> float:
@@ -109,6 +112,7 @@ def evaluate(
     preset: dict[str, Any],
     seed: int,
     wall: float,
+    cpu: float,
 ) -> Run:
     """100 deterministic episodes on a fresh env reset once with ``EVAL_SEED + seed``."""
     from palaestra.algos import evaluate_policy
@@ -137,6 +141,7 @@ def evaluate(
         success,
         wall,
         int(model.num_timesteps),
+        cpu,
     )
 
 
@@ -168,7 +173,7 @@ def run_one(
         preset["policy"], venv, seed=seed, verbose=0, **presets.resolve(preset["hyperparams"])
     )
     marks = sorted(m for m in (eval_at or []) if m < preset["n_timesteps"])
-    paused = [0.0]
+    paused = [0.0, 0.0]  # wall, CPU seconds spent evaluating
 
     class EvalAt(BaseCallback):
         def _on_step(self) -> bool:
@@ -176,24 +181,25 @@ def run_one(
             # collected, so the policy that learn(N) returns exists from step N + 1 on.
             if marks and self.num_timesteps > marks[0]:
                 mark = marks.pop(0)
-                begin = time.perf_counter()
-                done = evaluate(
-                    model, venv, algo, env_id, name, preset, seed, begin - start - paused[0]
-                )
+                begin, begin_cpu = time.perf_counter(), time.process_time()
+                wall, cpu = begin - start - paused[0], begin_cpu - start_cpu - paused[1]
+                done = evaluate(model, venv, algo, env_id, name, preset, seed, wall, cpu)
                 done.steps = mark
                 print(row(done), flush=True)
                 paused[0] += time.perf_counter() - begin
+                paused[1] += time.process_time() - begin_cpu
             return True
 
-    start = time.perf_counter()
+    start, start_cpu = time.perf_counter(), time.process_time()
     model.learn(preset["n_timesteps"], callback=EvalAt() if marks else None)
     wall = time.perf_counter() - start - paused[0]
-    return evaluate(model, venv, algo, env_id, name, preset, seed, wall)
+    cpu = time.process_time() - start_cpu - paused[1]
+    return evaluate(model, venv, algo, env_id, name, preset, seed, wall, cpu)
 
 
 # -- output ------------------------------------------------------------------------------------
 HEADER = f"{'algo':4s} {'env':15s} {'preset':8s} {'seed':>4s} {'return':>14s} {'success':>7s}"
-HEADER += f" {'wall s':>7s} {'steps':>8s}"
+HEADER += f" {'wall s':>7s} {'cpu s':>7s} {'steps':>8s}"
 
 
 def row(run: Run) -> str:
@@ -202,7 +208,7 @@ def row(run: Run) -> str:
     score = f"{run.mean_return:7.1f} ±{run.std_return:5.1f}"
     return (
         f"{run.algo:4s} {run.env_id:15s} {run.name:8s} {run.seed:4d} {score:>14s} {success:>7s}"
-        f" {run.wall_s:7.1f} {run.steps:8d}"
+        f" {run.wall_s:7.1f} {run.cpu_s:7.1f} {run.steps:8d}"
     )
 
 
@@ -217,6 +223,8 @@ def summary(runs: list[Run]) -> dict[str, Any]:
         "seeds_meeting_target": sum(r.mean_return >= goal for r in runs),
         "wall_s": [round(r.wall_s, 1) for r in runs],
         "wall_s_median": round(statistics.median(r.wall_s for r in runs), 1),
+        "cpu_s": [round(r.cpu_s, 1) for r in runs],
+        "cpu_s_median": round(statistics.median(r.cpu_s for r in runs), 1),
     }
     if runs[0].success is not None:
         out["success_rate"] = [r.success for r in runs]
@@ -229,7 +237,7 @@ def summary_line(runs: list[Run]) -> str:
     return (
         f"{head} median return {s['median_return']:.1f}, "
         f"{s['seeds_meeting_target']}/{len(runs)} seeds >= {s['target']:g}, "
-        f"median train wall {s['wall_s_median']:.1f}s"
+        f"median train wall {s['wall_s_median']:.1f}s, CPU {s['cpu_s_median']:.1f}s"
     )
 
 
