@@ -48,7 +48,7 @@ def save(norm: VecNormalize, save_path: str | os.PathLike[str]) -> None:
         "format": DICT_FORMAT if isinstance(norm.obs_rms, dict) else BOX_FORMAT,
         **{key: getattr(norm, key) for key in _OPTIONS},
     }
-    arrays: dict[str, np.ndarray] = {}
+    arrays: dict[str, Any] = {}  # name -> array
     if isinstance(norm.obs_rms, dict):
         settings["norm_obs_keys"] = list(norm.obs_rms)
         settings["obs_counts"] = [float(rms.count) for rms in norm.obs_rms.values()]
@@ -206,13 +206,9 @@ def _read_settings(
 def _dict_settings(settings: dict[str, Any], name: str) -> dict[str, Any]:
     """The per-key settings of a Dict file: distinct string keys, one positive count each."""
     _check(name, settings, "norm_obs", settings["norm_obs"], f"true in a {DICT_FORMAT} file")
-    keys = settings.get("norm_obs_keys")
-    good = (
-        isinstance(keys, list)
-        and len(keys) > 0
-        and all(isinstance(k, str) for k in keys)
-        and len(set(keys)) == len(keys)
-    )
+    raw = settings.get("norm_obs_keys")
+    keys: list[str] = raw if isinstance(raw, list) else []
+    good = len(keys) > 0 and all(isinstance(k, str) for k in keys) and len(set(keys)) == len(keys)
     _check(name, settings, "norm_obs_keys", good, "a non-empty list of distinct strings")
     counts = settings.get("obs_counts")
     numbers = [_number(c) for c in counts] if isinstance(counts, list) else []
