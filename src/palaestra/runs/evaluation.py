@@ -244,6 +244,7 @@ def evaluate_run(
                 norm_reward=False,
                 clip_obs=training_env.clip_obs,
                 epsilon=training_env.epsilon,
+                norm_obs_keys=training_env.norm_obs_keys,  # a Dict env's normalised keys
             )
             venv.obs_rms = copy.deepcopy(training_env.obs_rms)
         elif (path.parent / NORMALIZE_FILE).is_file():

@@ -14,8 +14,10 @@ state from another env, another ``n_envs`` or a crafted file is refused with a
 :class:`~palaestra.error.RunStateError` that names the field.
 
 Attribute kinds: numpy arrays (copied), ``np.random.Generator`` (its bit generator's state),
-lists of generators or ``None`` (per-row generators), JSON scalars and flat lists of them, and
-nested objects that have a ``RUN_STATE`` of their own.
+lists of generators or ``None`` (per-row generators), JSON scalars and flat lists of them,
+nested objects that have a ``RUN_STATE`` of their own, and dicts of such objects keyed by
+strings (one per ``Dict`` observation key: ``VecNormalize.obs_rms``); a dict's objects are
+numbered in its arrays' names, so any key string is safe.
 """
 
 from __future__ import annotations
@@ -58,6 +60,13 @@ def capture(obj: Any, prefix: str = "") -> State:
             sub_meta, sub_arrays = capture(value, key + "/")
             meta[name] = {"object": sub_meta}
             arrays.update(sub_arrays)
+        elif _is_object_dict(value):
+            pairs = []
+            for i, (item_key, item) in enumerate(value.items()):
+                sub_meta, sub_arrays = capture(item, f"{key}/{i}/")
+                pairs.append([item_key, sub_meta])
+                arrays.update(sub_arrays)
+            meta[name] = {"objects": pairs}
         else:
             meta[name] = {"value": _plain(value, key)}
     return meta, arrays
@@ -69,6 +78,15 @@ def restore(obj: Any, state: State, prefix: str = "") -> None:
     _plan(obj, state[0], state[1], prefix, ops)
     for op in ops:
         op()
+
+
+def _is_object_dict(value: Any) -> bool:
+    """A non-empty dict of string keys to objects that have a run state."""
+    return (
+        isinstance(value, dict)
+        and bool(value)
+        and all(isinstance(k, str) and supports_run_state(v) for k, v in value.items())
+    )
 
 
 def _generator_state(value: Any, key: str) -> dict[str, Any] | None:
@@ -113,6 +131,8 @@ def _plan(
         ((kind, saved),) = entry.items()
         if kind == "object" and supports_run_state(current):
             _plan(current, saved, arrays, key + "/", ops)
+        elif kind == "objects" and _is_object_dict(current):
+            _plan_objects(current, saved, arrays, key, ops)
         elif kind == "generator" and isinstance(current, np.random.Generator):
             ops.append(_plan_generator(current, saved, key))
         elif kind == "generators" and isinstance(current, list):
@@ -123,6 +143,25 @@ def _plan(
             ops.append(_plan_list(current, saved, key))
         else:
             raise RunStateError(f"run state field {key!r} holds a {kind}, which does not fit")
+
+
+def _plan_objects(
+    current: dict[str, Any],
+    saved: Any,
+    arrays: dict[str, np.ndarray],
+    key: str,
+    ops: list[Callable[[], None]],
+) -> None:
+    """A dict of objects: the same keys in the same order, then each object in place."""
+    pairs = saved if isinstance(saved, list) else []
+    keys = [p[0] if isinstance(p, list) and len(p) == 2 else None for p in pairs]
+    if not isinstance(saved, list) or keys != list(current):
+        shown = keys if isinstance(saved, list) else type(saved).__name__
+        raise RunStateError(
+            f"run state {key!r} holds the keys {shown!r:.200}, this object has {list(current)!r}"
+        )
+    for i, (item_key, sub_meta) in enumerate(pairs):
+        _plan(current[item_key], sub_meta, arrays, f"{key}/{i}/", ops)
 
 
 def _plan_array(

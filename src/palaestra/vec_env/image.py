@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from palaestra.spaces import Box
+from palaestra.spaces import Box, Dict
 from palaestra.vec_env.base import StepReturn, VecEnv, VecEnvWrapper
+from palaestra.vec_env.stacked_observations import StackedObservations
 
 
 def physical_memory() -> int | None:
@@ -53,14 +55,28 @@ class VecFrameStack(VecEnvWrapper):
 
     ``channels_order`` is "last" or "first"; None means "last" unless the observations are
     channel-first images (SB3's rule). A finished env's stack restarts from zeros.
+
+    A ``Dict`` observation space has every key stacked by a :class:`StackedObservations` (SB3's
+    Dict path): every key must be a ``Box`` (else ``TypeError``, as SB3), and
+    ``channels_order`` may be one order for all keys or a dict of one per key.
     """
 
-    RUN_STATE = ("venv", "stacked")  # exact resume (utils.run_state)
+    RUN_STATE: tuple[str, ...] = ("venv", "stacked")  # exact resume (utils.run_state)
 
-    def __init__(self, venv: VecEnv, n_stack: int, channels_order: str | None = None) -> None:
+    def __init__(
+        self,
+        venv: VecEnv,
+        n_stack: int,
+        channels_order: str | Mapping[str, str | None] | None = None,
+    ) -> None:
         space = venv.observation_space
+        if isinstance(space, Dict):
+            self._init_dict(venv, n_stack, space, channels_order)
+            return
         if not isinstance(space, Box):
-            raise ValueError(f"VecFrameStack supports Box observations only, got {space}")
+            raise ValueError(f"VecFrameStack supports Box and Dict observations only, got {space}")
+        if isinstance(channels_order, Mapping):
+            raise TypeError("When the observation space is Box, channels_order can't be a dict.")
         if channels_order is None:
             channels_first = (
                 _is_image(space)
@@ -84,6 +100,23 @@ class VecFrameStack(VecEnvWrapper):
         # [N, *stacked_shape]
         self.stacked = np.zeros((venv.num_envs, *stacked_space.shape), dtype=space.dtype)
 
+    def _init_dict(
+        self,
+        venv: VecEnv,
+        n_stack: int,
+        space: Dict,
+        channels_order: str | Mapping[str, str | None] | None,
+    ) -> None:
+        boxes = [sub for sub in space.spaces.values() if isinstance(sub, Box)]
+        frame_bytes = sum(
+            (venv.num_envs + 2) * int(np.prod(sub.shape)) * sub.dtype.itemsize for sub in boxes
+        )
+        self.n_stack = check_n_stack(n_stack, max(frame_bytes, 1))
+        # [N, *stacked_shape] per key, in stacked_obs.sub_stacked_observations
+        self.stacked_obs = StackedObservations(venv.num_envs, self.n_stack, space, channels_order)
+        super().__init__(venv, observation_space=self.stacked_obs.stacked_observation_space)
+        self.RUN_STATE = ("venv", "stacked_obs")
+
     def _push(self, obs: np.ndarray) -> None:
         axis = self.axis if self.axis < 0 else 1  # batch axis comes first
         self.stacked = np.roll(self.stacked, shift=-self.channels, axis=axis)
@@ -95,6 +128,17 @@ class VecFrameStack(VecEnvWrapper):
     def step_wait(self) -> StepReturn:
         """Step and push the new observations onto each env's stack."""
         obs, rewards, dones, infos = self.venv.step_wait()
+        if isinstance(self.observation_space, Dict):
+            # the stacks complete terminal observations in place: give them copies, so the
+            # inner env's infos stay as it returned them
+            infos = [
+                {**info, "terminal_observation": dict(info["terminal_observation"])}
+                if "terminal_observation" in info
+                else info
+                for info in infos
+            ]
+            stacked, infos = self.stacked_obs.update(obs, dones, infos)
+            return _copies(stacked), rewards, dones, infos
         for i in np.flatnonzero(dones).tolist():
             if "terminal_observation" in infos[i]:
                 last = np.roll(self.stacked[i], -self.channels, axis=self.axis)
@@ -110,9 +154,17 @@ class VecFrameStack(VecEnvWrapper):
     def reset(self) -> Any:
         """Reset; each stack is zeros then the first observation."""
         obs = self.venv.reset()
+        if isinstance(self.observation_space, Dict):
+            return _copies(self.stacked_obs.reset(obs))
         self.stacked[...] = 0
         self._push(obs)
         return self.stacked.copy()
+
+
+def _copies(stacked: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Copies of the stacks: the next reset zeroes them in place (SB3 hands out the stacks
+    themselves, so an observation kept from before a reset changes under the caller)."""
+    return {key: array.copy() for key, array in stacked.items()}
 
 
 class VecTransposeImage(VecEnvWrapper):

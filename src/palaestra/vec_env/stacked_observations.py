@@ -41,6 +41,8 @@ class StackedObservations:
     """Stacks of observations for ``num_envs`` envs (``stacked_observation_space``: their
     space)."""
 
+    RUN_STATE: tuple[str, ...]  # exact resume (utils.run_state): the stacks, per key for a Dict
+
     def __init__(
         self,
         num_envs: int,
@@ -64,6 +66,7 @@ class StackedObservations:
             self.stacked_observation_space = Dict(
                 {k: s.stacked_observation_space for k, s in self.sub_stacked_observations.items()}
             )
+            self.RUN_STATE = ("sub_stacked_observations",)
             return
         if not isinstance(observation_space, Box):
             raise TypeError(
@@ -85,6 +88,7 @@ class StackedObservations:
         )
         # [num_envs, *stacked_shape]
         self.stacked_obs = np.zeros((num_envs, *self.stacked_shape), dtype=observation_space.dtype)
+        self.RUN_STATE = ("stacked_obs",)
 
     @staticmethod
     def compute_stacking(
