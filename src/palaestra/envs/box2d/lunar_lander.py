@@ -324,6 +324,8 @@ class LunarLander(ClassicControlEnv):
             )
 
         self.world.Step(1.0 / FPS, 6 * 30, 2 * 30)
+        if self.particles:
+            self._age_particles()
 
         pos, vel = lander.position, lander.linearVelocity
         angle = lander.angle
@@ -358,7 +360,7 @@ class LunarLander(ClassicControlEnv):
             self.render()
         return obs, reward, terminated, False, {}
 
-    # -- exhaust particles (only while rendering) ---------------------------------------------
+    # -- exhaust particles (only with a render_mode) -------------------------------------------
 
     def _particle(self, mass: float, x: float, y: float, ttl: float) -> Any:
         """A small disc body pushed out of an engine; it collides with the ground only."""
@@ -380,6 +382,19 @@ class LunarLander(ClassicControlEnv):
         self._drop_expired_particles()
         return p
 
+    def _age_particles(self) -> None:
+        """Exhaust cools by 0.15 per step and goes when cold.
+
+        Gymnasium ages particles in ``render``, so an ``rgb_array`` env that is never rendered
+        (SB3's ``make_vec_env`` asks for ``rgb_array``) keeps every puff of the episode as a
+        Box2D body: a hovering lander piles up hundreds and each step slows several times.
+        Aging once per step gives the same frames when every step is rendered, and the lander
+        moves the same either way (particles collide with the ground only).
+        """
+        for p in self.particles:
+            p.ttl -= 0.15
+        self._drop_expired_particles()
+
     def _drop_expired_particles(self) -> None:
         while self.particles and self.particles[0].ttl < 0:
             self.world.DestroyBody(self.particles.pop(0))
@@ -391,9 +406,6 @@ class LunarLander(ClassicControlEnv):
 
         if self.lander is None:
             raise error.ResetNeeded("Call reset before render.")
-        for p in self.particles:  # exhaust cools and fades as it is drawn (Gymnasium's rule)
-            p.ttl -= 0.15
-        self._drop_expired_particles()
         if self._background is None:
             self._background = scenes.lunar_lander_background(
                 self.sky_polys, (self.helipad_x1, self.helipad_x2), self.helipad_y
