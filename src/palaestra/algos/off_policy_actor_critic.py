@@ -46,6 +46,67 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
             )
         self.action_noise = action_noise
 
+    def _init_model(
+        self,
+        policy: str | type,
+        env: Any,
+        learning_rate: Any,
+        buffer_size: int,
+        learning_starts: int,
+        batch_size: int,
+        tau: float,
+        gamma: float,
+        train_freq: int | tuple[int, str],
+        gradient_steps: int,
+        action_noise: Any,
+        replay_buffer_class: None,
+        replay_buffer_kwargs: dict[str, Any] | None,
+        optimize_memory_usage: bool,
+        n_steps: int,
+        stats_window_size: int,
+        tensorboard_log: str | None,
+        policy_kwargs: dict[str, Any] | None,
+        verbose: int,
+        seed: int | None,
+        device: torch.device | str,
+        num_threads: int | None,
+        init_setup_model: bool,
+    ) -> None:
+        """The constructor plumbing SAC, TD3 and DDPG share, once their own arguments are
+        checked and set: the replay loop's settings, the common ones, then the networks."""
+        self._init_actor_critic(tau, action_noise)
+        self._init_off_policy(
+            learning_rate,
+            buffer_size,
+            learning_starts,
+            batch_size,
+            tau,
+            gamma,
+            train_freq,
+            gradient_steps,
+            replay_buffer_class,
+            replay_buffer_kwargs,
+            optimize_memory_usage,
+            n_steps,
+        )
+        self._init_common(
+            policy,
+            env,
+            policy_kwargs,
+            verbose,
+            seed,
+            device,
+            tensorboard_log,
+            num_threads,
+            stats_window_size,
+        )
+        if init_setup_model:
+            if self.env is None:
+                raise ValueError(
+                    f"{type(self).__name__} needs an env (an id string, an Env or a VecEnv)"
+                )
+            self._setup_model()
+
     def _check_action_space(self) -> None:
         box = self.action_space
         if not isinstance(box, spaces.Box):

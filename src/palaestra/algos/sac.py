@@ -100,8 +100,9 @@ class SAC(ActorCriticOffPolicy):
             raise ValueError(f"target_update_interval must be a positive int, got {interval!r}")
         self.ent_coef, self.target_entropy_setting = ent_coef, target_entropy
         self.target_update_interval = interval
-        self._init_actor_critic(tau, action_noise)
-        self._init_off_policy(
+        self._init_model(
+            policy,
+            env,
             learning_rate,
             buffer_size,
             learning_starts,
@@ -110,26 +111,20 @@ class SAC(ActorCriticOffPolicy):
             gamma,
             train_freq,
             gradient_steps,
+            action_noise,
             replay_buffer_class,
             replay_buffer_kwargs,
             optimize_memory_usage,
             n_steps,
-        )
-        self._init_common(
-            policy,
-            env,
+            stats_window_size,
+            tensorboard_log,
             policy_kwargs,
             verbose,
             seed,
             device,
-            tensorboard_log,
             num_threads,
-            stats_window_size,
+            _init_setup_model,
         )
-        if _init_setup_model:
-            if self.env is None:
-                raise ValueError("SAC needs an env (an id string, an Env or a VecEnv)")
-            self._setup_model()
 
     def _setup_model(self) -> None:
         self._check_action_space()

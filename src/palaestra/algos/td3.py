@@ -70,8 +70,9 @@ class TD3(ActorCriticOffPolicy):
                 raise ValueError(f"{name} must be a number >= 0, got {value!r}")
         self.policy_delay = policy_delay
         self.target_policy_noise, self.target_noise_clip = target_policy_noise, target_noise_clip
-        self._init_actor_critic(tau, action_noise)
-        self._init_off_policy(
+        self._init_model(
+            policy,
+            env,
             learning_rate,
             buffer_size,
             learning_starts,
@@ -80,26 +81,20 @@ class TD3(ActorCriticOffPolicy):
             gamma,
             train_freq,
             gradient_steps,
+            action_noise,
             replay_buffer_class,
             replay_buffer_kwargs,
             optimize_memory_usage,
             n_steps,
-        )
-        self._init_common(
-            policy,
-            env,
+            stats_window_size,
+            tensorboard_log,
             policy_kwargs,
             verbose,
             seed,
             device,
-            tensorboard_log,
             num_threads,
-            stats_window_size,
+            _init_setup_model,
         )
-        if _init_setup_model:
-            if self.env is None:
-                raise ValueError(f"{type(self).__name__} needs an env (an id, an Env or a VecEnv)")
-            self._setup_model()
 
     def _setup_model(self) -> None:
         self._check_action_space()
