@@ -123,17 +123,21 @@ class BaseAlgorithm:
         if isinstance(policy, type):
             base = self._policy_class_base
             if base is None or not issubclass(policy, base):
+                article = "an" if base is not None and base.__name__[0] in "AEIOU" else "a"
                 takes = (
                     "a policy name"
                     if base is None
-                    else f"a policy name or an {base.__name__} subclass"
+                    else f"a policy name or {article} {base.__name__} subclass"
                 )
                 raise ValueError(
                     f"{type(self).__name__} takes {takes} ('MlpPolicy', 'CnnPolicy', "
-                    f"'MultiInputPolicy'), got the class {policy.__name__}; custom networks "
-                    "go in policy_kwargs (features_extractor_class=..., net_arch=...)"
+                    f"'MultiInputPolicy'), got the class {policy.__name__}"
+                    f"{' from ' + policy.__module__ if base is not None else ''}; custom "
+                    "networks also go in policy_kwargs (features_extractor_class=..., "
+                    "net_arch=...)"
                 )
-        extractor_class(policy)  # unknown names fail here, before any env work
+        else:
+            extractor_class(policy)  # unknown names fail here, before any env work
         self.policy_name, self.policy_kwargs = policy, dict(policy_kwargs or {})
         self.verbose, self.seed, self.tensorboard_log = verbose, seed, tensorboard_log
         self.device = self._resolve_device(device, policy)

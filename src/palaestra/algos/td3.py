@@ -3,19 +3,34 @@ critic, no target smoothing and no delay) with Stable-Baselines3's parameters an
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
-from palaestra.algos.continuous_policies import DeterministicActor
+from palaestra.algos.continuous_policies import ContinuousCritic, DeterministicActor, TD3Policy
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.objectives import TD3ActorObjective, TD3CriticObjective
+from palaestra.algos.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.off_policy_actor_critic import ActorCriticOffPolicy
 from palaestra.algos.policies import _numpy_input_problem
 from palaestra.algos.schedules import Schedule
 
-__all__ = ["DDPG", "TD3"]
+__all__ = ["DDPG", "TD3", "CnnPolicy", "MlpPolicy", "MultiInputPolicy", "TD3Policy"]
+
+MlpPolicy = TD3Policy  # SB3's alias (DDPG's policies are TD3's, as in SB3)
+
+
+class CnnPolicy(TD3Policy):
+    """``TD3Policy`` with ``NatureCNN`` as its default features extractor (SB3's)."""
+
+    default_features_extractor_class = NatureCNN
+
+
+class MultiInputPolicy(TD3Policy):
+    """``TD3Policy`` with ``CombinedExtractor`` as its default features extractor (SB3's)."""
+
+    default_features_extractor_class = CombinedExtractor
 
 
 class TD3(ActorCriticOffPolicy):
@@ -29,11 +44,16 @@ class TD3(ActorCriticOffPolicy):
     from the model's generator (same seed, same run, on either learner).
     """
 
-    _default_net_arch = [400, 300]  # SB3's TD3 and DDPG
+    policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {
+        "MlpPolicy": MlpPolicy,
+        "CnnPolicy": CnnPolicy,
+        "MultiInputPolicy": MultiInputPolicy,
+    }
+    _policy_class_base = TD3Policy
 
     def __init__(
         self,
-        policy: str,
+        policy: str | type[TD3Policy],
         env: Any,
         learning_rate: float | Schedule = 1e-3,
         buffer_size: int = 1_000_000,
@@ -99,38 +119,15 @@ class TD3(ActorCriticOffPolicy):
     def _setup_model(self) -> None:
         self._check_action_space()
         self.set_random_seed(self.seed)
-        kwargs, _, _, pi_arch, _, _, activation = self._parts()
-        normalize = kwargs.get("normalize_images", True)
-        actor = DeterministicActor(
-            self.observation_space,
-            self.action_dim,
-            self._new_extractor(),
-            pi_arch,
-            activation,
-            normalize,
+        policy = self._make_policy(
+            actor=DeterministicActor,
+            actor_target=DeterministicActor,
+            critic=ContinuousCritic,
+            critic_target=ContinuousCritic,
         )
-        actor_target = DeterministicActor(
-            self.observation_space,
-            self.action_dim,
-            self._new_extractor(),
-            pi_arch,
-            activation,
-            normalize,
-        )
-        actor_target.load_state_dict(actor.state_dict())
-        critic, critic_target = self._critic(actor.features_extractor), self._critic(None)
-        critic_target.load_state_dict(critic.state_dict())
-        for frozen in (actor_target, critic_target):
-            frozen.requires_grad_(False)
-        policy = torch.nn.ModuleDict(
-            {
-                "actor": actor,
-                "actor_target": actor_target,
-                "critic": critic,
-                "critic_target": critic_target,
-            }
-        ).to(self.device)
-        why = _numpy_input_problem(
+        actor, actor_target = policy.actor, policy.actor_target
+        critic, critic_target = policy.critic, policy.critic_target
+        why = self._custom_policy(policy) or _numpy_input_problem(
             self.observation_space, actor.features_extractor, actor.normalize_images
         )
         nets = {
@@ -144,12 +141,12 @@ class TD3(ActorCriticOffPolicy):
                 why=why,
             ),
         }
-        critic_nets, critic_params = self._critic_nets(critic, critic_target)
+        critic_nets, critic_params = self._critic_nets(critic, critic_target, policy)
         nets.update(critic_nets)
         actor_params = list(actor.parameters())
         groups = {
-            "actor": Group(self._make_optimizer_for(actor_params), actor_params),
-            "critic": Group(self._make_optimizer_for(critic_params), critic_params),
+            "actor": Group(self._make_optimizer_for(actor_params, policy), actor_params),
+            "critic": Group(self._make_optimizer_for(critic_params, policy), critic_params),
         }
         self._set_learner(
             policy,
@@ -162,19 +159,19 @@ class TD3(ActorCriticOffPolicy):
 
     @property
     def actor(self) -> DeterministicActor:
-        return self.policy["actor"]
+        return self.policy.actor
 
     @property
     def actor_target(self) -> DeterministicActor:
-        return self.policy["actor_target"]
+        return self.policy.actor_target
 
     @property
     def critic(self) -> Any:
-        return self.policy["critic"]
+        return self.policy.critic
 
     @property
     def critic_target(self) -> Any:
-        return self.policy["critic_target"]
+        return self.policy.critic_target
 
     # -- acting ------------------------------------------------------------------------------
     def _policy_actions(self, obs: Any, deterministic: bool) -> np.ndarray:
@@ -221,11 +218,11 @@ class DDPG(TD3):
     says otherwise), no target policy smoothing (``target_noise_clip=0``) and
     ``policy_delay=1``; SB3's constructor arguments and defaults."""
 
-    _default_n_critics = 1
+    _policy_defaults = {"n_critics": 1}  # SB3's DDPG, unless policy_kwargs says otherwise
 
     def __init__(
         self,
-        policy: str,
+        policy: str | type[TD3Policy],
         env: Any,
         learning_rate: float | Schedule = 1e-3,
         buffer_size: int = 1_000_000,
