@@ -145,12 +145,6 @@ class DQN(OffPolicyAlgorithm):
         kwargs = {k: v for k, v in self.policy_kwargs.items() if k != "share_features_extractor"}
         policy: DQNPolicy = self._build_policy(kwargs)
         q_net, q_net_target = policy.q_net, policy.q_net_target
-        for name, net in (("q_net", q_net), ("q_net_target", q_net_target)):
-            if not isinstance(net, torch.nn.Module):  # make_q_net's, in a subclass
-                raise TypeError(
-                    f"{type(policy).__name__}.{name} must be a torch.nn.Module mapping "
-                    f"observations to Q-values (a QNetwork), got {type(net).__name__}"
-                )
         params = list(q_net.parameters())
         optimizer = self._make_optimizer(params, policy.optimizer_class, policy.optimizer_kwargs)
         custom = self._custom_policy(policy)

@@ -125,10 +125,18 @@ class DQNPolicy(nn.Module):
         self.features_extractor_kwargs = dict(features_extractor_kwargs or {})
         self.normalize_images = normalize_images
         self.optimizer_class, self.optimizer_kwargs = optimizer_class, dict(optimizer_kwargs or {})
-        self.q_net = self.make_q_net()
-        self.q_net_target = self.make_q_net()
+        self.q_net: QNetwork = self._checked(self.make_q_net(), "q_net")
+        self.q_net_target: QNetwork = self._checked(self.make_q_net(), "q_net_target")
         self.q_net_target.load_state_dict(self.q_net.state_dict())
         self.q_net_target.requires_grad_(False)
+
+    def _checked(self, net: Any, name: str) -> Any:
+        if not isinstance(net, nn.Module):  # a subclass's make_q_net
+            raise TypeError(
+                f"{type(self).__name__}.{name} must be a torch.nn.Module mapping observations "
+                f"to Q-values (a QNetwork, from make_q_net), got {type(net).__name__}"
+            )
+        return net
 
     def make_q_net(self) -> QNetwork:
         """A new Q-network with its own features extractor."""
