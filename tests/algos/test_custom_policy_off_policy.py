@@ -302,6 +302,56 @@ def test_custom_extractor_on_images_and_dicts(algo: str) -> None:
         assert model.predict(sample, deterministic=True)[0] in model.action_space
 
 
+# -- SB3's tests/test_custom_policy.py, for the off-policy algorithms ----------------------------
+@pytest.mark.parametrize(
+    ("algo", "net_arch"),
+    [
+        *[(a, arch) for a in ("DQN", "SAC", "TD3") for arch in ([], [4], [4, 4])],
+        *[(a, {"qf": [8], "pi": [8, 4]}) for a in ("SAC", "TD3")],  # DQN's is a list only
+    ],
+)
+def test_flexible_mlp_as_sb3(algo: str, net_arch: Any) -> None:
+    """SB3's test_flexible_mlp / test_custom_offpolicy: the same parameter shapes as SB3's."""
+    ours = ALGOS[algo]("MlpPolicy", ENV_OF[algo], **SMALL, policy_kwargs=dict(net_arch=net_arch))
+    theirs = getattr(sb3, algo)(
+        "MlpPolicy", ENV_OF[algo], buffer_size=200, policy_kwargs=dict(net_arch=net_arch)
+    )
+    mine = [p.shape for n, p in ours.policy.named_parameters() if not n.startswith("ent_coef")]
+    assert mine == [p.shape for p in theirs.policy.parameters()]  # SB3: log_ent_coef on the model
+    ours.learn(24)
+
+
+@pytest.mark.parametrize("algo", ["DQN", "SAC", "TD3", "DDPG"])
+@pytest.mark.parametrize("optimizer_kwargs", [None, {"weight_decay": 0.0}])
+def test_custom_optimizer_as_sb3(algo: str, optimizer_kwargs: Any) -> None:
+    """SB3's test_custom_optimizer: AdamW from policy_kwargs, for every part."""
+    kwargs = dict(optimizer_class=torch.optim.AdamW, optimizer_kwargs=optimizer_kwargs)
+    model = ALGOS[algo](
+        "MlpPolicy", ENV_OF[algo], **SMALL, policy_kwargs={**kwargs, "net_arch": [32]}
+    )
+    # SAC's temperature keeps plain Adam, as in SB3
+    groups = {k: g for k, g in model.learner.groups.items() if k != "ent_coef"}
+    assert {type(g.optimizer) for g in groups.values()} == {torch.optim.AdamW}
+    assert all(
+        g.optimizer.defaults["weight_decay"] == (0.0 if optimizer_kwargs else 0.01)
+        for g in groups.values()
+    )
+    model.learn(24)
+
+
+def test_alias_classes_act_as_their_names() -> None:
+    """The ``MlpPolicy`` class gets the name's checks: a Dict observation space asks for
+    ``MultiInputPolicy``, as SB3 does; ``CnnPolicy`` the class builds NatureCNN."""
+    with pytest.raises(ValueError, match=r"You must use `MultiInputPolicy` .* not MlpPolicy"):
+        SAC(sac_module.MlpPolicy, Toy("dict", "box"), buffer_size=100)
+    model = TD3(td3_module.CnnPolicy, Toy("image", "box"), **SMALL)
+    assert isinstance(model.actor.features_extractor, NatureCNN)
+    assert (
+        model.learner.describe()
+        == "torch learner (numpy cannot: the features extractor is NatureCNN)"
+    )
+
+
 # -- custom policy classes --------------------------------------------------------------------
 @pytest.mark.parametrize("algo", ["DQN", "SAC", "TD3", "DDPG"])
 def test_custom_policy_class_trains_and_round_trips(tmp_path: Path, algo: str) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import inspect
 import warnings
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 import torch
@@ -50,9 +50,6 @@ class OffPolicyAlgorithm(BaseAlgorithm):
     # after a resume as without the stop.
     _extra_counters: tuple[str, ...] = ("_n_calls", "_collected_steps", "_collected_episodes")
     replay_buffer: ReplayBuffer | FrameReplayBuffer | None
-
-    # SB3's ``policy_aliases``: the class each policy name stands for.
-    policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {}
 
     def _build_policy(self, policy_kwargs: dict[str, Any]) -> Any:
         """The policy module: the class given (or the one its name stands for) built as SB3
