@@ -22,12 +22,13 @@ from palaestra.algos import td3 as td3_module
 from palaestra.algos.continuous_policies import (
     ContinuousCritic,
     DeterministicActor,
-    SACPolicy,
     SquashedGaussianActor,
-    TD3Policy,
 )
+from palaestra.algos.dqn import DQNPolicy
 from palaestra.algos.networks import BaseFeaturesExtractor, CombinedExtractor, NatureCNN
-from palaestra.algos.policies import DQNPolicy, QNetwork
+from palaestra.algos.policies import QNetwork
+from palaestra.algos.sac import SACPolicy
+from palaestra.algos.td3 import TD3Policy
 
 from .toys import Toy
 

@@ -13,8 +13,9 @@ import pytest
 
 from palaestra.algos import A2C, DDPG, DQN, PPO, SAC, TD3, ModelFileError
 from palaestra.algos import hyperparams as hp
+from palaestra.algos.dqn import DQNPolicy
 from palaestra.algos.model_io import read_archive, write_archive
-from palaestra.algos.policies import ActorCritic, DQNPolicy
+from palaestra.algos.policies import ActorCritic
 
 
 @pytest.fixture(scope="module")

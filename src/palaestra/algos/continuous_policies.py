@@ -3,37 +3,19 @@
 MLP ending in tanh) and ``n_critics`` Q-networks on ``[features, action]``, each with its own
 features extractor unless ``share_features_extractor`` (then the critics read the actor's,
 without training it, as SB3 does). Actions inside these networks live in ``[-1, 1]``.
-
-``SACPolicy`` and ``TD3Policy`` (SB3's names; DDPG uses TD3's) hold an algorithm's actor,
-critic and target copies, each built by ``make_actor``/``make_critic``, which a subclass may
-override as SB3's custom-policy guide does.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 import torch
 from torch import nn
 
 from palaestra import spaces
-from palaestra.algos.networks import (
-    BaseFeaturesExtractor,
-    FlattenExtractor,
-    make_extractor,
-    mlp,
-    preprocess_obs,
-)
+from palaestra.algos.networks import BaseFeaturesExtractor, FlattenExtractor, mlp, preprocess_obs
 
-__all__ = [
-    "ContinuousCritic",
-    "DeterministicActor",
-    "SACPolicy",
-    "SquashedGaussianActor",
-    "TD3Policy",
-    "split_net_arch",
-]
+__all__ = ["ContinuousCritic", "DeterministicActor", "SquashedGaussianActor", "split_net_arch"]
 
 
 def split_net_arch(net_arch: Any, default: list[int]) -> tuple[list[int], list[int]]:
@@ -147,199 +129,3 @@ class ContinuousCritic(_Extracting):
     def flat_input(self) -> bool:
         """Whether ``[flattened obs, action]`` is this critic's MLP input (numpy learner)."""
         return isinstance(self.features_extractor, FlattenExtractor)
-
-
-class _ActorCriticPolicy(nn.Module):
-    """What ``SACPolicy`` and ``TD3Policy`` share: SB3's policy keywords, kept as attributes
-    (the algorithm builds its optimizers from ``optimizer_class``/``optimizer_kwargs``), and
-    the critic factory."""
-
-    # The extractor when ``features_extractor_class`` is not given (CnnPolicy: NatureCNN).
-    default_features_extractor_class: type[BaseFeaturesExtractor] = FlattenExtractor
-    default_net_arch: tuple[int, ...] = (256, 256)
-
-    def __init__(
-        self,
-        observation_space: spaces.Space[Any],
-        action_space: spaces.Box,
-        lr_schedule: Any,
-        net_arch: Any,
-        activation_fn: type[nn.Module],
-        features_extractor_class: type[BaseFeaturesExtractor] | None,
-        features_extractor_kwargs: dict[str, Any] | None,
-        normalize_images: bool,
-        optimizer_class: type[torch.optim.Optimizer],
-        optimizer_kwargs: dict[str, Any] | None,
-        n_critics: int,
-        share_features_extractor: bool,
-    ) -> None:
-        super().__init__()
-        if not isinstance(action_space, spaces.Box):
-            raise TypeError(f"{type(self).__name__} needs a Box action space, got {action_space}")
-        self.observation_space, self.action_space = observation_space, action_space
-        self.action_dim = int(np.prod(action_space.shape))
-        self.lr_schedule, self.net_arch, self.activation_fn = lr_schedule, net_arch, activation_fn
-        self.actor_arch, self.critic_arch = split_net_arch(net_arch, list(self.default_net_arch))
-        self.features_extractor_class = (
-            features_extractor_class or self.default_features_extractor_class
-        )
-        self.features_extractor_kwargs = dict(features_extractor_kwargs or {})
-        self.normalize_images = normalize_images
-        self.optimizer_class, self.optimizer_kwargs = optimizer_class, dict(optimizer_kwargs or {})
-        self.n_critics, self.share_features_extractor = n_critics, bool(share_features_extractor)
-
-    def make_features_extractor(self) -> BaseFeaturesExtractor:
-        """A new features extractor of the policy's class and keywords."""
-        return make_extractor(
-            self.features_extractor_class, self.observation_space, self.features_extractor_kwargs
-        )
-
-    def make_critic(
-        self, features_extractor: BaseFeaturesExtractor | None = None
-    ) -> ContinuousCritic:
-        """``n_critics`` Q-networks on ``features_extractor`` (None: a new one)."""
-        if features_extractor is None:
-            features_extractor = self.make_features_extractor()
-        return ContinuousCritic(
-            self.observation_space,
-            self.action_dim,
-            features_extractor,
-            self.critic_arch,
-            self.activation_fn,
-            n_critics=self.n_critics,
-            share_features_extractor=self.share_features_extractor,
-            normalize_images=self.normalize_images,
-        )
-
-
-class SACPolicy(_ActorCriticPolicy):
-    """SB3's ``SACPolicy`` (``palaestra.algos.sac.MlpPolicy``): ``actor``, ``critic`` and
-    ``critic_target`` (default widths ``[256, 256]``), built by ``make_actor`` and
-    ``make_critic``. ``SAC(MyPolicy, env)`` builds it as
-    ``MyPolicy(observation_space, action_space, lr_schedule, **policy_kwargs)`` and trains a
-    subclass on the torch learner. ``log_std_init``, ``use_expln`` and ``clip_mean`` only
-    matter with ``use_sde``, which is not supported yet."""
-
-    def __init__(
-        self,
-        observation_space: spaces.Space[Any],
-        action_space: spaces.Box,
-        lr_schedule: Any = None,
-        net_arch: list[int] | dict[str, list[int]] | None = None,
-        activation_fn: type[nn.Module] = nn.ReLU,
-        use_sde: bool = False,
-        log_std_init: float = -3.0,
-        use_expln: bool = False,
-        clip_mean: float = 2.0,
-        features_extractor_class: type[BaseFeaturesExtractor] | None = None,
-        features_extractor_kwargs: dict[str, Any] | None = None,
-        normalize_images: bool = True,
-        optimizer_class: type[torch.optim.Optimizer] = torch.optim.Adam,
-        optimizer_kwargs: dict[str, Any] | None = None,
-        n_critics: int = 2,
-        share_features_extractor: bool = False,
-    ) -> None:
-        if use_sde:
-            raise NotImplementedError("use_sde (gSDE) is not supported by palaestra's SAC yet")
-        super().__init__(
-            observation_space,
-            action_space,
-            lr_schedule,
-            net_arch,
-            activation_fn,
-            features_extractor_class,
-            features_extractor_kwargs,
-            normalize_images,
-            optimizer_class,
-            optimizer_kwargs,
-            n_critics,
-            share_features_extractor,
-        )
-        self.log_std_init, self.use_expln, self.clip_mean = log_std_init, use_expln, clip_mean
-        # SB3's order (it sets the parameters a seed gives): actor, critic, critic target.
-        self.actor = self.make_actor()
-        shared = self.actor.features_extractor if self.share_features_extractor else None
-        self.critic = self.make_critic(shared)
-        self.critic_target = self.make_critic(None)  # its own extractor, polyak-averaged
-        self.critic_target.load_state_dict(self.critic.state_dict())
-        self.critic_target.requires_grad_(False)
-
-    def make_actor(
-        self, features_extractor: BaseFeaturesExtractor | None = None
-    ) -> SquashedGaussianActor:
-        """The squashed-Gaussian actor on ``features_extractor`` (None: a new one)."""
-        if features_extractor is None:
-            features_extractor = self.make_features_extractor()
-        return SquashedGaussianActor(
-            self.observation_space,
-            self.action_dim,
-            features_extractor,
-            self.actor_arch,
-            self.activation_fn,
-            self.normalize_images,
-        )
-
-
-class TD3Policy(_ActorCriticPolicy):
-    """SB3's ``TD3Policy`` (``palaestra.algos.td3.MlpPolicy``, DDPG's too): ``actor``,
-    ``actor_target``, ``critic`` and ``critic_target`` (default widths ``[400, 300]``), built
-    by ``make_actor`` and ``make_critic``; with ``share_features_extractor`` the critic reads
-    the actor's extractor and the critic target the actor target's, as in SB3."""
-
-    default_net_arch = (400, 300)
-
-    def __init__(
-        self,
-        observation_space: spaces.Space[Any],
-        action_space: spaces.Box,
-        lr_schedule: Any = None,
-        net_arch: list[int] | dict[str, list[int]] | None = None,
-        activation_fn: type[nn.Module] = nn.ReLU,
-        features_extractor_class: type[BaseFeaturesExtractor] | None = None,
-        features_extractor_kwargs: dict[str, Any] | None = None,
-        normalize_images: bool = True,
-        optimizer_class: type[torch.optim.Optimizer] = torch.optim.Adam,
-        optimizer_kwargs: dict[str, Any] | None = None,
-        n_critics: int = 2,
-        share_features_extractor: bool = False,
-    ) -> None:
-        super().__init__(
-            observation_space,
-            action_space,
-            lr_schedule,
-            net_arch,
-            activation_fn,
-            features_extractor_class,
-            features_extractor_kwargs,
-            normalize_images,
-            optimizer_class,
-            optimizer_kwargs,
-            n_critics,
-            share_features_extractor,
-        )
-        self.actor = self.make_actor()
-        self.actor_target = self.make_actor()
-        self.actor_target.load_state_dict(self.actor.state_dict())
-        share = self.share_features_extractor
-        self.critic = self.make_critic(self.actor.features_extractor if share else None)
-        self.critic_target = self.make_critic(
-            self.actor_target.features_extractor if share else None
-        )
-        self.critic_target.load_state_dict(self.critic.state_dict())
-        for frozen in (self.actor_target, self.critic_target):
-            frozen.requires_grad_(False)
-
-    def make_actor(
-        self, features_extractor: BaseFeaturesExtractor | None = None
-    ) -> DeterministicActor:
-        """The deterministic tanh actor on ``features_extractor`` (None: a new one)."""
-        if features_extractor is None:
-            features_extractor = self.make_features_extractor()
-        return DeterministicActor(
-            self.observation_space,
-            self.action_dim,
-            features_extractor,
-            self.actor_arch,
-            self.activation_fn,
-            self.normalize_images,
-        )

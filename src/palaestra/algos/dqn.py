@@ -13,7 +13,8 @@ from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.objectives import DQNObjective
 from palaestra.algos.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.off_policy import OffPolicyAlgorithm
-from palaestra.algos.policies import DQNPolicy, QNetwork
+from palaestra.algos.off_policy_policies import DQNPolicy
+from palaestra.algos.policies import QNetwork
 from palaestra.algos.schedules import LinearSchedule, Schedule
 
 __all__ = ["DQN", "CnnPolicy", "DQNPolicy", "MlpPolicy", "MultiInputPolicy"]

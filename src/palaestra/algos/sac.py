@@ -8,11 +8,7 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from palaestra.algos.continuous_policies import (
-    ContinuousCritic,
-    SACPolicy,
-    SquashedGaussianActor,
-)
+from palaestra.algos.continuous_policies import ContinuousCritic, SquashedGaussianActor
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.heads import squashed_gaussian_rsample
 from palaestra.algos.learners.objectives import (
@@ -23,6 +19,7 @@ from palaestra.algos.learners.objectives import (
 from palaestra.algos.learners.xp import numpy_ops
 from palaestra.algos.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.off_policy_actor_critic import ActorCriticOffPolicy
+from palaestra.algos.off_policy_policies import SACPolicy
 from palaestra.algos.policies import _numpy_input_problem
 from palaestra.algos.schedules import Schedule
 

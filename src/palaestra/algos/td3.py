@@ -8,11 +8,12 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from palaestra.algos.continuous_policies import ContinuousCritic, DeterministicActor, TD3Policy
+from palaestra.algos.continuous_policies import ContinuousCritic, DeterministicActor
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.objectives import TD3ActorObjective, TD3CriticObjective
 from palaestra.algos.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.off_policy_actor_critic import ActorCriticOffPolicy
+from palaestra.algos.off_policy_policies import TD3Policy
 from palaestra.algos.policies import _numpy_input_problem
 from palaestra.algos.schedules import Schedule
 
