@@ -175,6 +175,10 @@ def test_the_policy_class_itself_is_the_policy_name(algo: str) -> None:
     assert all(torch.equal(mine[k], theirs[k]) for k in mine)
     assert by_class.learner.describe() == by_name.learner.describe()
     assert by_class.learner.describe().startswith("numpy")
+    if algo == "DQN":  # SB3's policy(obs): the greedy actions
+        obs = _probe(algo)
+        greedy = by_class.policy(torch.as_tensor(obs)).numpy()
+        np.testing.assert_array_equal(greedy, by_class.predict(obs, deterministic=True)[0])
 
 
 def test_policy_state_keys_are_sb3s() -> None:
