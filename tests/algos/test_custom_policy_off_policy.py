@@ -163,9 +163,10 @@ def test_sb3_policy_names_and_paths() -> None:
 
 
 @pytest.mark.parametrize("algo", ["DQN", "SAC", "TD3", "DDPG"])
-def test_the_policy_class_itself_is_the_policy_name(algo: str) -> None:
+def test_the_policy_class_itself_is_the_policy_name(tmp_path: Path, algo: str) -> None:
     """``MlpPolicy`` the class builds what ``"MlpPolicy"`` the name builds (same seed, same
-    weights), on the same (numpy) learner, and is what ``model.policy`` is."""
+    weights), on the same (numpy) learner, and is what ``model.policy`` is; palaestra's own
+    classes load back without ``custom_objects``."""
     cls = ALGOS[algo]
     by_name = cls("MlpPolicy", ENV_OF[algo], seed=3, buffer_size=100)
     by_class = cls(POLICY_OF[algo], ENV_OF[algo], seed=3, buffer_size=100)
@@ -175,6 +176,8 @@ def test_the_policy_class_itself_is_the_policy_name(algo: str) -> None:
     assert all(torch.equal(mine[k], theirs[k]) for k in mine)
     assert by_class.learner.describe() == by_name.learner.describe()
     assert by_class.learner.describe().startswith("numpy")
+    by_class.save(tmp_path / "ours")
+    assert type(ALGOS[algo].load(tmp_path / "ours").policy) is POLICY_OF[algo]
     if algo == "DQN":  # SB3's policy(obs): the greedy actions
         obs = _probe(algo)
         greedy = by_class.policy(torch.as_tensor(obs)).numpy()
