@@ -13,8 +13,9 @@ import pytest
 
 from palaestra.algos import A2C, DDPG, DQN, PPO, SAC, TD3, ModelFileError
 from palaestra.algos import hyperparams as hp
+from palaestra.algos.dqn import DQNPolicy
 from palaestra.algos.model_io import read_archive, write_archive
-from palaestra.algos.policies import ActorCritic, QNetwork
+from palaestra.algos.policies import ActorCritic
 
 
 @pytest.fixture(scope="module")
@@ -46,18 +47,10 @@ def test_every_saved_value_of_the_actor_critics_has_a_rule(cls: Any) -> None:
     name = cls.__name__
     assert set(model._hyperparameters()) == set(hp.HYPERPARAMETERS[name])
     assert set(model._schedules()) == set(hp.SCHEDULES[name])
-    takes = {
-        "net_arch",
-        "activation_fn",
-        "features_extractor_class",
-        "features_extractor_kwargs",
-        "normalize_images",
-        "optimizer_class",
-        "optimizer_kwargs",
-        "share_features_extractor",
-        "n_critics",
-        "backend",
-    }
+    policy_class = type(model.policy)  # SACPolicy / TD3Policy: what policy_kwargs feed
+    takes = set(inspect.signature(policy_class.__init__).parameters)
+    takes -= {"self", "observation_space", "action_space", "lr_schedule"}
+    takes |= {"backend"}
     assert takes == set(hp.POLICY_KWARGS[name])
 
 
@@ -69,9 +62,9 @@ def test_every_saved_value_has_a_rule(cls: Any) -> None:
     name = cls.__name__
     assert set(model._hyperparameters()) == set(hp.HYPERPARAMETERS[name])
     assert set(model._schedules()) == set(hp.SCHEDULES[name])
-    network = QNetwork if cls is DQN else ActorCritic
+    network = DQNPolicy if cls is DQN else ActorCritic
     taken = set(inspect.signature(network.__init__).parameters)
-    taken -= {"self", "observation_space", "action_space"}
+    taken -= {"self", "observation_space", "action_space", "lr_schedule"}
     taken |= {"optimizer_class", "optimizer_kwargs", "share_features_extractor", "backend"}
     assert taken == set(hp.POLICY_KWARGS[name])
 

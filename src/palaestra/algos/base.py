@@ -26,7 +26,7 @@ import time
 import warnings
 from collections import deque
 from collections.abc import Iterator
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
@@ -71,6 +71,8 @@ class BaseAlgorithm:
     supported_action_spaces: tuple[type, ...] = ()
     # Policy classes the algorithm takes in place of a name (PPO/A2C: ActorCriticPolicy)
     _policy_class_base: type | None = None
+    # SB3's ``policy_aliases``: the class each policy name stands for (off-policy algorithms).
+    policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {}
     _extra_counters: tuple[str, ...] = ()
     lr_schedule: Schedule
     learner: Learner
@@ -123,18 +125,25 @@ class BaseAlgorithm:
         if isinstance(policy, type):
             base = self._policy_class_base
             if base is None or not issubclass(policy, base):
+                article = "an" if base is not None and base.__name__[0] in "AEIOU" else "a"
                 takes = (
                     "a policy name"
                     if base is None
-                    else f"a policy name or an {base.__name__} subclass"
+                    else f"a policy name or {article} {base.__name__} subclass"
                 )
                 raise ValueError(
                     f"{type(self).__name__} takes {takes} ('MlpPolicy', 'CnnPolicy', "
-                    f"'MultiInputPolicy'), got the class {policy.__name__}; custom networks "
-                    "go in policy_kwargs (features_extractor_class=..., net_arch=...)"
+                    f"'MultiInputPolicy'), got the class {policy.__name__}"
+                    f"{' from ' + policy.__module__ if base is not None else ''}; custom "
+                    "networks also go in policy_kwargs (features_extractor_class=..., "
+                    "net_arch=...)"
                 )
-        extractor_class(policy)  # unknown names fail here, before any env work
+        else:
+            extractor_class(policy)  # unknown names fail here, before any env work
         self.policy_name, self.policy_kwargs = policy, dict(policy_kwargs or {})
+        # The name an alias class stands for (DQN's MlpPolicy is DQNPolicy): it gets the
+        # same device and threads as the name; a user's subclass keeps torch's defaults.
+        policy = next((name for name, cls in self.policy_aliases.items() if cls is policy), policy)
         self.verbose, self.seed, self.tensorboard_log = verbose, seed, tensorboard_log
         self.device = self._resolve_device(device, policy)
         if verbose >= 1:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
@@ -11,11 +11,27 @@ import torch
 from palaestra import spaces
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.objectives import DQNObjective
+from palaestra.algos.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.off_policy import OffPolicyAlgorithm
-from palaestra.algos.policies import QNetwork, extractor_class
+from palaestra.algos.off_policy_policies import DQNPolicy
+from palaestra.algos.policies import QNetwork
 from palaestra.algos.schedules import LinearSchedule, Schedule
 
-__all__ = ["DQN"]
+__all__ = ["DQN", "CnnPolicy", "DQNPolicy", "MlpPolicy", "MultiInputPolicy"]
+
+MlpPolicy = DQNPolicy  # SB3's alias
+
+
+class CnnPolicy(DQNPolicy):
+    """``DQNPolicy`` with ``NatureCNN`` as its default features extractor (SB3's)."""
+
+    default_features_extractor_class = NatureCNN
+
+
+class MultiInputPolicy(DQNPolicy):
+    """``DQNPolicy`` with ``CombinedExtractor`` as its default features extractor (SB3's)."""
+
+    default_features_extractor_class = CombinedExtractor
 
 
 class DQN(OffPolicyAlgorithm):
@@ -34,13 +50,19 @@ class DQN(OffPolicyAlgorithm):
     """
 
     supported_action_spaces = (spaces.Discrete,)
+    policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {
+        "MlpPolicy": MlpPolicy,
+        "CnnPolicy": CnnPolicy,
+        "MultiInputPolicy": MultiInputPolicy,
+    }
+    _policy_class_base = DQNPolicy
     # The collection counters make a run stopped mid-collection train at the same steps
     # after a resume as without the stop.
     _extra_counters = ("_n_calls", "exploration_rate", "_collected_steps", "_collected_episodes")
 
     def __init__(
         self,
-        policy: str,
+        policy: str | type[DQNPolicy],
         env: Any,
         learning_rate: float | Schedule = 1e-4,
         buffer_size: int = 1_000_000,
@@ -120,36 +142,31 @@ class DQN(OffPolicyAlgorithm):
         if not isinstance(self.action_space, spaces.Discrete):
             raise TypeError(f"DQN only supports Discrete action spaces, got {self.action_space}")
         self.set_random_seed(self.seed)
-        kwargs = dict(self.policy_kwargs)
-        optimizer_class = kwargs.pop("optimizer_class", torch.optim.Adam)
-        optimizer_kwargs = kwargs.pop("optimizer_kwargs", None) or {}
-        backend = kwargs.pop("backend", "auto")
-        kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
-        kwargs.pop("share_features_extractor", None)
-        q_net = QNetwork(self.observation_space, self.action_space, **kwargs)
-        q_net_target = QNetwork(self.observation_space, self.action_space, **kwargs)
-        q_net_target.load_state_dict(q_net.state_dict())
-        q_net_target.requires_grad_(False)
-        policy = torch.nn.ModuleDict({"q_net": q_net, "q_net_target": q_net_target}).to(self.device)
+        # SB3's DQNPolicy does not take it; palaestra always let it through (and ignores it).
+        kwargs = {k: v for k, v in self.policy_kwargs.items() if k != "share_features_extractor"}
+        policy: DQNPolicy = self._build_policy(kwargs)
+        q_net, q_net_target = policy.q_net, policy.q_net_target
         params = list(q_net.parameters())
-        optimizer = self._make_optimizer(params, optimizer_class, optimizer_kwargs)
-        modules, why = q_net.mlp_modules()
-        target_modules, _ = q_net_target.mlp_modules()
+        optimizer = self._make_optimizer(params, policy.optimizer_class, policy.optimizer_kwargs)
+        custom = self._custom_policy(policy)
+        modules, why = (None, custom) if custom else q_net.mlp_modules()
+        target_modules = None if custom else q_net_target.mlp_modules()[0]
         nets = {
             "q": Net(q_net, modules, group="q", why=why),
             "q_target": Net(q_net_target, target_modules, target_of="q", why=why),
         }
+        backend = self.policy_kwargs.get("backend", "auto")
         self._set_learner(policy, optimizer, backend, nets, {"q": Group(optimizer, params)})
         self._make_replay_buffer()
 
     # SB3's attributes; reading them hands the parameters to torch, as ``policy`` does.
     @property
     def q_net(self) -> QNetwork:
-        return self.policy["q_net"]
+        return self.policy.q_net
 
     @property
     def q_net_target(self) -> QNetwork:
-        return self.policy["q_net_target"]
+        return self.policy.q_net_target
 
     # -- acting ------------------------------------------------------------------------------
     def _greedy(self, obs: Any) -> np.ndarray:

@@ -337,7 +337,14 @@ _ACTOR_CRITIC = {
     ),
     "n_critics": _integer(1, 64),
 }
-POLICY_KWARGS.update(SAC=_ACTOR_CRITIC, TD3=_ACTOR_CRITIC, DDPG=_ACTOR_CRITIC)
+POLICY_KWARGS.update(TD3=_ACTOR_CRITIC, DDPG=_ACTOR_CRITIC)
+POLICY_KWARGS["SAC"] = {  # SACPolicy's gSDE keywords: stored, unused while use_sde is refused
+    **_ACTOR_CRITIC,
+    "use_sde": _boolean,
+    "log_std_init": _number(-20.0, 20.0),
+    "use_expln": _boolean,
+    "clip_mean": _number(0.0, 1e6),
+}
 POLICY_KWARGS["A2C"] = POLICY_KWARGS["PPO"]  # the same ActorCritic
 
 
@@ -348,10 +355,15 @@ def _ours(ref: Any, packages: tuple[str, ...]) -> bool:
     return str(ref.get("__class__", "")).startswith(packages)
 
 
-def _check_policy_kwargs(algo: str, value: Any, source: str) -> None:
+def _check_policy_kwargs(algo: str, value: Any, source: str, policy: Any = None) -> None:
     if not isinstance(value, dict):
         raise ModelFileError(f"{source}: policy_kwargs must be a mapping, got {_short(value)}")
     rules = dict(POLICY_KWARGS[algo])
+    if not _ours(policy, ("palaestra.",)):
+        # A user's policy class (loaded through custom_objects only) takes its own keywords;
+        # ours keep their rules, and classes in any value still resolve as decode_classes says.
+        for key in set(value) - set(rules):
+            rules[key] = lambda v: None
     # A user's own extractor or optimizer (loaded through custom_objects) takes its own kwargs.
     if not _ours(value.get("features_extractor_class"), ("palaestra.",)):
         rules["features_extractor_kwargs"] = _optional(_mapping_of_any)
@@ -429,7 +441,7 @@ def check_model_file(algo: str, meta: Any, source: str) -> None:
                 f"(it may set {', '.join(sorted(SCHEDULES[algo]))})"
             )
         _check_schedule(name, data, SCHEDULES[algo][name], source)
-    _check_policy_kwargs(algo, meta.get("policy_kwargs", {}), source)
+    _check_policy_kwargs(algo, meta.get("policy_kwargs", {}), source, meta.get("policy"))
     problem = _integer(1, MAX_N_ENVS)(meta.get("n_envs", 1))  # absent: save(exclude=...)
     if problem is not None:
         raise ModelFileError(

@@ -23,6 +23,7 @@ __all__ = [
     "MlpExtractor",
     "NatureCNN",
     "extractor_space",
+    "make_extractor",
     "mlp",
     "preprocess_obs",
     "preprocessed_dim",
@@ -99,6 +100,27 @@ def extractor_space(space: spaces.Space[Any]) -> spaces.Space[Any]:
             low, high = space.low.transpose(order), space.high.transpose(order)
             return spaces.Box(low, high, low.shape, space.dtype)
     return space
+
+
+def make_extractor(
+    extractor_class: Any, space: spaces.Space[Any], kwargs: dict[str, Any] | None = None
+) -> BaseFeaturesExtractor:
+    """``extractor_class(extractor_space(space), **kwargs)``, checked: a ``TypeError`` naming the
+    value unless it is a ``torch.nn.Module`` class whose instances have a positive integer
+    ``features_dim`` (a ``BaseFeaturesExtractor`` or one shaped like it), which would
+    otherwise fail later, obscurely, inside a network."""
+    expected = "a BaseFeaturesExtractor subclass (palaestra.algos.networks)"
+    if not (isinstance(extractor_class, type) and issubclass(extractor_class, nn.Module)):
+        raise TypeError(f"features_extractor_class must be {expected}, got {extractor_class!r}")
+    extractor: Any = extractor_class(extractor_space(space), **(kwargs or {}))
+    dim = getattr(extractor, "features_dim", None)
+    if isinstance(dim, bool) or not isinstance(dim, int) or dim < 1:
+        raise TypeError(
+            f"features_extractor_class {extractor_class.__qualname__} built an extractor whose "
+            f"features_dim is {dim!r}; expected {expected} or a module with a positive int "
+            "features_dim"
+        )
+    return extractor
 
 
 class MlpExtractor(nn.Module):

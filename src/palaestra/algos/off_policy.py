@@ -10,10 +10,12 @@ stored, counters advanced), so a saved model continues exactly.
 
 from __future__ import annotations
 
+import inspect
 import warnings
 from typing import Any
 
 import numpy as np
+import torch
 
 from palaestra.algos import model_io
 from palaestra.algos.base import BaseAlgorithm
@@ -48,6 +50,33 @@ class OffPolicyAlgorithm(BaseAlgorithm):
     # after a resume as without the stop.
     _extra_counters: tuple[str, ...] = ("_n_calls", "_collected_steps", "_collected_episodes")
     replay_buffer: ReplayBuffer | FrameReplayBuffer | None
+
+    def _build_policy(self, policy_kwargs: dict[str, Any]) -> Any:
+        """The policy module: the class given (or the one its name stands for) built as SB3
+        does, ``cls(observation_space, action_space, lr_schedule, **policy_kwargs)``, on the
+        model's device. Keys the class does not take are a ``TypeError`` naming them."""
+        name = self.policy_name
+        cls: Any = name if isinstance(name, type) else self.policy_aliases[name]
+        kwargs = dict(policy_kwargs)
+        kwargs.pop("backend", None)  # the learner's, not the policy's
+        params = inspect.signature(cls).parameters.values()
+        if not any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params):
+            takes = {p.name for p in params} - {"observation_space", "action_space"}
+            unknown = sorted(set(kwargs) - takes)
+            if unknown:
+                raise TypeError(
+                    f"{type(self).__name__} policy_kwargs got unexpected keys {unknown} "
+                    f"({cls.__name__} takes {', '.join(sorted(takes - {'lr_schedule'}))})"
+                )
+        policy = cls(self.observation_space, self.action_space, self.lr_schedule, **kwargs)
+        return policy.to(self.device)
+
+    def _custom_policy(self, policy: torch.nn.Module) -> str:
+        """Why the numpy learner cannot run ``policy`` ("" for palaestra's own classes, whose
+        networks it knows): a user's subclass may change any of them."""
+        if type(policy) in self.policy_aliases.values():
+            return ""
+        return f"the policy is a custom {type(policy).__name__}"
 
     def _init_off_policy(
         self,

@@ -18,11 +18,10 @@ from palaestra.algos.action_noise import (
     noise_from_json,
     noise_to_json,
 )
-from palaestra.algos.continuous_policies import ContinuousCritic, split_net_arch
+from palaestra.algos.continuous_policies import ContinuousCritic
 from palaestra.algos.learners import Net
-from palaestra.algos.networks import BaseFeaturesExtractor, extractor_space
 from palaestra.algos.off_policy import OffPolicyAlgorithm
-from palaestra.algos.policies import _numpy_input_problem, extractor_class
+from palaestra.algos.policies import _numpy_input_problem
 
 __all__ = ["ActorCriticOffPolicy"]
 
@@ -45,6 +44,71 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
                 f"{type(action_noise).__name__}"
             )
         self.action_noise = action_noise
+
+    def _init_model(
+        self,
+        policy: str | type,
+        env: Any,
+        learning_rate: Any,
+        buffer_size: int,
+        learning_starts: int,
+        batch_size: int,
+        tau: float,
+        gamma: float,
+        train_freq: int | tuple[int, str],
+        gradient_steps: int,
+        action_noise: Any,
+        replay_buffer_class: None,
+        replay_buffer_kwargs: dict[str, Any] | None,
+        optimize_memory_usage: bool,
+        n_steps: int,
+        stats_window_size: int,
+        tensorboard_log: str | None,
+        policy_kwargs: dict[str, Any] | None,
+        verbose: int,
+        seed: int | None,
+        device: torch.device | str,
+        num_threads: int | None,
+        init_setup_model: bool,
+    ) -> None:
+        """The constructor plumbing SAC, TD3 and DDPG share, once their own arguments are
+        checked and set: the replay loop's settings, the common ones, then the networks."""
+        self._init_actor_critic(tau, action_noise)
+        self._init_off_policy(
+            learning_rate,
+            buffer_size,
+            learning_starts,
+            batch_size,
+            tau,
+            gamma,
+            train_freq,
+            gradient_steps,
+            replay_buffer_class,
+            replay_buffer_kwargs,
+            optimize_memory_usage,
+            n_steps,
+        )
+        self._init_common(
+            policy,
+            env,
+            policy_kwargs,
+            verbose,
+            seed,
+            device,
+            tensorboard_log,
+            num_threads,
+            stats_window_size,
+        )
+        if init_setup_model:
+            if self.env is None:
+                raise ValueError(
+                    f"{type(self).__name__} needs an env (an id string, an Env or a VecEnv)"
+                )
+            self._setup_model()
+
+    def _setup_model(self) -> None:
+        """Build the policy, the learner and the replay buffer (subclasses)."""
+        raise NotImplementedError
 
     def _check_action_space(self) -> None:
         box = self.action_space
@@ -105,62 +169,37 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
             noise.reset()
 
     # -- networks ------------------------------------------------------------------------------
-    def _parts(self) -> tuple[dict[str, Any], Any, Any, list[int], list[int], bool, Any]:
-        """The policy_kwargs, split: ``(rest, extractor class, its kwargs, actor widths, critic
-        widths, share_features_extractor, activation)``."""
-        kwargs = dict(self.policy_kwargs)
-        kwargs.pop("backend", None)
-        extractor = kwargs.pop("features_extractor_class", extractor_class(self.policy_name))
-        extractor_kwargs = kwargs.pop("features_extractor_kwargs", None) or {}
-        pi_arch, qf_arch = split_net_arch(kwargs.pop("net_arch", None), self._default_net_arch)
-        share = bool(kwargs.pop("share_features_extractor", False))
-        activation = kwargs.pop("activation_fn", torch.nn.ReLU)
-        unknown = set(kwargs) - {
-            "n_critics",
-            "normalize_images",
-            "optimizer_class",
-            "optimizer_kwargs",
-        }
-        if unknown:
-            raise TypeError(
-                f"{type(self).__name__} policy_kwargs got unexpected keys {sorted(unknown)}"
-            )
-        return kwargs, extractor, extractor_kwargs, pi_arch, qf_arch, share, activation
+    # Keys DDPG adds to policy_kwargs when they are absent (SB3's DDPG: n_critics=1).
+    _policy_defaults: dict[str, Any] = {}
 
-    def _new_extractor(self) -> BaseFeaturesExtractor:
-        _, cls, kwargs, *_ = self._parts()
-        extractor: BaseFeaturesExtractor = cls(extractor_space(self.observation_space), **kwargs)
-        return extractor
-
-    def _critic(self, shared: BaseFeaturesExtractor | None) -> ContinuousCritic:
-        kwargs, _, _, _, qf_arch, share, activation = self._parts()
-        return ContinuousCritic(
-            self.observation_space,
-            self.action_dim,
-            shared if share and shared is not None else self._new_extractor(),
-            qf_arch,
-            activation,
-            n_critics=kwargs.get("n_critics", self._default_n_critics),
-            share_features_extractor=share,
-            normalize_images=kwargs.get("normalize_images", True),
-        )
-
-    _default_n_critics = 2
-    _default_net_arch = [256, 256]  # SAC's; TD3 and DDPG: [400, 300]
+    def _make_policy(self, **parts: type[torch.nn.Module]) -> Any:
+        """The policy (``SACPolicy``/``TD3Policy`` or a subclass), checked to hold ``parts``
+        (attribute name -> the class it must be an instance of) for the learner to run."""
+        policy = self._build_policy({**self._policy_defaults, **self.policy_kwargs})
+        for name, cls in parts.items():
+            part = getattr(policy, name, None)
+            if not isinstance(part, cls):
+                raise TypeError(
+                    f"{type(policy).__name__}.{name} must be a {cls.__module__}.{cls.__name__} "
+                    f"(or a subclass; see make_actor/make_critic), got {type(part).__name__}"
+                )
+        return policy
 
     def _critic_nets(
-        self, critic: ContinuousCritic, target: ContinuousCritic
+        self, critic: ContinuousCritic, target: ContinuousCritic, policy: torch.nn.Module
     ) -> tuple[dict[str, Net], list[torch.nn.Parameter]]:
         """``qf{i}`` and ``qf{i}_target`` nets, and the critic optimizer's parameters (without
         a features extractor shared with the actor, which SB3 trains with the actor only)."""
-        why = _numpy_input_problem(
+        why = self._custom_policy(policy) or _numpy_input_problem(
             self.observation_space, critic.features_extractor, critic.normalize_images
         )
         nets: dict[str, Net] = {}
         for i in range(len(critic.q_networks)):
             own: torch.nn.Module = critic.q_networks[i]
             frozen: torch.nn.Module = target.q_networks[i]
-            if i == 0 and not critic.share_features_extractor:  # the extractor moves with qf0
+            if i == 0:
+                # The extractor moves with qf0, shared or not: SB3 polyak-averages all of
+                # critic.parameters() (with a shared one, the actor's) into the target's.
                 own = torch.nn.ModuleList([critic.features_extractor, own])
                 frozen = torch.nn.ModuleList([target.features_extractor, frozen])
             nets[f"qf{i}"] = Net(
@@ -186,10 +225,12 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
         ]
         return nets, params
 
-    def _make_optimizer_for(self, params: list[torch.nn.Parameter]) -> torch.optim.Optimizer:
-        kwargs = dict(self.policy_kwargs)
-        optimizer_class = kwargs.get("optimizer_class", torch.optim.Adam)
-        optimizer_kwargs = kwargs.get("optimizer_kwargs", None) or {}
+    def _make_optimizer_for(
+        self, params: list[torch.nn.Parameter], policy: Any
+    ) -> torch.optim.Optimizer:
+        """An optimizer of the policy's ``optimizer_class``/``optimizer_kwargs``."""
+        optimizer_class = getattr(policy, "optimizer_class", torch.optim.Adam)
+        optimizer_kwargs = getattr(policy, "optimizer_kwargs", None) or {}
         return self._make_optimizer(params, optimizer_class, optimizer_kwargs)
 
     def _polyak_critics(self) -> None:

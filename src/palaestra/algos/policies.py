@@ -17,7 +17,7 @@ from palaestra.algos.networks import (
     FlattenExtractor,
     MlpExtractor,
     NatureCNN,
-    extractor_space,
+    make_extractor,
     mlp,
     preprocess_obs,
 )
@@ -66,8 +66,8 @@ class QNetwork(nn.Module):
     ) -> None:
         super().__init__()
         self.observation_space, self.normalize_images = observation_space, normalize_images
-        self.features_extractor = features_extractor_class(
-            extractor_space(observation_space), **(features_extractor_kwargs or {})
+        self.features_extractor = make_extractor(
+            features_extractor_class, observation_space, features_extractor_kwargs
         )
         if net_arch is None:
             net_arch = [] if features_extractor_class is NatureCNN else [64, 64]
@@ -143,11 +143,14 @@ class ActorCritic(nn.Module):
         self.observation_space, self.action_space = observation_space, action_space
         self.normalize_images, self.ortho_init = normalize_images, ortho_init
         self.net_arch, self.activation_fn = net_arch, activation_fn
-        kwargs = features_extractor_kwargs or {}
-        space = extractor_space(observation_space)
-        self.features_extractor = features_extractor_class(space, **kwargs)
+        kwargs = features_extractor_kwargs
+        self.features_extractor = make_extractor(
+            features_extractor_class, observation_space, kwargs
+        )
         self.vf_features_extractor = (
-            None if share_features_extractor else features_extractor_class(space, **kwargs)
+            None
+            if share_features_extractor
+            else make_extractor(features_extractor_class, observation_space, kwargs)
         )
         self.features_dim = self.features_extractor.features_dim
         self._features_extractor_class = features_extractor_class

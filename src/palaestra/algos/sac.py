@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
-from palaestra.algos.continuous_policies import SquashedGaussianActor
+from palaestra.algos.continuous_policies import ContinuousCritic, SquashedGaussianActor
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.heads import squashed_gaussian_rsample
 from palaestra.algos.learners.objectives import (
@@ -17,11 +17,27 @@ from palaestra.algos.learners.objectives import (
     SACCriticObjective,
 )
 from palaestra.algos.learners.xp import numpy_ops
+from palaestra.algos.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.off_policy_actor_critic import ActorCriticOffPolicy
+from palaestra.algos.off_policy_policies import SACPolicy
 from palaestra.algos.policies import _numpy_input_problem
 from palaestra.algos.schedules import Schedule
 
-__all__ = ["SAC"]
+__all__ = ["SAC", "CnnPolicy", "MlpPolicy", "MultiInputPolicy", "SACPolicy"]
+
+MlpPolicy = SACPolicy  # SB3's alias
+
+
+class CnnPolicy(SACPolicy):
+    """``SACPolicy`` with ``NatureCNN`` as its default features extractor (SB3's)."""
+
+    default_features_extractor_class = NatureCNN
+
+
+class MultiInputPolicy(SACPolicy):
+    """``SACPolicy`` with ``CombinedExtractor`` as its default features extractor (SB3's)."""
+
+    default_features_extractor_class = CombinedExtractor
 
 
 def _ent_coef_init(ent_coef: Any) -> tuple[bool, float]:
@@ -58,9 +74,16 @@ class SAC(ActorCriticOffPolicy):
     ``use_sde`` (gSDE) is not implemented.
     """
 
+    policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {
+        "MlpPolicy": MlpPolicy,
+        "CnnPolicy": CnnPolicy,
+        "MultiInputPolicy": MultiInputPolicy,
+    }
+    _policy_class_base = SACPolicy
+
     def __init__(
         self,
-        policy: str,
+        policy: str | type[SACPolicy],
         env: Any,
         learning_rate: float | Schedule = 3e-4,
         buffer_size: int = 1_000_000,
@@ -100,8 +123,9 @@ class SAC(ActorCriticOffPolicy):
             raise ValueError(f"target_update_interval must be a positive int, got {interval!r}")
         self.ent_coef, self.target_entropy_setting = ent_coef, target_entropy
         self.target_update_interval = interval
-        self._init_actor_critic(tau, action_noise)
-        self._init_off_policy(
+        self._init_model(
+            policy,
+            env,
             learning_rate,
             buffer_size,
             learning_starts,
@@ -110,58 +134,40 @@ class SAC(ActorCriticOffPolicy):
             gamma,
             train_freq,
             gradient_steps,
+            action_noise,
             replay_buffer_class,
             replay_buffer_kwargs,
             optimize_memory_usage,
             n_steps,
-        )
-        self._init_common(
-            policy,
-            env,
+            stats_window_size,
+            tensorboard_log,
             policy_kwargs,
             verbose,
             seed,
             device,
-            tensorboard_log,
             num_threads,
-            stats_window_size,
+            _init_setup_model,
         )
-        if _init_setup_model:
-            if self.env is None:
-                raise ValueError("SAC needs an env (an id string, an Env or a VecEnv)")
-            self._setup_model()
 
     def _setup_model(self) -> None:
         self._check_action_space()
         self.set_random_seed(self.seed)
-        kwargs, _, _, pi_arch, _, _, activation = self._parts()
+        policy = self._make_policy(
+            actor=SquashedGaussianActor, critic=ContinuousCritic, critic_target=ContinuousCritic
+        )
+        actor, critic, critic_target = policy.actor, policy.critic, policy.critic_target
         backend = self.policy_kwargs.get("backend", "auto")
         self.target_entropy = (
             float(-np.prod(self.action_space.shape).astype(np.float32))
             if self.target_entropy_setting == "auto"
             else float(self.target_entropy_setting)
         )
-        actor = SquashedGaussianActor(
-            self.observation_space,
-            self.action_dim,
-            self._new_extractor(),
-            pi_arch,
-            activation,
-            kwargs.get("normalize_images", True),
-        )
-        critic, critic_target = self._critic(actor.features_extractor), self._critic(None)
-        critic_target.load_state_dict(critic.state_dict())
-        critic_target.requires_grad_(False)
-        parts: dict[str, torch.nn.Module] = {
-            "actor": actor,
-            "critic": critic,
-            "critic_target": critic_target,
-        }
         log_ent_coef = torch.nn.Parameter(torch.full((1,), math.log(self._ent_coef_init)))
         if self._learn_ent_coef:
-            parts["ent_coef"] = torch.nn.ParameterDict({"log_ent_coef": log_ent_coef})
-        policy = torch.nn.ModuleDict(parts).to(self.device)
-        why = _numpy_input_problem(
+            # Kept in the policy's state (``ent_coef.log_ent_coef``) so the model file has it.
+            ent_coef = torch.nn.ParameterDict({"log_ent_coef": log_ent_coef}).to(self.device)
+            policy.add_module("ent_coef", ent_coef)
+        why = self._custom_policy(policy) or _numpy_input_problem(
             self.observation_space, actor.features_extractor, actor.normalize_images
         )
         nets = {
@@ -174,12 +180,12 @@ class SAC(ActorCriticOffPolicy):
             "mu": Net(actor.mu, [actor.mu], group="actor"),
             "log_std": Net(actor.log_std, [actor.log_std], group="actor"),
         }
-        critic_nets, critic_params = self._critic_nets(critic, critic_target)
+        critic_nets, critic_params = self._critic_nets(critic, critic_target, policy)
         nets.update(critic_nets)
         actor_params = list(actor.parameters())
         groups = {
-            "actor": Group(self._make_optimizer_for(actor_params), actor_params),
-            "critic": Group(self._make_optimizer_for(critic_params), critic_params),
+            "actor": Group(self._make_optimizer_for(actor_params, policy), actor_params),
+            "critic": Group(self._make_optimizer_for(critic_params, policy), critic_params),
         }
         if self._learn_ent_coef:
             # SB3: plain Adam at the learning rate, whatever optimizer the networks use.
@@ -193,15 +199,15 @@ class SAC(ActorCriticOffPolicy):
 
     @property
     def actor(self) -> SquashedGaussianActor:
-        return self.policy["actor"]
+        return self.policy.actor
 
     @property
     def critic(self) -> Any:
-        return self.policy["critic"]
+        return self.policy.critic
 
     @property
     def critic_target(self) -> Any:
-        return self.policy["critic_target"]
+        return self.policy.critic_target
 
     def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
         optimizers = super()._optimizers()

@@ -3,19 +3,35 @@ critic, no target smoothing and no delay) with Stable-Baselines3's parameters an
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
-from palaestra.algos.continuous_policies import DeterministicActor
+from palaestra.algos.continuous_policies import ContinuousCritic, DeterministicActor
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.objectives import TD3ActorObjective, TD3CriticObjective
+from palaestra.algos.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.off_policy_actor_critic import ActorCriticOffPolicy
+from palaestra.algos.off_policy_policies import TD3Policy
 from palaestra.algos.policies import _numpy_input_problem
 from palaestra.algos.schedules import Schedule
 
-__all__ = ["DDPG", "TD3"]
+__all__ = ["DDPG", "TD3", "CnnPolicy", "MlpPolicy", "MultiInputPolicy", "TD3Policy"]
+
+MlpPolicy = TD3Policy  # SB3's alias (DDPG's policies are TD3's, as in SB3)
+
+
+class CnnPolicy(TD3Policy):
+    """``TD3Policy`` with ``NatureCNN`` as its default features extractor (SB3's)."""
+
+    default_features_extractor_class = NatureCNN
+
+
+class MultiInputPolicy(TD3Policy):
+    """``TD3Policy`` with ``CombinedExtractor`` as its default features extractor (SB3's)."""
+
+    default_features_extractor_class = CombinedExtractor
 
 
 class TD3(ActorCriticOffPolicy):
@@ -29,11 +45,16 @@ class TD3(ActorCriticOffPolicy):
     from the model's generator (same seed, same run, on either learner).
     """
 
-    _default_net_arch = [400, 300]  # SB3's TD3 and DDPG
+    policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {
+        "MlpPolicy": MlpPolicy,
+        "CnnPolicy": CnnPolicy,
+        "MultiInputPolicy": MultiInputPolicy,
+    }
+    _policy_class_base = TD3Policy
 
     def __init__(
         self,
-        policy: str,
+        policy: str | type[TD3Policy],
         env: Any,
         learning_rate: float | Schedule = 1e-3,
         buffer_size: int = 1_000_000,
@@ -70,8 +91,9 @@ class TD3(ActorCriticOffPolicy):
                 raise ValueError(f"{name} must be a number >= 0, got {value!r}")
         self.policy_delay = policy_delay
         self.target_policy_noise, self.target_noise_clip = target_policy_noise, target_noise_clip
-        self._init_actor_critic(tau, action_noise)
-        self._init_off_policy(
+        self._init_model(
+            policy,
+            env,
             learning_rate,
             buffer_size,
             learning_starts,
@@ -80,62 +102,33 @@ class TD3(ActorCriticOffPolicy):
             gamma,
             train_freq,
             gradient_steps,
+            action_noise,
             replay_buffer_class,
             replay_buffer_kwargs,
             optimize_memory_usage,
             n_steps,
-        )
-        self._init_common(
-            policy,
-            env,
+            stats_window_size,
+            tensorboard_log,
             policy_kwargs,
             verbose,
             seed,
             device,
-            tensorboard_log,
             num_threads,
-            stats_window_size,
+            _init_setup_model,
         )
-        if _init_setup_model:
-            if self.env is None:
-                raise ValueError(f"{type(self).__name__} needs an env (an id, an Env or a VecEnv)")
-            self._setup_model()
 
     def _setup_model(self) -> None:
         self._check_action_space()
         self.set_random_seed(self.seed)
-        kwargs, _, _, pi_arch, _, _, activation = self._parts()
-        normalize = kwargs.get("normalize_images", True)
-        actor = DeterministicActor(
-            self.observation_space,
-            self.action_dim,
-            self._new_extractor(),
-            pi_arch,
-            activation,
-            normalize,
+        policy = self._make_policy(
+            actor=DeterministicActor,
+            actor_target=DeterministicActor,
+            critic=ContinuousCritic,
+            critic_target=ContinuousCritic,
         )
-        actor_target = DeterministicActor(
-            self.observation_space,
-            self.action_dim,
-            self._new_extractor(),
-            pi_arch,
-            activation,
-            normalize,
-        )
-        actor_target.load_state_dict(actor.state_dict())
-        critic, critic_target = self._critic(actor.features_extractor), self._critic(None)
-        critic_target.load_state_dict(critic.state_dict())
-        for frozen in (actor_target, critic_target):
-            frozen.requires_grad_(False)
-        policy = torch.nn.ModuleDict(
-            {
-                "actor": actor,
-                "actor_target": actor_target,
-                "critic": critic,
-                "critic_target": critic_target,
-            }
-        ).to(self.device)
-        why = _numpy_input_problem(
+        actor, actor_target = policy.actor, policy.actor_target
+        critic, critic_target = policy.critic, policy.critic_target
+        why = self._custom_policy(policy) or _numpy_input_problem(
             self.observation_space, actor.features_extractor, actor.normalize_images
         )
         nets = {
@@ -149,12 +142,12 @@ class TD3(ActorCriticOffPolicy):
                 why=why,
             ),
         }
-        critic_nets, critic_params = self._critic_nets(critic, critic_target)
+        critic_nets, critic_params = self._critic_nets(critic, critic_target, policy)
         nets.update(critic_nets)
         actor_params = list(actor.parameters())
         groups = {
-            "actor": Group(self._make_optimizer_for(actor_params), actor_params),
-            "critic": Group(self._make_optimizer_for(critic_params), critic_params),
+            "actor": Group(self._make_optimizer_for(actor_params, policy), actor_params),
+            "critic": Group(self._make_optimizer_for(critic_params, policy), critic_params),
         }
         self._set_learner(
             policy,
@@ -167,19 +160,19 @@ class TD3(ActorCriticOffPolicy):
 
     @property
     def actor(self) -> DeterministicActor:
-        return self.policy["actor"]
+        return self.policy.actor
 
     @property
     def actor_target(self) -> DeterministicActor:
-        return self.policy["actor_target"]
+        return self.policy.actor_target
 
     @property
     def critic(self) -> Any:
-        return self.policy["critic"]
+        return self.policy.critic
 
     @property
     def critic_target(self) -> Any:
-        return self.policy["critic_target"]
+        return self.policy.critic_target
 
     # -- acting ------------------------------------------------------------------------------
     def _policy_actions(self, obs: Any, deterministic: bool) -> np.ndarray:
@@ -226,11 +219,11 @@ class DDPG(TD3):
     says otherwise), no target policy smoothing (``target_noise_clip=0``) and
     ``policy_delay=1``; SB3's constructor arguments and defaults."""
 
-    _default_n_critics = 1
+    _policy_defaults = {"n_critics": 1}  # SB3's DDPG, unless policy_kwargs says otherwise
 
     def __init__(
         self,
-        policy: str,
+        policy: str | type[TD3Policy],
         env: Any,
         learning_rate: float | Schedule = 1e-3,
         buffer_size: int = 1_000_000,
