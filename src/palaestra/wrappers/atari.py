@@ -37,9 +37,10 @@ Step = tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]
 Reset = tuple[np.ndarray, dict[str, Any]]
 
 # OpenCV's RGB2GRAY weights for uint8 (0.299, 0.587, 0.114 in 14-bit fixed point; they sum to
-# 2**14). As float32 every product and sum stays an exact integer below 2**24, so a float
-# matrix-vector product (fast in numpy, unlike integer matmul) gives the same integers.
-_GRAY_WEIGHTS = np.array([4899, 9617, 1868], dtype=np.float32)
+# 2**14), here pre-scaled by 2**-14. As float32 every product and sum is an exact multiple of
+# 2**-14 below 2**10 (24 bits), so a float matrix-vector product (fast in numpy, unlike integer
+# matmul) gives OpenCV's fixed-point luma exactly.
+_GRAY_WEIGHTS = np.array([4899, 9617, 1868], dtype=np.float32) * np.float32(2.0**-14)
 
 
 def rgb_to_gray(frame: np.ndarray) -> np.ndarray:
@@ -53,11 +54,9 @@ def rgb_to_gray(frame: np.ndarray) -> np.ndarray:
 
 def _gray_f32(frame: np.ndarray) -> np.ndarray:
     """:func:`rgb_to_gray`'s integers as ``[H, W]`` float32 (what the resize works on)."""
-    luma = frame.reshape(-1, 3) @ _GRAY_WEIGHTS  # [H*W] float32, exact integers
-    # OpenCV's CV_DESCALE, (luma + 2**13) >> 14, in float32: the sum stays below 2**24 and the
-    # scale is a power of two, so every step is exact.
-    luma += 1 << 13
-    luma *= 1.0 / (1 << 14)
+    luma = frame.reshape(-1, 3) @ _GRAY_WEIGHTS  # [H*W] float32, exact
+    # OpenCV's CV_DESCALE, (luma + 2**13) >> 14, on the pre-scaled luma: exact in float32.
+    luma += 0.5
     np.floor(luma, out=luma)
     return luma.reshape(frame.shape[:2])
 
