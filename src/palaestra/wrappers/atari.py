@@ -212,7 +212,9 @@ class MaxAndSkipEnv(MaxAndSkipObservation[np.ndarray, int, np.ndarray]):
 
     The frames before the last two are never looked at: when nothing between this wrapper and
     the Atari env looks at observations either, the env skips reading the screen for them (a
-    screen read costs about a quarter of an emulated frame). The results are unchanged.
+    screen read costs about a quarter of an emulated frame), and the last two are kept by
+    reference instead of copied (the env's frames are fresh arrays that nobody else holds).
+    The results are unchanged.
     """
 
     def __init__(self, env: Env[Any, Any], skip: int = 4) -> None:
@@ -220,6 +222,9 @@ class MaxAndSkipEnv(MaxAndSkipObservation[np.ndarray, int, np.ndarray]):
         base = env.unwrapped
         quiet = _observations_unused_below(env) and hasattr(base, "skip_screen_observations")
         self._screen_source: Any = base if quiet else None
+        # The last two frames on the quiet path: like the buffer's slots, one left from an
+        # earlier step stays when an episode ends before the second-to-last repeat.
+        self._last_two: list[np.ndarray] = [self._obs_buffer[0], self._obs_buffer[1]]
 
     def step(self, action: int) -> Step:
         """Step ``skip`` times (fewer if the episode ends) with ``action``."""
@@ -236,13 +241,13 @@ class MaxAndSkipEnv(MaxAndSkipObservation[np.ndarray, int, np.ndarray]):
                     base.skip_screen_observations(False)  # the two frames that are max-pooled
                 obs, reward, terminated, truncated, info = self.env.step(action)
                 if i >= self._skip - 2:
-                    self._obs_buffer[i - self._skip + 2] = obs
+                    self._last_two[i - self._skip + 2] = obs
                 total_reward += float(reward)
                 if terminated or truncated:
                     break
         finally:
             base.skip_screen_observations(False)
-        pooled = np.maximum(self._obs_buffer[0], self._obs_buffer[1])  # half max(axis=0)'s time
+        pooled = np.maximum(self._last_two[0], self._last_two[1])  # half max(axis=0)'s time
         return pooled, total_reward, terminated, truncated, info
 
 

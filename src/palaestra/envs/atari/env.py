@@ -132,6 +132,10 @@ class AtariEnv(Env[Any, Any]):
         self._window: Any = None
         self._image_shape = shape
         self._blank: np.ndarray | None = None  # set by skip_screen_observations()
+        # The one all-zero frame handed out while reads are skipped: read-only, so no holder can
+        # change what another holds (built once: a frame-skip wrapper toggles reads every step).
+        self._zero_frame = np.zeros(shape, np.uint8)
+        self._zero_frame.flags.writeable = False
 
     # --- seeding and loading (ale-py's public methods, same names) -------------------------
 
@@ -204,7 +208,7 @@ class AtariEnv(Env[Any, Any]):
         return self._obs(), reward, terminated, truncated, self._info()
 
     def skip_screen_observations(self, skip: bool = True) -> None:
-        """Return a fresh all-zero frame instead of reading the screen at every step and
+        """Return an all-zero read-only frame instead of reading the screen at every step and
         reset (``skip=False`` undoes it).
 
         For wrappers that read the screen from ``ale`` themselves and discard the env's
@@ -213,7 +217,7 @@ class AtariEnv(Env[Any, Any]):
         """
         # The frame's shape is the image space's: no screen read needed to build the blank,
         # so a frame-skip wrapper can switch reads off and on around each skipped frame.
-        self._blank = np.zeros(self._image_shape, np.uint8) if skip else None
+        self._blank = self._zero_frame if skip else None
 
     @property
     def screen_observations_skipped(self) -> bool:
@@ -221,7 +225,7 @@ class AtariEnv(Env[Any, Any]):
         return self._blank is not None
 
     def _obs(self) -> Any:
-        image = self._observe() if self._blank is None else np.zeros(self._image_shape, np.uint8)
+        image = self._observe() if self._blank is None else self._blank
         if self.sound_obs:
             return {"image": image, "sound": self.ale.getAudio()}
         return image
