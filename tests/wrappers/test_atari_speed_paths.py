@@ -1,9 +1,10 @@
 """The fast paths of SB3's Atari stack change no byte (issue 16, item 14).
 
-``WarpFrame`` computes the grayscale in float32 and resizes it with the grouped area passes:
-equal to OpenCV's ``cvtColor`` + ``resize(INTER_AREA)``. ``MaxAndSkipEnv`` lets the env skip
-reading the screen for the frames it never looks at: the same observations, rewards and flags
-as with every screen read.
+``WarpFrame`` computes the grayscale in float32 and resizes it with two small matrix products
+(``tests/wrappers/test_resize_products.py`` checks those on their own): equal to OpenCV's
+``cvtColor`` + ``resize(INTER_AREA)``. ``MaxAndSkipEnv`` lets the env skip reading the screen
+for the frames it never looks at and keeps the last two by reference: the same observations,
+rewards and flags as with every screen read and copy.
 """
 
 from __future__ import annotations

@@ -9,11 +9,13 @@ as it likes; the horizontal one (weights ``k / D``, a ``Px x Qx`` block) lands w
 float32 roundings of ``N / D``. Atari's 210x160 -> 84x84 is ``(2/5) x (21/40)``: ``D = 200``.
 
 OpenCV sums float32 weights in a fixed order, so its result too is ``N / D`` give or take a few
-roundings (``error_bound``). Where ``1 / D`` dwarfs those errors, rounding our value gives
-OpenCV's byte for every pixel except exact ties (``N / D = k + 1/2``), where OpenCV's rounding
-errors decide the side. Those pixels (a few per frame in most Atari games, dozens in some) are
-recomputed in OpenCV's own order (``ResizeArea_Invoker``: each source row's horizontal sum,
-then the vertical sum, term by term in float32).
+roundings: each is within ``error_bound`` of ``N / D``, and a plan is only made where that bound
+is below ``1 / (4D)``. A pixel of ours farther than ``1 / (2D)`` from a rounding boundary
+``k + 1/2`` then has OpenCV's on the same side, and rounds to OpenCV's byte. The others are the
+exact ties ``N / D = k + 1/2`` (a few per frame in most Atari games, dozens in some), where
+OpenCV's rounding errors decide the side: they are recomputed in OpenCV's own order
+(``ResizeArea_Invoker``: each source row's horizontal sum, then the vertical sum, term by term
+in float32).
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ class IntegerAreaPlan:
 
     rows: np.ndarray  # [Qy, Py] float32 integers: one vertical period
     cols: np.ndarray  # [Px*C, Qx*C] float32, integers / D: one horizontal period, per channel
-    tie_margin: float  # |out - round(out)| above this is an exact tie
+    tie_margin: float  # 1/2 - 1/(2D): |value - round(value)| above this is recomputed
     # OpenCV's terms per output value (flat [oh*ow*C]), for recomputing ties in its order:
     tie_pixels: np.ndarray  # [oh*ow*C, Ty, Tx] intp: flat source positions
     tie_weights: np.ndarray  # [oh*ow*C, Ty, Tx+1] float32: horizontal weights, vertical last
@@ -80,7 +82,7 @@ def integer_area_plan(
     (py, _), (px, _) = _period(h, oh), _period(w, ow)
     d = py * px
     bound = error_bound(y_table[0].shape[1], x_table[0].shape[1])
-    # Ours and OpenCV's are each within `bound` of N/D, a non-tie N/D is 1/D from k + 1/2.
+    # Ours and OpenCV's each within `bound` < 1/(4D) of N/D: they differ by less than 1/(2D).
     if 255 * d >= 2**24 or 4 * bound * d >= 1:
         return None
     rows, cols = _block(y_table, h, oh), _block(x_table, w, ow)
