@@ -1,12 +1,15 @@
 """The fast paths of SB3's Atari stack change no byte (issue 16, item 14).
 
-``WarpFrame`` computes the grayscale in float32 and resizes it with the grouped area passes:
-equal to OpenCV's ``cvtColor`` + ``resize(INTER_AREA)``. ``MaxAndSkipEnv`` lets the env skip
-reading the screen for the frames it never looks at: the same observations, rewards and flags
-as with every screen read.
+``WarpFrame`` computes the grayscale in float32 and resizes it with two small matrix products
+(``tests/wrappers/test_resize_products.py`` checks those on their own): equal to OpenCV's
+``cvtColor`` + ``resize(INTER_AREA)``. ``MaxAndSkipEnv`` lets the env skip reading the screen
+for the frames it never looks at and keeps the last two by reference: the same observations,
+rewards and flags as with every screen read and copy.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 import pytest
@@ -107,3 +110,29 @@ def test_max_and_skip_restores_screen_reads_after_an_error():
     with pytest.raises(palaestra.error.InvalidAction):
         wrapper.step(99)
     assert not env.unwrapped.screen_observations_skipped
+
+
+def test_quiet_max_and_skip_returns_frames_nobody_else_holds():
+    def pooled_frames(scribble):
+        env = MaxAndSkipEnv(palaestra.make("BreakoutNoFrameskip-v4"), skip=4)
+        assert env._screen_source is not None  # the quiet path: last two kept by reference
+        env.reset(seed=0)
+        frames = []
+        for action in (1, 0, 3, 2, 0):
+            obs = env.step(action)[0]
+            frames.append(obs.copy())
+            if scribble:
+                obs[...] = 255  # the caller owns what it got: later steps must not see this
+        return frames
+
+    for mine, theirs in zip(pooled_frames(True), pooled_frames(False)):
+        np.testing.assert_array_equal(mine, theirs)
+
+
+def test_quiet_stack_trips_no_env_checker_warning():
+    """The skipped frames are fresh arrays: the passive checker (inside ``make``) compares the
+    first steps' observations and warns about shared objects."""
+    env = AtariWrapper(palaestra.make("BreakoutNoFrameskip-v4"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _rollout(env, steps=20)

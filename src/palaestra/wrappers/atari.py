@@ -37,9 +37,10 @@ Step = tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]
 Reset = tuple[np.ndarray, dict[str, Any]]
 
 # OpenCV's RGB2GRAY weights for uint8 (0.299, 0.587, 0.114 in 14-bit fixed point; they sum to
-# 2**14). As float32 every product and sum stays an exact integer below 2**24, so a float
-# matrix-vector product (fast in numpy, unlike integer matmul) gives the same integers.
-_GRAY_WEIGHTS = np.array([4899, 9617, 1868], dtype=np.float32)
+# 2**14), here pre-scaled by 2**-14. As float32 every product and sum is an exact multiple of
+# 2**-14 below 2**10 (24 bits), so a float matrix-vector product (fast in numpy, unlike integer
+# matmul) gives OpenCV's fixed-point luma exactly.
+_GRAY_WEIGHTS = np.array([4899, 9617, 1868], dtype=np.float32) * np.float32(2.0**-14)
 
 
 def rgb_to_gray(frame: np.ndarray) -> np.ndarray:
@@ -53,11 +54,9 @@ def rgb_to_gray(frame: np.ndarray) -> np.ndarray:
 
 def _gray_f32(frame: np.ndarray) -> np.ndarray:
     """:func:`rgb_to_gray`'s integers as ``[H, W]`` float32 (what the resize works on)."""
-    luma = frame.reshape(-1, 3) @ _GRAY_WEIGHTS  # [H*W] float32, exact integers
-    # OpenCV's CV_DESCALE, (luma + 2**13) >> 14, in float32: the sum stays below 2**24 and the
-    # scale is a power of two, so every step is exact.
-    luma += 1 << 13
-    luma *= 1.0 / (1 << 14)
+    luma = frame.reshape(-1, 3) @ _GRAY_WEIGHTS  # [H*W] float32, exact
+    # OpenCV's CV_DESCALE, (luma + 2**13) >> 14, on the pre-scaled luma: exact in float32.
+    luma += 0.5
     np.floor(luma, out=luma)
     return luma.reshape(frame.shape[:2])
 
@@ -213,7 +212,9 @@ class MaxAndSkipEnv(MaxAndSkipObservation[np.ndarray, int, np.ndarray]):
 
     The frames before the last two are never looked at: when nothing between this wrapper and
     the Atari env looks at observations either, the env skips reading the screen for them (a
-    screen read costs about a quarter of an emulated frame). The results are unchanged.
+    screen read costs about a quarter of an emulated frame), and the last two are kept by
+    reference instead of copied (the env's frames are fresh arrays that nobody else holds).
+    The results are unchanged.
     """
 
     def __init__(self, env: Env[Any, Any], skip: int = 4) -> None:
@@ -221,6 +222,9 @@ class MaxAndSkipEnv(MaxAndSkipObservation[np.ndarray, int, np.ndarray]):
         base = env.unwrapped
         quiet = _observations_unused_below(env) and hasattr(base, "skip_screen_observations")
         self._screen_source: Any = base if quiet else None
+        # The last two frames on the quiet path: like the buffer's slots, one left from an
+        # earlier step stays when an episode ends before the second-to-last repeat.
+        self._last_two: list[np.ndarray] = [self._obs_buffer[0], self._obs_buffer[1]]
 
     def step(self, action: int) -> Step:
         """Step ``skip`` times (fewer if the episode ends) with ``action``."""
@@ -237,13 +241,13 @@ class MaxAndSkipEnv(MaxAndSkipObservation[np.ndarray, int, np.ndarray]):
                     base.skip_screen_observations(False)  # the two frames that are max-pooled
                 obs, reward, terminated, truncated, info = self.env.step(action)
                 if i >= self._skip - 2:
-                    self._obs_buffer[i - self._skip + 2] = obs
+                    self._last_two[i - self._skip + 2] = obs
                 total_reward += float(reward)
                 if terminated or truncated:
                     break
         finally:
             base.skip_screen_observations(False)
-        pooled = np.maximum(self._obs_buffer[0], self._obs_buffer[1])  # half max(axis=0)'s time
+        pooled = np.maximum(self._last_two[0], self._last_two[1])  # half max(axis=0)'s time
         return pooled, total_reward, terminated, truncated, info
 
 

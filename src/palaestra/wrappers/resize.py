@@ -18,9 +18,10 @@ import numpy as np
 from palaestra.core import ActType, Env, ObsType, WrapperObsType
 from palaestra.spaces import Box
 from palaestra.utils.record_constructor import RecordConstructorArgs
+from palaestra.wrappers.resize_products import IntegerAreaPlan, integer_area_plan, resize_with_plan
 from palaestra.wrappers.transform_observation import TransformObservation
 
-__all__ = ["ResizeObservation", "resize_area", "resize_area_f32"]
+__all__ = ["ResizeObservation", "resize_area", "resize_area_f32", "resize_area_terms"]
 
 
 @lru_cache(maxsize=64)
@@ -83,14 +84,30 @@ def resize_area(image: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
 
 def resize_area_f32(src: np.ndarray, oh: int, ow: int, channels: int = 1) -> np.ndarray:
     """The general (non-integer factor) path of :func:`resize_area` on a ``[H, W*C]`` float32
-    image of integer values: ``[oh, ow*C]`` uint8. Taking float32 lets a caller that computes
-    the image in float32 anyway (``WarpFrame``'s grayscale) skip a uint8 round trip.
+    image of integer values in [0, 255]: ``[oh, ow*C]`` uint8. Taking float32 lets a caller
+    that computes the image in float32 anyway (``WarpFrame``'s grayscale) skip a uint8 round
+    trip.
 
-    Horizontal pass for every source row, then the vertical one, each term multiplied and
-    summed in float32 in OpenCV's order (``ResizeArea_Invoker``), so every byte matches. All
-    terms of a pass are gathered with one fancy index and weighted with one multiply; only the
-    sums are per term, on strided views (8 numpy calls per pass became 4 to 5: this runs once
-    per Atari frame).
+    Where the scale factors are small fractions (Atari's 210x160 -> 84x84 is 2/5 by 21/40),
+    two exact integer matrix products and a fix-up of exact ties
+    (:mod:`palaestra.wrappers.resize_products`); otherwise :func:`resize_area_terms`.
+    """
+    plan = _integer_plan(src.shape[0], src.shape[1] // channels, oh, ow, channels)
+    if plan is not None:
+        return resize_with_plan(src, plan)
+    return resize_area_terms(src, oh, ow, channels)
+
+
+@lru_cache(maxsize=64)
+def _integer_plan(h: int, w: int, oh: int, ow: int, channels: int) -> IntegerAreaPlan | None:
+    return integer_area_plan(_area_weights(h, oh), _area_weights(w, ow), h, w, channels)
+
+
+def resize_area_terms(src: np.ndarray, oh: int, ow: int, channels: int = 1) -> np.ndarray:
+    """:func:`resize_area_f32` term by term, for any factors: horizontal pass for every source
+    row, then the vertical one, each term multiplied and summed in float32 in OpenCV's order
+    (``ResizeArea_Invoker``), so every byte matches. All terms of a pass are gathered with one
+    fancy index and weighted with one multiply; only the sums are per term, on strided views.
     """
     h = src.shape[0]
     w = src.shape[1] // channels
