@@ -124,10 +124,12 @@ def area_average(image: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
 
 
 def opencv_gray(frame: np.ndarray) -> np.ndarray:
-    """``cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)`` from OpenCV's documented fixed-point formula
-    (BT.601 weights 4899, 9617, 1868 over 2**14, rounded half up), in integer arithmetic."""
+    """``cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)`` in integer arithmetic: BT.601 weights
+    9798, 19235, 3735 over 2**15, rounded half up (what OpenCV 5 computes on every colour;
+    test_atari_wrappers checks this against the installed OpenCV)."""
     f = frame.astype(np.int64)
-    return ((f[..., 0] * 4899 + f[..., 1] * 9617 + f[..., 2] * 1868 + 8192) >> 14).astype(np.uint8)
+    luma = f[..., 0] * 9798 + f[..., 1] * 19235 + f[..., 2] * 3735
+    return ((luma + (1 << 14)) >> 15).astype(np.uint8)
 
 
 def fake_cv2() -> types.ModuleType:

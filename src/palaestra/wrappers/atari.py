@@ -36,11 +36,12 @@ __all__ = [
 Step = tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]
 Reset = tuple[np.ndarray, dict[str, Any]]
 
-# OpenCV's RGB2GRAY weights for uint8 (0.299, 0.587, 0.114 in 14-bit fixed point; they sum to
-# 2**14), here pre-scaled by 2**-14. As float32 every product and sum is an exact multiple of
-# 2**-14 below 2**10 (24 bits), so a float matrix-vector product (fast in numpy, unlike integer
-# matmul) gives OpenCV's fixed-point luma exactly.
-_GRAY_WEIGHTS = np.array([4899, 9617, 1868], dtype=np.float32) * np.float32(2.0**-14)
+# OpenCV's RGB2GRAY weights for uint8: 0.299, 0.587, 0.114 in 15-bit fixed point (they sum to
+# 2**15; OpenCV 5 uses these on every colour, where its documentation still gives a 14-bit
+# formula that differs on 43,864 of the 2**24 colours), here pre-scaled by 2**-15. As float32
+# every product and sum is an exact multiple of 2**-15 below 2**8 (23 bits), so a float
+# matrix-vector product (fast in numpy, unlike integer matmul) gives OpenCV's luma exactly.
+_GRAY_WEIGHTS = np.array([9798, 19235, 3735], dtype=np.float32) * np.float32(2.0**-15)
 
 
 def rgb_to_gray(frame: np.ndarray) -> np.ndarray:
@@ -55,7 +56,7 @@ def rgb_to_gray(frame: np.ndarray) -> np.ndarray:
 def _gray_f32(frame: np.ndarray) -> np.ndarray:
     """:func:`rgb_to_gray`'s integers as ``[H, W]`` float32 (what the resize works on)."""
     luma = frame.reshape(-1, 3) @ _GRAY_WEIGHTS  # [H*W] float32, exact
-    # OpenCV's CV_DESCALE, (luma + 2**13) >> 14, on the pre-scaled luma: exact in float32.
+    # OpenCV's CV_DESCALE, (luma + 2**14) >> 15, on the pre-scaled luma: exact in float32.
     luma += 0.5
     np.floor(luma, out=luma)
     return luma.reshape(frame.shape[:2])
