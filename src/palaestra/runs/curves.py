@@ -149,10 +149,7 @@ def plot_learning_curve(episodes: Episodes, path: Path, title: str) -> None:
     ax.set(xlabel="env steps", ylabel="return", title=title)
     ax.legend(loc="best")
     fig.tight_layout()
-    try:
-        save_figure(fig, path)
-    finally:
-        plt.close(fig)
+    save_figure(fig, path)
 
 
 # The drawing process: this process's sys.path, then draw_main on the remaining arguments.
@@ -201,9 +198,15 @@ def draw_main(argv: list[str]) -> int:
 
 
 def save_figure(fig: Any, path: Path) -> None:
-    """``fig.savefig``, written atomically (a crash mid-draw keeps the previous plot)."""
-    with atomic_write(path, "wb") as file:
-        fig.savefig(file, dpi=100, format=path.suffix.lstrip(".") or "png")
+    """``fig.savefig``, written atomically (a crash mid-draw keeps the previous plot), then
+    the figure closed, whether the save worked or not (pyplot keeps every open figure)."""
+    import matplotlib.pyplot as plt
+
+    try:
+        with atomic_write(path, "wb") as file:
+            fig.savefig(file, dpi=100, format=path.suffix.lstrip(".") or "png")
+    finally:
+        plt.close(fig)
 
 
 class Band(NamedTuple):
@@ -260,7 +263,4 @@ def plot_compare(
         ax.set(xlabel=xlabel, ylabel="return (rolling mean)", title=title)
         ax.legend(loc="best")
     fig.tight_layout()
-    try:
-        save_figure(fig, path)
-    finally:
-        plt.close(fig)
+    save_figure(fig, path)

@@ -129,7 +129,6 @@ def _plots(study: Any, folder: Path) -> None:
     ax.set_title(study.study_name)
     ax.legend()
     save_figure(fig, folder / "history.png")
-    plt.close(fig)
     if len(complete) < 2 or not complete[0].params:
         return
     import optuna
@@ -145,4 +144,3 @@ def _plots(study: Any, folder: Path) -> None:
     ax.set_title(f"{study.study_name}: hyperparameter importance")
     fig.tight_layout()
     save_figure(fig, folder / "importance.png")
-    plt.close(fig)
