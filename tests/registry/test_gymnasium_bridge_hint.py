@@ -35,3 +35,15 @@ def test_other_unknown_names_keep_gymnasiums_message():
         match=r"^Environment `Cartpole` doesn't exist\. Did you mean: `CartPole`\?$",
     ):
         gym.make("Cartpole-v1")
+
+
+def test_the_hint_names_the_mujoco_install():
+    with pytest.raises(error.NameNotFound, match=r'pip install "gymnasium\[mujoco\]"'):
+        gym.make("Ant-v5")
+
+
+def test_the_bridge_table_lists_no_native_env():
+    from palaestra.envs.lookup import GYMNASIUM_ONLY
+
+    native = {spec.name for spec in gym.registry.values() if spec.namespace is None}
+    assert not native & set(GYMNASIUM_ONLY)

@@ -67,18 +67,8 @@ def _check_namespace_exists(ns: str | None) -> None:
 
 # Gymnasium 1.x's own envs that palaestra does not implement (name -> latest version): an id
 # naming one of them gets the `gymnasium:` bridge in its error instead of a bare "not found".
+# (Toy text and Box2D are native since issue 15; MuJoCo is what is left.)
 GYMNASIUM_ONLY: dict[str, int] = {
-    "Taxi": 4,
-    "FrozenLake": 1,
-    "FrozenLake8x8": 1,
-    "CliffWalking": 1,
-    "CliffWalkingSlippery": 1,
-    "Blackjack": 1,
-    "LunarLander": 3,
-    "LunarLanderContinuous": 3,
-    "BipedalWalker": 3,
-    "BipedalWalkerHardcore": 3,
-    "CarRacing": 3,
     **dict.fromkeys(
         "Ant HalfCheetah Hopper Humanoid HumanoidStandup Pusher Reacher Swimmer Walker2d".split(),
         5,
@@ -101,8 +91,8 @@ def _check_name_exists(ns: str | None, name: str) -> None:
         env_id = get_env_id(None, name, GYMNASIUM_ONLY[name])
         suggestion_msg = (
             f" Gymnasium has it: make it through the bridge with "
-            f'`make("gymnasium:{env_id}")` (needs `pip install gymnasium`; '
-            f"Box2D and MuJoCo envs need Gymnasium's extras too)."
+            f'`make("gymnasium:{env_id}")` (needs `pip install "gymnasium[mujoco]"` '
+            f"for the MuJoCo envs)."
         )
     raise error.NameNotFound(f"Environment `{name}` doesn't exist{namespace_msg}.{suggestion_msg}")
 
