@@ -21,9 +21,9 @@ CASES = [
 
 
 def test_the_issue_presets_are_shipped() -> None:
-    """Issue 15's list: PPO and DQN on LunarLander, SAC on LunarLanderContinuous."""
+    """Issue 15's list: PPO and DQN on LunarLander, SAC and TD3 on LunarLanderContinuous."""
     assert {("ppo", "LunarLander-v3"), ("dqn", "LunarLander-v3")} <= set(CASES)
-    assert ("sac", "LunarLanderContinuous-v3") in CASES
+    assert {("sac", "LunarLanderContinuous-v3"), ("td3", "LunarLanderContinuous-v3")} <= set(CASES)
 
 
 @pytest.mark.parametrize(("algo", "env_id"), CASES, ids=[f"{a}-{e}" for a, e in CASES])
