@@ -267,7 +267,27 @@ def write_measured(measured: dict[tuple[str, str, str], dict[str, Any]]) -> None
 
 
 def machine() -> str:
-    return f"{os.cpu_count()}-core CPU, 1 torch thread"
+    """Cores and CPU model: the same code ran ~4x slower on 2026-11-27's machine (AMD EPYC
+    family 25, AVX2) than on 2026-11-23's, so a wall time means little without the CPU."""
+    return f"{os.cpu_count()}-core {cpu_model()}, 1 torch thread"
+
+
+def cpu_model() -> str:
+    """``/proc/cpuinfo``'s model name, family, model and widest AVX ("CPU" where unreadable)."""
+    try:
+        text = Path("/proc/cpuinfo").read_text(encoding="utf-8")
+    except OSError:
+        return "CPU"
+    fields: dict[str, str] = {}
+    for line in text.splitlines():
+        key, sep, value = line.partition(":")
+        if not sep:
+            break  # the first processor's block ends at the first blank line
+        fields.setdefault(key.strip(), value.strip())
+    flags = fields.get("flags", "").split()
+    avx = next((f for f in ("avx512f", "avx2", "avx") if f in flags), "no AVX")
+    name, family, model = (fields.get(k, "?") for k in ("model name", "cpu family", "model"))
+    return f"{name} (family {family}, model {model}, {avx})"
 
 
 # -- main ----------------------------------------------------------------------------------------
