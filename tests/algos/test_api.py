@@ -102,6 +102,18 @@ def test_bad_input_errors() -> None:
         DQN("MlpPolicy", 42)
 
 
+@pytest.mark.parametrize("name", ["A2C", "PPO", "DQN", "SAC", "TD3", "DDPG"])
+def test_building_without_an_env_is_refused_by_name(name: str) -> None:
+    """env=None is SB3's way to load into a model later; building its networks needs an env."""
+    from palaestra import algos
+
+    cls = getattr(algos, name)
+    with pytest.raises(ValueError, match=rf"^{name} needs an env \(an id string, an Env"):
+        cls("MlpPolicy", None)
+    model = cls("MlpPolicy", None, _init_setup_model=False)  # allowed: nothing is built
+    assert model.env is None
+
+
 def test_set_env_and_get_env() -> None:
     model = PPO("MlpPolicy", "CartPole-v1", **SMALL_PPO)
     venv = make_vec_env("CartPole-v1", n_envs=2)

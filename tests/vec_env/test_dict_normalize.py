@@ -250,14 +250,17 @@ def test_image_key_space_becomes_float_and_the_inner_space_is_untouched() -> Non
     assert norm.reset()["image"].dtype == np.float32
 
 
-def test_inner_infos_are_not_rewritten() -> None:
-    class Spy(DummyVecEnv):
-        def step_wait(self) -> Any:
-            out = super().step_wait()
-            self.seen = [dict(info) for info in out[3]]  # the dicts, not the list
-            return out
+class InfoSpy(DummyVecEnv):
+    """Keeps copies of the info dicts the inner env returned, to compare with the wrapper's."""
 
-    venv = Spy([lambda: OurWalker() for _ in range(N)])
+    def step_wait(self) -> Any:
+        out = super().step_wait()
+        self.seen = [dict(info) for info in out[3]]  # the dicts, not the list
+        return out
+
+
+def test_inner_infos_are_not_rewritten() -> None:
+    venv = InfoSpy([lambda: OurWalker() for _ in range(N)])
     venv.seed(3)
     norm = VecNormalize(venv)
     norm.reset()
@@ -302,13 +305,7 @@ def test_vec_frame_stack_over_vec_normalize_matches_sb3() -> None:
 
 
 def test_stacks_are_copies_and_the_inner_infos_stay() -> None:
-    class Spy(DummyVecEnv):
-        def step_wait(self) -> Any:
-            out = super().step_wait()
-            self.seen = [dict(info) for info in out[3]]  # the dicts, not the list
-            return out
-
-    venv = Spy([lambda: OurWalker() for _ in range(N)])
+    venv = InfoSpy([lambda: OurWalker() for _ in range(N)])
     venv.seed(1)
     stack = VecFrameStack(venv, 2)
     first = stack.reset()

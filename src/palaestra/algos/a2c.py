@@ -87,10 +87,7 @@ class A2C(OnPolicyAlgorithm):
         )
         if self.env is not None:
             self._check_rollout_size()
-        if _init_setup_model:
-            if self.env is None:
-                raise ValueError("A2C needs an env (an id string, an Env or a VecEnv)")
-            self._setup_model()
+        self._setup_model_if(_init_setup_model)
 
     def _check_rollout_size(self) -> None:
         if self.normalize_advantage and self.n_steps * self.n_envs <= 1:

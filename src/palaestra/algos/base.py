@@ -276,6 +276,20 @@ class BaseAlgorithm:
                 pass
         return build_optimizer(optimizer_class, params, lr=lr, **kwargs)
 
+    def _setup_model(self) -> None:
+        """Build the policy, the learner and any buffer (each algorithm)."""
+        raise NotImplementedError
+
+    def _setup_model_if(self, init_setup_model: bool) -> None:
+        """Build the networks now (SB3's ``_init_setup_model``), which needs an env."""
+        if not init_setup_model:
+            return
+        if self.env is None:
+            raise ValueError(
+                f"{type(self).__name__} needs an env (an id string, an Env or a VecEnv)"
+            )
+        self._setup_model()
+
     # -- device, seeding ---------------------------------------------------------------------
     def _resolve_device(self, device: torch.device | str, policy: str | type) -> torch.device:
         return resolve_device(device, policy)

@@ -133,10 +133,7 @@ class DQN(OffPolicyAlgorithm):
                 "is updated every step",
                 stacklevel=2,
             )
-        if _init_setup_model:
-            if self.env is None:
-                raise ValueError("DQN needs an env (an id string, an Env or a VecEnv)")
-            self._setup_model()
+        self._setup_model_if(_init_setup_model)
 
     def _setup_model(self) -> None:
         if not isinstance(self.action_space, spaces.Discrete):

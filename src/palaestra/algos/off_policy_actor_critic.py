@@ -99,16 +99,7 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
             num_threads,
             stats_window_size,
         )
-        if init_setup_model:
-            if self.env is None:
-                raise ValueError(
-                    f"{type(self).__name__} needs an env (an id string, an Env or a VecEnv)"
-                )
-            self._setup_model()
-
-    def _setup_model(self) -> None:
-        """Build the policy, the learner and the replay buffer (subclasses)."""
-        raise NotImplementedError
+        self._setup_model_if(init_setup_model)
 
     def _check_action_space(self) -> None:
         box = self.action_space

@@ -94,10 +94,7 @@ class PPO(OnPolicyAlgorithm):
         )
         if self.env is not None:
             self._check_rollout_size()
-        if _init_setup_model:
-            if self.env is None:
-                raise ValueError("PPO needs an env (an id string, an Env or a VecEnv)")
-            self._setup_model()
+        self._setup_model_if(_init_setup_model)
 
     def _check_rollout_size(self) -> None:
         size = self.n_steps * self.n_envs
