@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-all lint bench clean
+.PHONY: demo test test-user-install test-all lint bench clean
 
 $(STAMP): requirements/dev.txt pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -20,8 +20,14 @@ demo: $(STAMP)
 	$(BIN)/palaestra train dqn MountainCar-v0 --seed 0 --out runs/demo
 	$(BIN)/palaestra record runs/demo --out runs/demo/mountain_car.gif
 
+# The default suite, then the user-install check: a fresh venv from a clone of the committed
+# tree with only the README's own-environment install (no gymnasium/SB3/dev tools), smoke-run.
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -p no:cacheprovider
+	bash tests/userinstall/check.sh
+
+test-user-install:
+	bash tests/userinstall/check.sh
 
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -q -p no:cacheprovider -m "slow or not slow"
