@@ -15,6 +15,8 @@ git clone --quiet --no-hardlinks "$root" "$work/palaestra"
 echo "user-install check: commit $(git -C "$work/palaestra" rev-parse --short HEAD), extras [$extras]"
 "$py" -m venv "$work/venv"
 pip=("$work/venv/bin/python" -m pip --quiet --disable-pip-version-check)
+# This workplace's pip.conf names local indexes that may be absent: pip warns per package.
+exec 2> >(grep -v "^WARNING: Location 'file://" >&2)
 "${pip[@]}" install torch==2.13.0
 # README: the CPU torch first, then the extras; the extras must keep it (no CUDA wheels).
 (cd "$work/palaestra" && "${pip[@]}" install --dry-run --report "$work/report.json" ".[$extras]" >/dev/null)
