@@ -48,7 +48,7 @@ from palaestra.algos.schedules import Schedule
 from palaestra.algos.spaces_util import is_image_space, is_vectorized_observation
 from palaestra.core import Env, Wrapper
 
-__all__ = ["BaseAlgorithm", "resolve_device"]
+__all__ = ["BaseAlgorithm", "resolve_device", "round_up_steps"]
 
 
 def resolve_device(device: torch.device | str, policy: str | type) -> torch.device:
@@ -305,6 +305,14 @@ class BaseAlgorithm:
             self.env.seed(seed)
 
     # -- learn bookkeeping ---------------------------------------------------------------------
+    def final_timesteps(self, total_timesteps: int) -> int:
+        """The step count ``learn`` stops at when it trains on to ``total_timesteps`` steps in
+        all (``learn(total_timesteps - num_timesteps, reset_num_timesteps=False)``): every env
+        steps at once, so the count rises by ``n_envs``; on-policy algorithms finish their
+        rollout and off-policy ones their ``train_freq`` collection (SB3's loops, which check
+        the budget only between two of them)."""
+        return round_up_steps(self.num_timesteps, self.num_timesteps, total_timesteps, self.n_envs)
+
     def _setup_learn(
         self,
         total_timesteps: int,
@@ -542,3 +550,15 @@ class BaseAlgorithm:
     def _uses_images(self) -> bool:
         sub = getattr(self.observation_space, "spaces", {"": self.observation_space})
         return any(is_image_space(s) for s in sub.values())
+
+
+def round_up_steps(start: int, now: int, total: int, chunk: int) -> int:
+    """Where a loop that runs whole ``chunk``-step pieces from step ``start`` while the count is
+    below ``total`` stops, being at step ``now`` (``start <= now``).
+
+    >>> round_up_steps(0, 0, 5000, 4096), round_up_steps(0, 4096, 4096, 4096)
+    (8192, 4096)
+    """
+    if now >= total:
+        return now
+    return start + -(-(total - start) // chunk) * chunk

@@ -18,7 +18,7 @@ import numpy as np
 import torch
 
 from palaestra.algos import model_io
-from palaestra.algos.base import BaseAlgorithm
+from palaestra.algos.base import BaseAlgorithm, round_up_steps
 from palaestra.algos.frame_replay_buffer import FrameReplayBuffer, frame_layout
 from palaestra.algos.replay_buffer import ReplayBuffer
 from palaestra.algos.schedules import Schedule, as_schedule
@@ -128,6 +128,14 @@ class OffPolicyAlgorithm(BaseAlgorithm):
             self.device,
             **self.replay_buffer_kwargs,
         )
+
+    def final_timesteps(self, total_timesteps: int) -> int:
+        freq, unit = self.train_freq
+        if unit == "episode":  # unknown in advance: at least the whole steps of every env
+            return super().final_timesteps(total_timesteps)
+        # Whole collections of train_freq steps per env, from where the open one began.
+        start = self.num_timesteps - self._collected_steps * self.n_envs
+        return round_up_steps(start, self.num_timesteps, total_timesteps, freq * self.n_envs)
 
     def _on_n_envs_changed(self) -> None:
         if self.replay_buffer is not None and self.replay_buffer.size() > 0:

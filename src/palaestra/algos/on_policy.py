@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from palaestra import spaces
-from palaestra.algos.base import BaseAlgorithm
+from palaestra.algos.base import BaseAlgorithm, round_up_steps
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.policies import ActorCritic, ActorCriticPolicy, extractor_class
 from palaestra.algos.rollout_buffer import RolloutBuffer
@@ -101,6 +101,12 @@ class OnPolicyAlgorithm(BaseAlgorithm):
             self.gamma,
             self.gae_lambda,
         )
+
+    def final_timesteps(self, total_timesteps: int) -> int:
+        # Whole rollouts of n_steps per env, counted from where the one under way began.
+        rollout = self.n_steps * self.n_envs
+        start = self.num_timesteps - self.rollout_buffer.pos * self.n_envs
+        return round_up_steps(start, self.num_timesteps, total_timesteps, rollout)
 
     def _on_n_envs_changed(self) -> None:
         self._check_rollout_size()

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import argparse
 import sys
 from typing import Any
 
 from palaestra.runs.errors import RunError
 
-__all__ = ["CLIError", "add_allow_import", "eprint"]
+__all__ = ["CLIError", "add_allow_import", "add_timesteps", "eprint"]
 
 
 class CLIError(RunError):
@@ -34,3 +35,17 @@ def add_allow_import(parser: Any, what: str) -> None:
         "'MODULE:Class', env_id 'MODULE:Name-v0'); repeatable. Without it a run folder "
         "runs no code.",
     )
+
+
+def add_timesteps(parser: Any, metavar: str, help: str) -> None:
+    """``--timesteps N``, with CleanRL's ``--total-timesteps`` and the RL Zoo's
+    ``--n-timesteps`` as aliases (each its own option, so an error names the flag typed)."""
+    parser.add_argument(
+        "--timesteps",
+        type=int,
+        metavar=metavar,
+        help=f"{help}; --total-timesteps (CleanRL's name) and --n-timesteps (the RL Zoo's) "
+        "are the same flag",
+    )
+    for alias in ("--total-timesteps", "--n-timesteps"):
+        parser.add_argument(alias, dest="timesteps", type=int, help=argparse.SUPPRESS)

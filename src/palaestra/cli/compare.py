@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.cli.common import CLIError
+from palaestra.cli.common import CLIError, add_timesteps
 
 __all__ = ["add_parser", "run"]
 
@@ -48,7 +48,7 @@ def add_parser(sub: Any) -> None:
     )
     p.add_argument("--env", metavar="ENV", help="env id the variants train on")
     p.add_argument("--seeds", nargs="+", type=int, metavar="S", help="seeds each variant trains on")
-    p.add_argument("--timesteps", type=int, metavar="N", help="steps per variant run")
+    add_timesteps(p, "N", "steps per variant run")
     p.add_argument(
         "--runs-dir",
         metavar="DIR",

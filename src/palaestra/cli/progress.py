@@ -29,20 +29,31 @@ def format_duration(seconds: float) -> str:
 class LiveProgress(BaseCallback):
     """A tqdm bar (``mode="bar"``) or a plain line every ``interval`` seconds (``"line"``,
     default ``LINE_INTERVAL_S``) on stderr: steps, fps, mean return of the recent episodes,
-    time left."""
+    the latest evaluation's mean return (``evaluation``: the run's ``PeriodicEvaluation``, whose
+    ``last`` is read), time left. ``total``: the step count training will end at (the run's
+    ``final_timesteps``, past its budget after a whole last rollout)."""
 
-    def __init__(self, total: int, mode: str = "bar", interval: float | None = None) -> None:
+    def __init__(
+        self,
+        total: int,
+        mode: str = "bar",
+        interval: float | None = None,
+        evaluation: Any = None,
+    ) -> None:
         super().__init__()
-        self.total, self.mode = total, mode
+        self.total, self.mode, self.evaluation = total, mode, evaluation
         self.interval = LINE_INTERVAL_S if interval is None else interval
         self.bar: Any = None
         self._start_time = self._last_print = 0.0
         self._start_steps = 0
 
     def _mean_return(self) -> str:
-        """Mean return of the last (up to 100) episodes, ``-`` before the first one ends."""
+        """Mean return of the last (up to 100) episodes, ``-`` before the first one ends; then
+        the latest evaluation's, when the run has one."""
         buffer = self.model.ep_info_buffer
-        return f"{np.mean([e['r'] for e in buffer]):.2f}" if buffer else "-"
+        text = f"{np.mean([e['r'] for e in buffer]):.2f}" if buffer else "-"
+        last = None if self.evaluation is None else self.evaluation.last
+        return text if last is None else f"{text} | eval {last[1]:.2f}"
 
     def _on_training_start(self) -> None:
         if self._start_time:  # learn goes on after a checkpoint: one bar, one clock
@@ -65,6 +76,8 @@ class LiveProgress(BaseCallback):
     def _on_step(self) -> bool:
         now = time.perf_counter()
         if self.bar is not None:
+            if self.model.num_timesteps > self.bar.total:  # train_freq in episodes: unknown end
+                self.bar.total = self.model.num_timesteps
             self.bar.update(self.model.num_timesteps - self.bar.n)
             if now - self._last_print >= 1.0:
                 self._last_print = now
@@ -77,6 +90,7 @@ class LiveProgress(BaseCallback):
     def status_line(self, now: float) -> str:
         """``"  4,096/10,000 steps | 2,310 fps | mean return -200.00 | ETA 0:00:03"``."""
         steps = self.model.num_timesteps
+        self.total = max(self.total, steps)  # train_freq in episodes: an end not known before
         fps = (steps - self._start_steps) / max(now - self._start_time, 1e-9)
         left = (self.total - steps) / fps if fps > 0 else float("inf")
         return (

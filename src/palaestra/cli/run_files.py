@@ -8,8 +8,11 @@ import numpy as np
 
 from palaestra.cli.common import eprint
 from palaestra.runs.files import (
+    BEST_MODEL_FILE,
+    BEST_NORMALIZE_FILE,
     CONFIG_FILE,
     EPISODES_FILE,
+    EVALUATIONS_FILE,
     MODEL_FILE,
     NORMALIZE_FILE,
     REPLAY_ALGOS,
@@ -26,7 +29,7 @@ def print_summary(eval_episodes: int, result: Any) -> None:
     from palaestra.cli.evaluate import GAMES_NOTE, summary_lines
     from palaestra.cli.progress import format_duration
     from palaestra.runs import evaluate_run
-    from palaestra.runs.curves import read_episodes
+    from palaestra.runs.curves import read_episodes, read_evaluations
 
     model, run_dir, algo = result.model, result.run_dir, result.spec.algo
     steps, seconds, env_id = result.session_steps, result.session_seconds, result.spec.env_id
@@ -55,6 +58,17 @@ def print_summary(eval_episodes: int, result: Any) -> None:
     except DependencyNotInstalled:
         eprint(f"note: matplotlib is not installed, so no {LEARNING_CURVE_FILE}")
         curve = ""
+    evaluations = read_evaluations(run_dir)
+    if evaluations is not None and len(evaluations.mean):
+        best = int(np.argmax(evaluations.mean))
+        print(
+            f"evaluations during training: {len(evaluations.mean)}, the last "
+            f"{evaluations.mean[-1]:.2f} at {evaluations.steps[-1]:,} steps, the best "
+            f"{evaluations.mean[best]:.2f} at {evaluations.steps[best]:,} steps ({BEST_MODEL_FILE})"
+        )
+        written += [EVALUATIONS_FILE, BEST_MODEL_FILE]
+        if (run_dir / BEST_NORMALIZE_FILE).is_file():
+            written.append(BEST_NORMALIZE_FILE)
     if eval_episodes > 0:
         played = evaluate_run(run_dir, eval_episodes, model=model, spec=result.spec)
         unit = ("game" if played.games else "episode") + "s" * (eval_episodes != 1)

@@ -7,7 +7,7 @@ import argparse
 import json
 from typing import Any
 
-from palaestra.cli.common import CLIError
+from palaestra.cli.common import CLIError, add_timesteps
 
 __all__ = ["add_parser", "run"]
 
@@ -33,7 +33,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument(
         "--seeds", type=int, default=1, metavar="K", help="seeds per trial, 0..K-1 (default 1)"
     )
-    p.add_argument("--timesteps", type=int, metavar="T", help="steps per run (default: preset)")
+    add_timesteps(p, "T", "steps per run (default: preset)")
     p.add_argument("--preset", metavar="NAME", help="preset the trials start from")
     p.add_argument("--out", metavar="DIR", help="sweep folder (default: runs/sweep-ALGO-ENV)")
     p.add_argument(

@@ -5,7 +5,8 @@ and ``--set`` overrides, into a run folder that ``eval``, ``record``, ``compare`
 Run folder: ``config.json`` (resolved settings), ``status.json`` (steps done, total, wall
 time), ``progress.csv`` (SB3's log), ``episodes.csv`` (every episode: steps, return, length,
 terminated, training seconds), ``model.zip``, ``replay_buffer.zip`` (DQN), ``checkpoints/``,
-``learning_curve.png``, ``tb/`` (when tensorboard is installed).
+``learning_curve.png``, ``tb/`` (when tensorboard is installed); with ``--eval-freq``,
+``evaluations.csv`` and ``best_model.zip`` (:mod:`palaestra.runs.periodic_eval`).
 
 The env comes from :mod:`palaestra.runs.recipe` (SB3's Atari recipe when the settings say
 ``atari``), which ``eval`` and ``record`` use to rebuild it.
@@ -19,13 +20,15 @@ import time
 from pathlib import Path
 from typing import Any
 
-from palaestra.cli.common import CLIError, add_allow_import, eprint
+from palaestra import presets
+from palaestra.cli.common import CLIError, add_allow_import, add_timesteps, eprint
 from palaestra.runs import settings as settings_mod
 
 __all__ = ["EXTRA_CALLBACKS", "add_parser", "run"]
 
 # Test hook: callbacks added to every ``learn`` call (e.g. one that raises KeyboardInterrupt).
 EXTRA_CALLBACKS: list[Any] = []
+DEFAULT_EVAL_EPISODES = 10
 
 
 def add_parser(sub: Any) -> None:
@@ -58,7 +61,13 @@ def add_parser(sub: Any) -> None:
         "frame_stack, seed) or hyperparameters at top level",
     )
     p.add_argument("--n-envs", type=int, metavar="N", help="number of parallel envs")
-    p.add_argument("--timesteps", type=int, metavar="N", help="total env steps to train for")
+    add_timesteps(
+        p,
+        "N",
+        "total env steps to train for; PPO and A2C train on whole rollouts and off-policy "
+        "algorithms on whole train_freq collections, so a run can end a little past N (a note "
+        "says where at the start, and the progress counts to there)",
+    )
     p.add_argument("--seed", type=int, metavar="S", help="random seed (default: none)")
     p.add_argument(
         "--out", metavar="DIR", help="run folder (default: runs/<algo>-<env>-<timestamp>)"
@@ -90,11 +99,24 @@ def add_parser(sub: Any) -> None:
         "the budget; 0: never)",
     )
     p.add_argument(
+        "--eval-freq",
+        type=int,
+        default=0,
+        metavar="N",
+        help="evaluate during training every N env steps counted over all envs, as the RL Zoo "
+        "counts (every N // n_envs steps of the vector env), on a separate env seeded 0 each "
+        "time, its VecNormalize statistics copied from the training env: writes "
+        "evaluations.csv, keeps best_model.zip (the best mean return so far) and draws the "
+        "evaluations on learning_curve.png (default: 0, never); --resume continues the run's "
+        "schedule",
+    )
+    p.add_argument(
         "--eval-episodes",
         type=int,
-        default=10,
-        metavar="N",
-        help="deterministic evaluation episodes at the end (default: 10; 0: skip)",
+        metavar="K",
+        help="deterministic episodes of each evaluation: every --eval-freq one and the final "
+        "one (default: 10, where the RL Zoo's --eval-episodes is 5; 0: no final evaluation); "
+        "with --resume it sets the final one only, the periodic ones keep the run's K",
     )
     p.add_argument(
         "--progress",
@@ -130,6 +152,7 @@ def _refuse_resume_flags(args: argparse.Namespace) -> None:
             ("--n-envs", args.n_envs),
             ("--seed", args.seed),
             ("--out", args.out),
+            ("--eval-freq", args.eval_freq),
         )
         if value
     ]
@@ -146,8 +169,16 @@ def _check_flags(args: argparse.Namespace) -> str:
         raise CLIError(
             f"--checkpoint-every must be >= 0, got {args.checkpoint_every}", "e.g. 10000"
         )
+    if args.eval_freq < 0:
+        raise CLIError(f"--eval-freq must be >= 0, got {args.eval_freq}", "e.g. 10000 (0: never)")
+    if args.eval_episodes is None:
+        args.eval_episodes = DEFAULT_EVAL_EPISODES
     if args.eval_episodes < 0:
         raise CLIError(f"--eval-episodes must be >= 0, got {args.eval_episodes}", "e.g. 10")
+    if args.eval_freq > 0 and args.eval_episodes == 0:
+        raise CLIError(
+            "--eval-freq needs --eval-episodes of 1 or more, got 0", "e.g. --eval-episodes 5"
+        )
     if args.progress != "auto":
         if args.progress == "bar" and importlib.util.find_spec("tqdm") is None:
             raise CLIError("--progress bar needs tqdm", 'pip install "palaestra[progress]"')
@@ -194,8 +225,9 @@ def run(args: argparse.Namespace) -> int:
                 f"{run_dir} already holds a run", f"choose another --out, or --resume {run_dir}"
             )
         progress_mode = _check_flags(args)
-        run_ = open_run(spec, run_dir)
-        run_.notes[:0] = notes
+        run_ = open_run(spec, run_dir, eval_freq=args.eval_freq, eval_episodes=args.eval_episodes)
+        shortfall = presets.measured_shortfall(spec.algo, spec.env_id, spec.preset, spec.seed)
+        run_.notes[:0] = [*notes, *([shortfall] if shortfall else [])]
     for note in run_.notes:  # after every check: bad input gets its error line only
         eprint(f"note: {note}")
     return _train(args, run_, progress_mode)
@@ -209,13 +241,13 @@ def _train(args: argparse.Namespace, run_: Any, progress_mode: str) -> int:
     from palaestra.runs.files import STATUS_FILE, read_json
 
     spec, run_dir, model = run_.spec, run_.run_dir, run_.model
-    total = spec.n_timesteps
+    total = run_.final_timesteps  # past spec.n_timesteps after a whole last rollout
     stop = GracefulStop()
-    stop.finish_at = total
+    stop.finish_at = spec.n_timesteps  # a stop from there on lets the last update run
     callbacks: list[Any] = [stop]
     progress = None
     if progress_mode != "none":
-        progress = LiveProgress(total, progress_mode)
+        progress = LiveProgress(total, progress_mode, evaluation=run_.evaluation)
         callbacks.append(progress)
     callbacks.extend(EXTRA_CALLBACKS)
     start_steps = model.num_timesteps

@@ -29,6 +29,7 @@ __all__ = [
     "base_settings",
     "get_preset",
     "has_preset",
+    "measured_shortfall",
     "merge",
     "resolve",
 ]
@@ -96,6 +97,46 @@ def get_preset(algo: str, env_id: str, name: str = "default") -> dict[str, Any]:
 def has_preset(algo: str, env_id: str, name: str = "default") -> bool:
     """Whether :func:`get_preset` would find ``(algo, env_id, name)``."""
     return name in _table().get(algo.lower(), {}).get(env_id, {})
+
+
+def measured_shortfall(
+    algo: str, env_id: str, name: str | None, seed: int | None = None
+) -> str | None:
+    """What a run of the preset should know before it starts when the preset's recorded
+    results (``measured``: per seed, the mean return of 100 deterministic episodes after
+    training) fall short of the target on some seeds: which seeds, their figures, and whether
+    ``seed`` is one of them. None when every measured seed reached the target, or nothing was
+    measured against one.
+
+    >>> measured_shortfall("a2c", "CartPole-v1", "default") is None  # 5 of 5 reached 475
+    True
+    >>> measured_shortfall("ddpg", "Pendulum-v1", "default", seed=0).split("; ")[-1]
+    'this run uses seed 0'
+    """
+    if name is None or not has_preset(algo, env_id, name):
+        return None
+    measured = _table()[algo.lower()][env_id][name].get("measured") or {}
+    seeds, returns, target = (measured.get(k) for k in ("seeds", "mean_return", "target"))
+    if not (isinstance(seeds, list) and isinstance(returns, list) and len(seeds) == len(returns)):
+        return None
+    if not isinstance(target, (int, float)):
+        return None
+    short = [(s, r) for s, r in zip(seeds, returns) if r < target]
+    if not short:
+        return None
+    which = "seed" + "s" * (len(short) > 1)
+    text = (
+        f"the {algo.lower()} preset {name!r} for {env_id} fell short of its target on some seeds "
+        f"when measured: {which} {', '.join(str(s) for s, _ in short)} ended at "
+        f"{', '.join(f'{r:.1f}' for _, r in short)} (target {target:g}; mean return of 100 "
+        f"deterministic episodes after training); {len(seeds) - len(short)} of {len(seeds)} "
+        f"seeds reached it, median {measured.get('median_return', float('nan')):.1f}"
+    )
+    if str(measured.get("note", "")).startswith("TARGET NOT MET"):
+        text += "; recorded as TARGET NOT MET"
+    if seed is not None and seed in {s for s, _ in short}:
+        text += f"; this run uses seed {seed}"
+    return text
 
 
 def base_settings(n_timesteps: int = 100_000) -> dict[str, Any]:

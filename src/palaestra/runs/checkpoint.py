@@ -162,7 +162,11 @@ def load_env_state(folder: Path, venv: Any) -> str | None:
 
 
 # The logs a run appends to, and the column that says at which step a row was written.
-_LOGS = (("episodes.csv", "steps"), ("progress.csv", "time/total_timesteps"))
+_LOGS = (
+    ("episodes.csv", "steps"),
+    ("progress.csv", "time/total_timesteps"),
+    ("evaluations.csv", "timesteps"),
+)
 
 
 def trim_logs(run_dir: Path, steps: int) -> None:

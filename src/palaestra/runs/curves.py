@@ -12,6 +12,9 @@ this process's ``sys.path`` exactly, so it runs no code this process would not. 
 written atomically (a temporary file beside it, then ``os.replace``): a reader sees the previous
 PNG, or none, until the new one is whole; a failed drawing only means no new PNG (a killed one
 may leave its hidden ``.learning_curve.png.PID.tmp``).
+
+A run evaluated during training (``train --eval-freq``) shows its ``evaluations.csv`` beside
+the training returns.
 """
 
 from __future__ import annotations
@@ -31,16 +34,18 @@ import numpy as np
 
 from palaestra.error import dependency_not_installed
 from palaestra.runs.errors import RunError
-from palaestra.runs.files import EPISODES_FILE
+from palaestra.runs.files import EPISODES_FILE, EVALUATIONS_FILE
 from palaestra.utils.atomic_write import atomic_write, complete_text
 
 __all__ = [
     "LEARNING_CURVE_FILE",
     "Episodes",
+    "Evaluations",
     "draw_learning_curve",
     "plot_compare",
     "plot_learning_curve",
     "read_episodes",
+    "read_evaluations",
     "rolling_mean",
     "save_figure",
 ]
@@ -104,6 +109,43 @@ def read_episodes(run: Path) -> Episodes:
     )
 
 
+class Evaluations(NamedTuple):
+    """The periodic evaluations of one run (``evaluations.csv``), in order."""
+
+    steps: np.ndarray  # [V] env steps when evaluated
+    mean: np.ndarray  # [V] mean return of the episodes
+    std: np.ndarray  # [V]
+    episodes: np.ndarray  # [V] int, episodes per evaluation
+
+
+def read_evaluations(run: Path) -> Evaluations | None:
+    """``evaluations.csv`` (written by ``train --eval-freq``), or None when the run has none."""
+    path = run / EVALUATIONS_FILE
+    if not path.is_file():
+        return None
+    try:
+        rows = _read_csv(path)
+        return Evaluations(
+            _floats(rows, "timesteps").astype(np.int64),
+            _floats(rows, "mean_return"),
+            _floats(rows, "std_return"),
+            np.array([len(r["returns"].split()) for r in rows], dtype=np.int64),
+        )
+    except (OSError, KeyError, ValueError, AttributeError) as exc:
+        raise RunError(f"cannot read {str(path)!r}: {exc}", "fix or remove the file") from None
+
+
+def evaluation_label(evaluations: Evaluations) -> str:
+    """The legend of the evaluation series.
+
+    >>> evaluation_label(Evaluations(*[np.array([5, 5])] * 4))
+    'evaluation: mean of 5 deterministic episodes'
+    """
+    low, high = int(evaluations.episodes.min()), int(evaluations.episodes.max())
+    count = f"{low}" if low == high else f"{low}-{high}"
+    return f"evaluation: mean of {count} deterministic episode{'s' * (high != 1)}"
+
+
 def rolling_mean(values: np.ndarray, window: int) -> np.ndarray:
     """Mean of the last ``window`` values at each index (fewer at the start).
 
@@ -137,8 +179,11 @@ def _pyplot() -> Any:
     return plt
 
 
-def plot_learning_curve(episodes: Episodes, path: Path, title: str) -> None:
-    """Episode returns against env steps, with their rolling mean."""
+def plot_learning_curve(
+    episodes: Episodes, path: Path, title: str, evaluations: Evaluations | None = None
+) -> None:
+    """Episode returns against env steps, with their rolling mean; with ``evaluations``, the
+    mean return of each evaluation during training, as markers on a line."""
     plt = _pyplot()
     window = default_window(len(episodes.returns))
     fig, ax = plt.subplots(figsize=(7, 4))
@@ -146,6 +191,16 @@ def plot_learning_curve(episodes: Episodes, path: Path, title: str) -> None:
     if len(episodes.returns):
         smooth = rolling_mean(episodes.returns, window)
         ax.plot(episodes.steps, smooth, lw=2, label=f"mean of last {window}")
+    if evaluations is not None and len(evaluations.mean):
+        ax.plot(
+            evaluations.steps,
+            evaluations.mean,
+            "o-",
+            ms=5,
+            lw=1,
+            color="tab:red",
+            label=evaluation_label(evaluations),
+        )
     ax.set(xlabel="env steps", ylabel="return", title=title)
     ax.legend(loc="best")
     fig.tight_layout()
@@ -162,15 +217,17 @@ _CHILD_CODE = (
 def draw_learning_curve(
     run: Path, title: str, background: bool | None = None
 ) -> subprocess.Popen[bytes] | None:
-    """Draw ``run/learning_curve.png`` from the run's episodes: in a detached process when
-    ``background`` (by default, unless pyplot is already imported here: see the module
-    docstring), which is returned (the file appears when whole; exit code 0 when written);
+    """Draw ``run/learning_curve.png`` from the run's episodes and evaluations: in a detached
+    process when ``background`` (by default, unless pyplot is already imported here: see the
+    module docstring), which is returned (the file appears when whole; exit code 0 when written);
     else in this process, returning None. ``DependencyNotInstalled`` when matplotlib is
     missing (checked without importing it)."""
     if background is None:
         background = "matplotlib.pyplot" not in sys.modules
     if not background:
-        plot_learning_curve(read_episodes(run), run / LEARNING_CURVE_FILE, title)
+        plot_learning_curve(
+            read_episodes(run), run / LEARNING_CURVE_FILE, title, read_evaluations(run)
+        )
         return None
     if importlib.util.find_spec("matplotlib") is None:
         raise _no_matplotlib()
@@ -193,7 +250,7 @@ def draw_main(argv: list[str]) -> int:
     if hasattr(os, "nice"):  # leave the CPU to the foreground: 2 cores are often all there is
         os.nice(10)
     run, title = Path(argv[0]), argv[1]
-    plot_learning_curve(read_episodes(run), run / LEARNING_CURVE_FILE, title)
+    plot_learning_curve(read_episodes(run), run / LEARNING_CURVE_FILE, title, read_evaluations(run))
     return 0
 
 

@@ -3,7 +3,8 @@
 Episodes are played by :func:`palaestra.algos.evaluate_policy` on a one-env copy of the run's
 recipe (Monitor returns: a reward-shaping wrapper changes what the agent learned from, not
 what is reported; for SB3's Atari recipe an episode is a whole game), observations normalized
-with the run's saved statistics. The first reset gets ``seed``; later ones continue its
+with the run's saved statistics (``best_vecnormalize.npz`` for ``best_model.zip``: the ones it
+was evaluated with during training). The first reset gets ``seed``; later ones continue its
 generator.
 """
 
@@ -18,9 +19,23 @@ from typing import Any
 import numpy as np
 
 from palaestra.runs.errors import RunError
-from palaestra.runs.files import MODEL_FILE, NORMALIZE_FILE, is_goal_env, model_file
+from palaestra.runs.files import (
+    BEST_MODEL_FILE,
+    BEST_NORMALIZE_FILE,
+    MODEL_FILE,
+    NORMALIZE_FILE,
+    is_goal_env,
+    model_file,
+)
 
-__all__ = ["EvalResult", "evaluate_run", "load_model", "play_episodes"]
+__all__ = [
+    "EvalResult",
+    "evaluate_run",
+    "load_model",
+    "make_eval_env",
+    "normalized_like",
+    "play_episodes",
+]
 
 
 @dataclasses.dataclass
@@ -146,6 +161,34 @@ def _eval_env(config: dict[str, Any], seed: int | None, frames: _FrameLog | None
     )
 
 
+def normalized_like(training_env: Any, venv: Any) -> Any:
+    """``venv`` under a ``VecNormalize`` that normalizes observations as ``training_env`` (a
+    ``VecNormalize``) does now, its statistics frozen and rewards left raw: SB3's eval env."""
+    from palaestra.vec_env import VecNormalize
+
+    out = VecNormalize(
+        venv,
+        training=False,
+        norm_obs=training_env.norm_obs,
+        norm_reward=False,
+        clip_obs=training_env.clip_obs,
+        epsilon=training_env.epsilon,
+        norm_obs_keys=training_env.norm_obs_keys,  # a Dict env's normalised keys
+    )
+    out.obs_rms = copy.deepcopy(training_env.obs_rms)
+    return out
+
+
+def make_eval_env(config: dict[str, Any], training_env: Any, seed: int | None) -> Any:
+    """One env of the run's recipe for evaluations during training, each episode under a
+    Monitor, wrapped as ``training_env`` is in ``VecNormalize`` (so that
+    ``sync_envs_normalization`` can copy the training statistics into it)."""
+    from palaestra.vec_env import VecNormalize
+
+    venv = _eval_env(config, seed, None)
+    return normalized_like(training_env, venv) if isinstance(training_env, VecNormalize) else venv
+
+
 def play_episodes(
     model: Any, venv: Any, episodes: int, deterministic: bool = True
 ) -> tuple[list[float], list[int], list[bool]]:
@@ -236,19 +279,13 @@ def evaluate_run(
         from palaestra.vec_env import VecNormalize
 
         training_env = model.get_env()
+        stats = path.parent / NORMALIZE_FILE
+        if path.name == BEST_MODEL_FILE and (path.parent / BEST_NORMALIZE_FILE).is_file():
+            stats = path.parent / BEST_NORMALIZE_FILE
         if isinstance(training_env, VecNormalize):  # a model in training: its statistics now
-            venv = VecNormalize(
-                venv,
-                training=False,
-                norm_obs=training_env.norm_obs,
-                norm_reward=False,
-                clip_obs=training_env.clip_obs,
-                epsilon=training_env.epsilon,
-                norm_obs_keys=training_env.norm_obs_keys,  # a Dict env's normalised keys
-            )
-            venv.obs_rms = copy.deepcopy(training_env.obs_rms)
-        elif (path.parent / NORMALIZE_FILE).is_file():
-            venv = VecNormalize.load(str(path.parent / NORMALIZE_FILE), venv)
+            venv = normalized_like(training_env, venv)
+        elif stats.is_file():
+            venv = VecNormalize.load(str(stats), venv)
             venv.training, venv.norm_reward = False, False
         returns, lengths, terminated = play_episodes(model, venv, episodes, deterministic)
         fps = recipe.render_fps(venv, config) if frames is not None else 0.0

@@ -3,8 +3,9 @@
 A run folder holds ``config.json`` (the run description as resolved), ``status.json`` (steps
 done, total, wall time, the checkpoint to resume from), ``progress.csv``, ``episodes.csv``,
 ``model.zip``, ``replay_buffer.zip`` (off-policy algorithms), ``vecnormalize.npz`` (normalized
-runs), ``resume/`` (complete checkpoints), ``learning_curve.png`` and ``tb/``. Every file is
-written atomically.
+runs), ``resume/`` (complete checkpoints), ``learning_curve.png`` and ``tb/``; with periodic
+evaluation (``train --eval-freq``) also ``evaluations.csv`` and ``best_model.zip`` (with
+``best_vecnormalize.npz`` when normalized). Every file is written atomically.
 """
 
 from __future__ import annotations
@@ -18,8 +19,11 @@ from palaestra.runs.errors import RunError
 from palaestra.utils.atomic_write import atomic_write
 
 __all__ = [
+    "BEST_MODEL_FILE",
+    "BEST_NORMALIZE_FILE",
     "CONFIG_FILE",
     "EPISODES_FILE",
+    "EVALUATIONS_FILE",
     "MODEL_FILE",
     "NORMALIZE_FILE",
     "REPLAY_ALGOS",
@@ -40,6 +44,9 @@ EPISODES_FILE = "episodes.csv"
 MODEL_FILE = "model.zip"
 REPLAY_FILE = "replay_buffer.zip"
 NORMALIZE_FILE = "vecnormalize.npz"
+EVALUATIONS_FILE = "evaluations.csv"  # one row per periodic evaluation
+BEST_MODEL_FILE = "best_model.zip"  # SB3's EvalCallback name: the best evaluation's model
+BEST_NORMALIZE_FILE = "best_vecnormalize.npz"  # the normalization it was evaluated with
 # Off-policy algorithms: their replay buffer is saved with each checkpoint and the final model.
 REPLAY_ALGOS = ("dqn", "sac", "td3", "ddpg")
 

@@ -45,6 +45,7 @@ __all__ = [
 CONFIG_KEYS = frozenset(
     {*presets.SETTINGS_KEYS, "seed", "algo", "env_id", "preset", "device", "palaestra_version"}
     | {"measured"}  # a preset's results, accepted by --config and dropped
+    | {"evaluation"}  # train --eval-freq's schedule (runs.periodic_eval checks it)
 )
 RESUME_KEYS = ("algo", "env_id", "policy", "n_envs", "n_timesteps", "hyperparams")
 MAX_N_ENVS = 4096

@@ -63,7 +63,7 @@ ALGOS = tuple(ALGO_CLASSES)
 _NOT_HYPERPARAMS = {"self", "policy", "env", "_init_setup_model", "verbose", "seed", "device"}
 _NOT_HYPERPARAMS |= {"tensorboard_log"}
 # Keys a --config file may carry that describe the run rather than configure it.
-_RUN_KEYS = {"algo", "env_id", "preset", "device", "palaestra_version", "measured"}
+_RUN_KEYS = {"algo", "env_id", "preset", "device", "palaestra_version", "measured", "evaluation"}
 _TOP_KEYS = (*presets.SETTINGS_KEYS, "seed")
 
 

@@ -6,6 +6,9 @@ checkpoint every ``checkpoint_every`` steps (ending ``learn`` between two consis
 continuing exactly: :mod:`palaestra.runs.checkpoint`), publish the final model, replay buffer and
 normalization statistics, and write ``status.json``. ``resume_run("runs/x")`` continues from
 the newest checkpoint, exactly where the run stopped when the checkpoint holds the env state.
+``eval_freq``/``eval_episodes`` add evaluations during training (``evaluations.csv``,
+``best_model.zip``: :mod:`palaestra.runs.periodic_eval`), recorded in ``config.json`` so that a
+resume continues them.
 
 For the notes a command prints between building and training (a resume that starts new
 episodes, an extended budget) use the two steps: :func:`open_run`/:func:`open_resume`, then
@@ -16,11 +19,12 @@ from __future__ import annotations
 
 import dataclasses
 import importlib.util
+import math
 import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from palaestra.runs.errors import RunError
 from palaestra.runs.files import (
@@ -35,6 +39,9 @@ from palaestra.runs.files import (
     write_status,
 )
 from palaestra.runs.spec import RunSpec
+
+if TYPE_CHECKING:
+    from palaestra.runs.periodic_eval import PeriodicEvaluation
 
 __all__ = [
     "Run",
@@ -131,6 +138,13 @@ class Run:
     resumed: bool
     wall_before: float  # training seconds of earlier sessions
     notes: list[str]
+    evaluation: PeriodicEvaluation | None = None  # evaluations during training
+
+    @property
+    def final_timesteps(self) -> int:
+        """The step count training will end at: ``spec.n_timesteps`` rounded up to whole
+        rollouts (PPO, A2C) or ``train_freq`` collections (off-policy), as SB3's loops do."""
+        return int(self.model.final_timesteps(self.spec.n_timesteps))
 
     def train(
         self,
@@ -168,6 +182,9 @@ class Run:
         every = checkpoint_every if checkpoint_every is not None else total // 10
         due = CheckpointDue(every, total)
         evaluation = CheckpointDue(evaluate_every if on_evaluate is not None else 0, total)
+        periodic = [] if self.evaluation is None else [self.evaluation]
+        for each in periodic:
+            each.open(self.spec.to_config(), model)
         start_steps = model.num_timesteps
         saved = latest_checkpoint(run_dir)  # what a stop at once leaves to resume from
         stopped = False
@@ -179,7 +196,7 @@ class Run:
                 evaluation.plan(model.num_timesteps)
                 model.learn(
                     total - model.num_timesteps,
-                    callback=CallbackList([episodes, due, evaluation, *callbacks]),
+                    callback=CallbackList([episodes, due, evaluation, *periodic, *callbacks]),
                     reset_num_timesteps=first,
                 )
                 first = False
@@ -203,6 +220,8 @@ class Run:
         finally:
             seconds = time.perf_counter() - start
             episodes.close()
+            for each in periodic:
+                each.close()
             model.logger.close()
         folder, _ = write_checkpoint(model, run_dir, self.spec.algo)
         publish(folder, run_dir)
@@ -232,11 +251,18 @@ def _one_thread() -> None:
     torch.set_num_threads(1)  # the small nets here are fastest on one thread
 
 
-def open_run(spec: RunSpec, run_dir: str | Path) -> Run:
+def open_run(
+    spec: RunSpec, run_dir: str | Path, *, eval_freq: int = 0, eval_episodes: int = 10
+) -> Run:
     """Check ``spec``, build its env and model, and write ``config.json`` into ``run_dir``
-    (``RunError`` when ``run_dir`` already holds a run)."""
+    (``RunError`` when ``run_dir`` already holds a run). ``eval_freq`` > 0: evaluate
+    ``eval_episodes`` deterministic episodes every ``eval_freq`` env steps counted over all envs
+    (:mod:`palaestra.runs.periodic_eval`)."""
+    from palaestra.runs.periodic_eval import EvalSchedule, PeriodicEvaluation
+
     run_dir = Path(run_dir)
     spec.validate()
+    schedule = EvalSchedule.from_arguments(eval_freq, eval_episodes)
     if (run_dir / CONFIG_FILE).exists():
         raise RunError(
             f"{run_dir} already holds a run", f"choose another --out, or --resume {run_dir}"
@@ -244,8 +270,41 @@ def open_run(spec: RunSpec, run_dir: str | Path) -> Run:
     _one_thread()
     model = make_model(spec, make_env(spec, spec.seed))
     run_dir.mkdir(parents=True, exist_ok=True)
-    write_json(run_dir / CONFIG_FILE, spec.to_config())
-    return Run(spec, run_dir, model, False, 0.0, [])
+    config = spec.to_config()
+    if schedule is not None:
+        config["evaluation"] = schedule.to_config()
+    write_json(run_dir / CONFIG_FILE, config)
+    run = Run(spec, run_dir, model, False, 0.0, [])
+    if schedule is not None:
+        run.evaluation = PeriodicEvaluation(run_dir, schedule)
+    run.notes.extend(_rounding_note(run))
+    return run
+
+
+def _rounding_note(run: Run) -> list[str]:
+    """The note saying that training ends past ``n_timesteps``, and where (or nothing)."""
+    from palaestra.algos.off_policy import OffPolicyAlgorithm
+    from palaestra.algos.on_policy import OnPolicyAlgorithm
+
+    model, total, end = run.model, run.spec.n_timesteps, run.final_timesteps
+    name, n_envs = run.spec.algo.upper(), model.n_envs
+    if isinstance(model, OffPolicyAlgorithm) and model.train_freq[1] == "episode":
+        return [
+            f"{name} collects whole episodes between updates (train_freq "
+            f"{model.train_freq[0]} episode): the run ends when the episodes under way at "
+            f"{total:,} steps end"
+        ]
+    if end == total:
+        return []
+    if isinstance(model, OnPolicyAlgorithm):
+        how = f"whole rollouts of n_steps {model.n_steps} x {n_envs} envs"
+        chunk = model.n_steps * n_envs
+    elif isinstance(model, OffPolicyAlgorithm):
+        how = f"whole collections of train_freq {model.train_freq[0]} x {n_envs} envs"
+        chunk = model.train_freq[0] * n_envs
+    else:
+        how, chunk = f"steps of all {n_envs} envs at once", n_envs
+    return [f"{name} trains on {how} = {chunk:,} steps: the run ends at {end:,}, not {total:,}"]
 
 
 def open_resume(
@@ -262,6 +321,7 @@ def open_resume(
     from palaestra.runs import folder as run_folder
     from palaestra.runs import settings
     from palaestra.runs.checkpoint import latest_checkpoint, load_env_state, trim_logs
+    from palaestra.runs.periodic_eval import EvalSchedule, PeriodicEvaluation, best_return
 
     run_dir = Path(run_dir)
     config = run_folder.read_run_config(run_dir / CONFIG_FILE, allow_import, run_folder.RESUME_KEYS)
@@ -273,6 +333,9 @@ def open_resume(
             )
     if n_timesteps is not None:
         config["n_timesteps"] = n_timesteps
+    schedule = None
+    if "evaluation" in config:
+        schedule = EvalSchedule.from_config(config["evaluation"], str(run_dir / CONFIG_FILE))
     settings.check_settings(config, str(config.get("env_id")))
     status = run_folder.read_status(run_dir / STATUS_FILE)  # before any env or model
     spec = RunSpec.from_config(config, str(run_dir / CONFIG_FILE))
@@ -309,7 +372,19 @@ def open_resume(
             f"{model.num_timesteps:,} (progress remaining {1 - model.num_timesteps / total:.3f})"
         )
     write_json(run_dir / CONFIG_FILE, {**config, "n_timesteps": total})
-    return Run(spec, run_dir, model, True, float(status.get("wall_time_s", 0.0)), notes)
+    run = Run(spec, run_dir, model, True, float(status.get("wall_time_s", 0.0)), notes)
+    if schedule is not None:  # the rows past the checkpoint are gone: their steps run again
+        best = best_return(run_dir)
+        run.evaluation = PeriodicEvaluation(run_dir, schedule, best)
+        period = schedule.period(model.n_envs)
+        after = (model.num_timesteps // period + 1) * period
+        notes.append(
+            f"evaluating every {period:,} steps on {schedule.episodes} episodes as before: "
+            f"next at {after:,} steps; best mean return so far "
+            + (f"{best:.2f}" if best > -math.inf else "none (no evaluation yet)")
+        )
+    notes.extend(_rounding_note(run))
+    return run
 
 
 def train_run(
@@ -318,9 +393,14 @@ def train_run(
     callbacks: Sequence[Any] = (),
     checkpoint_every: int | None = None,
     verbose: bool = False,
+    *,
+    eval_freq: int = 0,
+    eval_episodes: int = 10,
 ) -> TrainResult:
-    """Train ``spec`` into the new run folder ``run_dir``: ``palaestra train`` as a call."""
-    return open_run(spec, run_dir).train(callbacks, checkpoint_every, verbose)
+    """Train ``spec`` into the new run folder ``run_dir``: ``palaestra train`` as a call
+    (``eval_freq``, ``eval_episodes``: evaluations during training, see :func:`open_run`)."""
+    run = open_run(spec, run_dir, eval_freq=eval_freq, eval_episodes=eval_episodes)
+    return run.train(callbacks, checkpoint_every, verbose)
 
 
 def resume_run(
@@ -331,7 +411,7 @@ def resume_run(
     checkpoint_every: int | None = None,
     verbose: bool = False,
 ) -> TrainResult:
-    """Continue the run in ``run_dir`` (to ``n_timesteps`` when given): ``palaestra train
-    --resume`` as a call."""
+    """Continue the run in ``run_dir`` (to ``n_timesteps`` when given), its evaluations during
+    training included: ``palaestra train --resume`` as a call."""
     run = open_resume(run_dir, n_timesteps, allow_import)
     return run.train(callbacks, checkpoint_every, verbose)
