@@ -159,10 +159,12 @@ def cli_on_a_builtin_env(cwd: Path) -> None:
     run = cwd / "runs" / "ppo-cartpole"
     out = palaestra(
         cwd, "train", "ppo", "CartPole-v1", "--seed", "0", "--timesteps", "2048",
-        "--out", str(run), "--progress", "none", "--eval-episodes", "2",
+        "--out", str(run), "--progress", "none", "--eval-episodes", "2", "--eval-freq", "1024",
     )  # fmt: skip
     assert "trained ppo on CartPole-v1" in out, out
-    for name in ("config.json", "model.zip", "episodes.csv", "progress.csv"):
+    rows = (run / "evaluations.csv").read_text().splitlines()
+    assert [row.split(",")[0] for row in rows[1:]] == ["1024", "2048"], rows
+    for name in ("config.json", "model.zip", "episodes.csv", "progress.csv", "best_model.zip"):
         assert (run / name).is_file(), name
     out = palaestra(cwd, "eval", str(run), "--episodes", "3")
     assert "mean return" in out, out
