@@ -78,7 +78,15 @@ def add_parser(sub: Any) -> None:
         help="continue the run in DIR (after Ctrl-C, or to a larger --timesteps) with its "
         "saved settings, model and replay buffer",
     )
-    add_allow_import(p, "--resume")
+    p.add_argument(
+        "--env-kwargs",
+        nargs="+",
+        default=None,
+        metavar="KEY:VALUE",
+        help="keyword arguments for the env, RL Zoo style: --env-kwargs size:5 slippery:False "
+        "(VALUE is JSON or a Python literal, else text); overrides the config file's env_kwargs",
+    )
+    add_allow_import(p, "train (a --config file's env_wrapper) and --resume")
     p.add_argument(
         "--device", default="auto", metavar="DEV", help="torch device: auto (default), cpu, cuda"
     )
@@ -128,6 +136,7 @@ def _refuse_resume_flags(args: argparse.Namespace) -> None:
             ("--config", args.config),
             ("--set", args.assignments),
             ("--n-envs", args.n_envs),
+            ("--env-kwargs", args.env_kwargs),
             ("--seed", args.seed),
             ("--out", args.out),
         )
@@ -139,6 +148,30 @@ def _refuse_resume_flags(args: argparse.Namespace) -> None:
             f"{', '.join(given)} cannot change them",
             "drop them, or start a new run",
         )
+
+
+def _env_kwargs(items: list[str]) -> dict[str, Any]:
+    """``["size:5", "slippery:False"]`` -> ``{"size": 5, "slippery": False}`` (RL Zoo's
+    ``--env-kwargs``; values that JSON cannot hold are refused, config.json records them)."""
+    import json
+
+    from palaestra.runs.settings import parse_value
+
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, text = item.partition(":")
+        if not sep or not key.strip():
+            raise CLIError(f"--env-kwargs {item!r} is not KEY:VALUE", "e.g. --env-kwargs size:5")
+        value = parse_value(text)
+        try:
+            json.dumps(value, allow_nan=False)
+        except (TypeError, ValueError):
+            raise CLIError(
+                f"--env-kwargs {item!r}: {value!r} is not plain data",
+                "use numbers, true/false, text, lists or dicts",
+            ) from None
+        out[key.strip()] = value
+    return out
 
 
 def _check_flags(args: argparse.Namespace) -> str:
@@ -169,12 +202,6 @@ def run(args: argparse.Namespace) -> int:
             expect={"algo": args.algo, "env_id": args.env},
         )
     else:
-        if args.allow_import:
-            raise CLIError(
-                "--allow-import applies to --resume (a new run imports what its --config "
-                "and --set name)",
-                "drop --allow-import",
-            )
         if args.algo is None or args.env is None:
             raise CLIError("train needs ALGO and ENV", "e.g. palaestra train ppo CartPole-v1")
         spec, notes = resolve_spec(
@@ -183,6 +210,8 @@ def run(args: argparse.Namespace) -> int:
             args.preset,
             config=args.config,
             assignments=args.assignments,
+            overrides={"env_kwargs": _env_kwargs(args.env_kwargs)} if args.env_kwargs else None,
+            allow_import=args.allow_import,
             seed=args.seed,
             n_envs=args.n_envs,
             n_timesteps=args.timesteps,
