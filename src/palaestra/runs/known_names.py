@@ -21,7 +21,15 @@ HistoryWrapper, TimeFeatureWrapper, ...), ``sb3_contrib.common.wrappers.TimeFeat
 
 from __future__ import annotations
 
-__all__ = ["ACTIVATIONS", "CALLBACKS", "ENV_WRAPPERS", "KINDS", "is_palaestra", "palaestra_name"]
+__all__ = [
+    "ACTIVATIONS",
+    "CALLBACKS",
+    "ENV_WRAPPERS",
+    "KINDS",
+    "is_palaestra",
+    "markdown_table",
+    "palaestra_name",
+]
 
 _GYMNASIUM_WRAPPERS = (
     "AddRenderObservation",
@@ -144,3 +152,11 @@ def palaestra_name(kind: str, name: str) -> str | None:
         return table[dotted]
     module = name.partition(":")[0] if ":" in name else name.rpartition(".")[0]
     return name if is_palaestra(module) else None
+
+
+def markdown_table() -> str:
+    """The table as ``docs/known_names.md`` shows it (a test keeps the page equal to it)."""
+    rows = ["| Setting | Name in the file | palaestra's |", "|---|---|---|"]
+    for kind, table in KINDS.items():
+        rows += [f"| `{kind}` | `{name}` | `{ours}` |" for name, ours in table.items()]
+    return "\n".join(rows) + "\n"
