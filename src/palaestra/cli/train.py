@@ -55,7 +55,9 @@ def add_parser(sub: Any) -> None:
         metavar="FILE",
         help="settings file, .json or .yaml (PyYAML): preset keys (hyperparams, n_envs, "
         "n_timesteps, policy, env_kwargs, normalize, env_wrapper ('module:Class'), atari, "
-        "frame_stack, seed) or hyperparameters at top level",
+        "frame_stack, seed) or hyperparameters at top level; a module its env_wrapper names "
+        "is imported only with --allow-import MODULE (palaestra's own names need none: "
+        "docs/known_names.md); the command line's values override the file's",
     )
     p.add_argument("--n-envs", type=int, metavar="N", help="number of parallel envs")
     p.add_argument("--timesteps", type=int, metavar="N", help="total env steps to train for")

@@ -1,13 +1,17 @@
-"""A run folder read back by ``eval``, ``record`` and ``train --resume``: data, never code.
+"""A run folder read back by ``eval``, ``record`` and ``train --resume``, and a settings file
+read by ``train --config``, ``compare`` and a sweep's ``best.yaml``: data, never code.
 
-Users share run folders, so their files are checked like any input. Following what
-``config.json`` names can run code: an ``env_wrapper`` (``"shaping:BetterRewardShaping"``)
-imports its module, and an ``env_id`` of the form ``module:Name-v0`` imports ``module``
-(Gymnasium's convention). A run folder names such a module; only the command line may allow it:
-``--allow-import MODULE`` (repeatable). Without it the command stops with one line saying what
-was refused and how to allow it, before anything is imported; with it, a note says what will
-be imported. Settings given on the command line for a new run (``train --config``/``--set``,
-``compare`` settings files) are the user's own request and need no flag.
+Users share run folders and settings files, so their contents are checked like any input.
+Following what they name can run code: an ``env_wrapper`` (``"shaping:BetterRewardShaping"``)
+imports its module, and a run's ``env_id`` of the form ``module:Name-v0`` imports ``module``
+(Gymnasium's convention). Only the command line may allow that: ``--allow-import MODULE``
+(repeatable). Without it the command stops with one line saying what was refused and how to
+allow it, before anything is imported; with it, a note says what will be imported, a missing
+module is one line saying where it was looked for, and a module whose file differs from the
+sha256 the run recorded (``module_sha256``) gets a warning. Names that are palaestra's own
+(under ``palaestra``, or mapped by :mod:`palaestra.runs.known_names`) need no flag. What the
+command line itself names (``train ALGO mygrid:Grid-v0``, ``--set env_wrapper=...``) is the
+user's own request and needs no flag.
 
 The values are checked too before they reach a constructor: the keys ``train`` writes and
 their types, the sizes that allocate (``n_envs``, ``frame_stack``, the Atari screen) within

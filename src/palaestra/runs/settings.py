@@ -4,6 +4,11 @@ Settings are plain data in the preset format (``policy``, ``n_envs``, ``n_timest
 ``hyperparams``, ``env_kwargs``, ``normalize``, ``env_wrapper``, and for Atari ``atari`` and
 ``frame_stack``; see :mod:`palaestra.runs.recipe`) plus ``seed``; ``config.json`` records them
 exactly as resolved, so a run's ``config.json`` is itself a valid ``--config`` file.
+
+A settings file is data as a run folder is (people pass sweep folders around): its values are
+held to a run folder's limits and the modules it names are imported only when the command
+line allows them (:mod:`palaestra.runs.folder`); YAML is read with ``safe_load``, and a
+``!!python/...`` tag is refused by name.
 """
 
 from __future__ import annotations
