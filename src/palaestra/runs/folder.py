@@ -88,9 +88,10 @@ def modules_named(config: dict[str, Any]) -> list[tuple[str, str, str]]:
     not palaestra's own (a name under ``palaestra``, or one :mod:`known_names` maps to it)."""
     out: list[tuple[str, str, str]] = []
     env_id = config.get("env_id")
-    module = recipe.env_id_module(env_id) if isinstance(env_id, str) else None
-    if module and not known_names.is_palaestra(module):
-        out.append(("env_id", env_id, module))
+    if isinstance(env_id, str):
+        module = recipe.env_id_module(env_id)
+        if module and not known_names.is_palaestra(module):
+            out.append(("env_id", env_id, module))
     wrappers = config.get("env_wrapper") or []
     for path in wrappers if isinstance(wrappers, list) else [wrappers]:
         if known_names.palaestra_name("env_wrapper", path) is None:
