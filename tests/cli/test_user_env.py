@@ -287,3 +287,40 @@ def test_a_tampered_module_hash_is_refused(trained: Path, project: Path) -> None
     result = _cli("eval", copy, "--allow-import", NAME)
     assert result.code == 2 and result.err.count("\n") == 1
     assert "module_sha256 must be a mapping of module names to sha256 digests" in result.err
+
+
+class _ImageEnv:
+    """A stand-in env of 8x8 RGB frames (``CnnPolicy``) or a float box (``MlpPolicy``)."""
+
+    def __new__(cls, image: bool = True):  # type: ignore[no-untyped-def]
+        import numpy as np
+
+        import palaestra as gym
+        from palaestra import spaces
+
+        class Env(gym.Env):  # type: ignore[type-arg]
+            observation_space = (
+                spaces.Box(0, 255, shape=(8, 8, 3), dtype=np.uint8)
+                if image
+                else spaces.Box(0.0, 255.0, shape=(8, 8, 3), dtype=np.float32)
+            )
+            action_space = spaces.Discrete(2)
+
+        return Env()
+
+
+def test_image_observations_choose_cnn_policy() -> None:
+    import palaestra
+    from palaestra.envs.registration import registry
+    from palaestra.runs.recipe import choose_policy
+
+    palaestra.register("ImageUE-v0", entry_point=_ImageEnv)
+    try:
+        assert choose_policy({}, "ImageUE-v0") == ("CnnPolicy", "image observations (8, 8, 3)")
+        # a float box of the same shape is no image to SB3
+        assert choose_policy({"env_kwargs": {"image": False}}, "ImageUE-v0") == (
+            "MlpPolicy",
+            "Box observations",
+        )
+    finally:
+        registry.pop("ImageUE-v0", None)

@@ -298,3 +298,72 @@ def test_a_sweep_with_a_symlinked_trials_folder_writes_nothing(tmp_path: Path) -
         run_sweep(space, "ppo", "CartPole-v1", 1, out=folder, n_timesteps=64)
     assert list(outside.iterdir()) == []
     assert sorted(p.name for p in folder.iterdir()) == ["trials"]
+
+
+# -- wrapper arguments (RL Zoo's form) ---------------------------------------------------------
+def test_a_mapped_wrapper_takes_rl_zoo_style_arguments(workdir: Path) -> None:
+    _write(workdir, "zoo.yaml",
+           "env_wrapper:\n  - gymnasium.wrappers.TimeLimit:\n      max_episode_steps: 7\n"
+           "  - gymnasium.wrappers.FlattenObservation\n")  # fmt: skip
+    run = workdir / "run"
+    result = run_cli("train", "ppo", "CartPole-v1", "--config", "zoo.yaml", *TINY,
+                     "--out", run, *QUIET)  # fmt: skip
+    assert result.code == 0, result.err
+    config = json.loads((run / "config.json").read_text())
+    assert config["env_wrapper"] == [
+        {"gymnasium.wrappers.TimeLimit": {"max_episode_steps": 7}},
+        "gymnasium.wrappers.FlattenObservation",
+    ]
+    import palaestra
+    from palaestra.runs.recipe import env_wrapper
+    from palaestra.wrappers import FlattenObservation, TimeLimit
+
+    wrap = env_wrapper(config)
+    assert wrap is not None
+    env = wrap(palaestra.make("CartPole-v1"))
+    assert isinstance(env, FlattenObservation) and isinstance(env.env, TimeLimit)
+    env.reset(seed=0)
+    steps = [env.step(0) for _ in range(7)]  # pushing left: the pole stands 7 steps
+    assert [s[3] for s in steps] == [False] * 6 + [True]  # truncated at the 7th
+
+
+@pytest.mark.parametrize(
+    ("wrapper", "message"),
+    [
+        ({"gymnasium.wrappers.TimeLimit": {"max_steps": 7}},
+         "palaestra: error: env_wrapper 'gymnasium.wrappers.TimeLimit' does not take "
+         "{'max_steps': 7}: missing a required argument: 'max_episode_steps' (fix its "
+         "arguments)\n"),
+        ({"gymnasium.wrappers.TimeLimit": 7},
+         "palaestra: error: config file 'bad.json': env_wrapper must be 'module:Class' or a "
+         "list of them (each may be {'module:Class': {kwargs}}), got "
+         "[{'gymnasium.wrappers.TimeLimit': 7}] (fix the file)\n"),
+        ({"a:W": {}, "b:V": {}}, "env_wrapper must be 'module:Class' or a list of them"),
+    ],
+)  # fmt: skip
+def test_bad_wrapper_arguments_are_one_line(
+    workdir: Path, wrapper: dict[str, object], message: str
+) -> None:
+    _write(workdir, "bad.json", json.dumps({"env_wrapper": [wrapper]}))
+    result = run_cli("train", "ppo", "CartPole-v1", "--config", "bad.json", "--out", workdir / "r")
+    assert result.code == 2 and result.err.count("\n") == 1, result.err
+    assert message in result.err, result.err
+    assert not (workdir / "r").exists()
+
+
+def test_wrappers_that_write_files_need_the_flag_even_under_palaestra(workdir: Path) -> None:
+    target = workdir / "elsewhere"
+    _write(workdir, "video.json",
+           json.dumps({"env_wrapper": [{"palaestra.wrappers:RecordVideo":
+                                        {"video_folder": str(target)}}]}))  # fmt: skip
+    result = run_cli("train", "ppo", "CartPole-v1", "--config", "video.json", *TINY,
+                     "--out", workdir / "r", *QUIET)  # fmt: skip
+    assert result.code == 2, result.err
+    assert (
+        "names env_wrapper 'palaestra.wrappers:RecordVideo', which would import module "
+        "'palaestra.wrappers'; palaestra runs no code named by a settings file (pass "
+        "--allow-import palaestra.wrappers to allow it"
+    ) in result.err
+    assert not target.exists() and not (workdir / "r").exists()
+    for name in ("palaestra.wrappers.monitor:Monitor", "palaestra.wrappers.HumanRendering"):
+        assert known_names.palaestra_name("env_wrapper", name) is None

@@ -92,8 +92,7 @@ def modules_named(config: dict[str, Any]) -> list[tuple[str, str, str]]:
         module = recipe.env_id_module(env_id)
         if module and not known_names.is_palaestra(module):
             out.append(("env_id", env_id, module))
-    wrappers = config.get("env_wrapper") or []
-    for path in wrappers if isinstance(wrappers, list) else [wrappers]:
+    for path, _ in recipe.wrapper_items(config.get("env_wrapper") or []):
         if known_names.palaestra_name("env_wrapper", path) is None:
             out.append(("env_wrapper", path, wrapper_module(path)[0]))
     return out
@@ -244,6 +243,13 @@ def _check_names(config: dict[str, Any], source: str) -> None:
         _integer(source, "seed", config["seed"], 0, 2**64 - 1)
 
 
+def _wrapper_args(item: dict[Any, Any]) -> bool:
+    """Whether ``{name: kwargs}`` has a name and a mapping of keyword arguments (or null)."""
+    ((name, kwargs),) = item.items()
+    kwargs = {} if kwargs is None else kwargs
+    return isinstance(name, str) and isinstance(kwargs, dict) and all(map(str.isidentifier, kwargs))
+
+
 def _check_pipeline(config: dict[str, Any], source: str) -> None:
     """The env settings: sizes within limits, the shapes ``pipeline`` expects."""
     for key, high in (("n_envs", MAX_N_ENVS), ("n_timesteps", MAX_STEPS)):
@@ -258,8 +264,19 @@ def _check_pipeline(config: dict[str, Any], source: str) -> None:
         raise _fail(source, "env_kwargs", env_kwargs, "a mapping of keyword arguments")
     wrappers = config.get("env_wrapper")
     listed = wrappers if isinstance(wrappers, list) else [wrappers]
-    if wrappers is not None and not (len(listed) <= 16 and all(isinstance(w, str) for w in listed)):
-        raise _fail(source, "env_wrapper", wrappers, "'module:Class' or a list of them")
+    if wrappers is not None and not (
+        len(listed) <= 16
+        and all(
+            isinstance(w, str) or (isinstance(w, dict) and len(w) == 1 and _wrapper_args(w))
+            for w in listed
+        )
+    ):
+        raise _fail(
+            source,
+            "env_wrapper",
+            wrappers,
+            "'module:Class' or a list of them (each may be {'module:Class': {kwargs}})",
+        )
     _check_atari(source, config.get("atari"))
     _check_normalize(source, config.get("normalize"))
     hashes = config.get("module_sha256")

@@ -7,7 +7,9 @@ runs that module, so palaestra imports nothing a file names unless the command l
 (``--allow-import MODULE``, :mod:`palaestra.runs.folder`). Two kinds of names need no flag,
 because they resolve to code palaestra ships:
 
-- a name under ``palaestra`` itself (``palaestra.wrappers:TimeLimit``);
+- a name under ``palaestra`` itself (``palaestra.wrappers:TimeLimit``), except the wrappers
+  that write files or open windows (:data:`SIDE_EFFECT_WRAPPERS`: ``Monitor``,
+  ``RecordVideo``, ``HumanRendering``), whose arguments would let a file choose where;
 - a name this table maps to its palaestra equivalent: the wrappers of Gymnasium and SB3's Atari
   wrappers (their palaestra classes take the same arguments), the torch activations RL Zoo
   files write as ``nn.ReLU`` or ``th.nn.Tanh``, and SB3's callbacks.
@@ -26,6 +28,7 @@ __all__ = [
     "CALLBACKS",
     "ENV_WRAPPERS",
     "KINDS",
+    "SIDE_EFFECT_WRAPPERS",
     "is_palaestra",
     "markdown_table",
     "palaestra_name",
@@ -97,8 +100,12 @@ ENV_WRAPPERS: dict[str, str] = {
         f"stable_baselines3.common.atari_wrappers.{n}": f"palaestra.wrappers.atari:{n}"
         for n in _SB3_ATARI_WRAPPERS
     },
-    "stable_baselines3.common.monitor.Monitor": "palaestra.wrappers:Monitor",
 }
+# Wrappers that write files or open windows where their arguments say: a file naming one
+# (with keyword arguments, RL Zoo's form) could choose where palaestra writes, so these are
+# never "palaestra's own" for the gate, whatever their module (every env is under a Monitor
+# already).
+SIDE_EFFECT_WRAPPERS = frozenset({"Monitor", "RecordVideo", "HumanRendering"})
 
 # policy_kwargs.activation_fn: RL Zoo's spelling -> the name presets use ("relu", ...).
 ACTIVATIONS: dict[str, str] = {
@@ -151,6 +158,8 @@ def palaestra_name(kind: str, name: str) -> str | None:
     if dotted in table:
         return table[dotted]
     module = name.partition(":")[0] if ":" in name else name.rpartition(".")[0]
+    if kind == "env_wrapper" and dotted.rpartition(".")[2] in SIDE_EFFECT_WRAPPERS:
+        return None
     return name if is_palaestra(module) else None
 
 

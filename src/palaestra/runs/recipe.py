@@ -35,6 +35,7 @@ from __future__ import annotations
 import hashlib
 import importlib
 import importlib.util
+import inspect
 import os
 import sys
 from collections.abc import Callable
@@ -59,6 +60,7 @@ __all__ = [
     "registered_id",
     "render_fps",
     "uses_vec_pipeline",
+    "wrapper_items",
     "wrapper_module",
 ]
 
@@ -200,6 +202,33 @@ def wrapper_module(path: Any) -> tuple[str, str]:
     return module_name, name
 
 
+def wrapper_items(value: Any) -> list[tuple[str, dict[str, Any]]]:
+    """A run's ``env_wrapper`` as ``[(name, kwargs)]``, innermost first: a name, a one-key
+    mapping ``{name: kwargs}`` (RL Zoo's form, e.g. ``{"gymnasium.wrappers.TimeLimit":
+    {"max_episode_steps": 100}}``), or a list of them. Imports nothing.
+
+    >>> wrapper_items(["a:W", {"b:V": {"k": 1}}, {"c:U": None}])
+    [('a:W', {}), ('b:V', {'k': 1}), ('c:U', {})]
+    """
+    out = []
+    for item in value if isinstance(value, list) else [value]:
+        if isinstance(item, dict) and len(item) == 1:
+            ((name, kwargs),) = item.items()
+            if kwargs is None:
+                kwargs = {}
+            if not (isinstance(kwargs, dict) and all(isinstance(k, str) for k in kwargs)):
+                raise RunError(
+                    f"env_wrapper {name!r} takes a mapping of keyword arguments, got {kwargs!r}",
+                    "e.g. {'gymnasium.wrappers.TimeLimit': {'max_episode_steps': 100}}",
+                )
+            out.append((name, dict(kwargs)))
+        else:
+            out.append((item, {}))
+    for name, _ in out:
+        wrapper_module(name)
+    return out
+
+
 def _import_wrapper(path: Any) -> type[Any]:
     """The wrapper class named by ``"module:Class"``: a ``palaestra.Wrapper`` subclass, never
     just any callable (``"os:system"`` would run a shell command on the env's repr)."""
@@ -222,15 +251,26 @@ def _import_wrapper(path: Any) -> type[Any]:
 
 def env_wrapper(config: dict[str, Any]) -> Callable[[Any], Any] | None:
     """The run's ``env_wrapper`` setting as one callable (a list applies innermost first), or
-    None when it has none."""
+    None when it has none. ``RunError`` when a wrapper does not take its keyword arguments."""
     value = config.get("env_wrapper")
     if not value:
         return None
-    classes = [_import_wrapper(v) for v in (value if isinstance(value, list) else [value])]
+    classes = []
+    for name, kwargs in wrapper_items(value):
+        cls = _import_wrapper(name)
+        try:  # the env comes first; the kwargs must fit the rest of the signature
+            inspect.signature(cls).bind(None, **kwargs)
+        except TypeError as exc:
+            raise RunError(
+                f"env_wrapper {name!r} does not take {kwargs}: {exc}", "fix its arguments"
+            ) from None
+        except ValueError:  # no signature to check against (a builtin): the call will tell
+            pass
+        classes.append((cls, kwargs))
 
     def wrap(env: Any) -> Any:
-        for cls in classes:
-            env = cls(env)
+        for cls, kwargs in classes:
+            env = cls(env, **kwargs)
         return env
 
     return wrap

@@ -41,7 +41,7 @@ class RunSpec:
     hyperparams: dict[str, Any] = dataclasses.field(default_factory=dict)
     env_kwargs: dict[str, Any] = dataclasses.field(default_factory=dict)
     normalize: bool | dict[str, Any] = False
-    env_wrapper: str | list[str] | None = None
+    env_wrapper: str | dict[str, Any] | list[str | dict[str, Any]] | None = None
     atari: bool | dict[str, Any] | None = None
     frame_stack: int | None = None
     seed: int | None = None
