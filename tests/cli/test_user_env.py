@@ -242,6 +242,13 @@ def test_eval_record_resume_import_it_with_the_flag(trained: Path, project: Path
     assert json.loads((trained / "status.json").read_text())["num_timesteps"] >= 128
 
 
+def test_an_env_named_on_the_eval_command_line_needs_no_flag(trained: Path, project: Path) -> None:
+    result = _cli("eval", trained, "--env", ENV, "--episodes", 1)
+    assert result.code == 0, result.err
+    assert f"on {ENV}: 1 episode" in result.out and "importing module" not in result.err
+    assert _imports(project) == 2  # train's, then eval's own --env
+
+
 def test_eval_where_the_module_is_missing_names_it_and_the_flag(
     trained: Path, project: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

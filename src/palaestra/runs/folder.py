@@ -317,11 +317,12 @@ def read_run_config(
     env_id: str | None = None,
 ) -> dict[str, Any]:
     """``config.json`` at ``path``, checked (:func:`check_run_config`) and with every module it
-    names allowed by ``allowed`` (:func:`check_imports`). ``env_id`` (``--env``) replaces the
-    run's id, whose module is then not imported."""
+    names allowed by ``allowed`` (:func:`check_imports`). ``env_id`` (``--env``, the command
+    line's own) replaces the run's id, whose module is then not imported."""
     config = read_json(path, "run config")
     check_run_config(config, str(path), required)
-    check_imports(config if env_id is None else {**config, "env_id": env_id}, str(path), allowed)
+    gated = config if env_id is None else {k: v for k, v in config.items() if k != "env_id"}
+    check_imports(gated, str(path), allowed)
     return config
 
 
