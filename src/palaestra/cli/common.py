@@ -35,6 +35,7 @@ def add_allow_import(parser: Any, what: str) -> None:
         "config.json or a --config settings file names it: env_wrapper 'MODULE:Class', or "
         "env_id 'MODULE:Name-v0' of a run folder; repeatable. Without it those files run no "
         "code. Needed by no module given on the command line itself (ENV 'MODULE:Name-v0', "
-        "--set env_wrapper=...) and by no wrapper name under palaestra or mapped to it in "
+        "--set env_wrapper=...) and by no wrapper name under palaestra (but Monitor, "
+        "RecordVideo, HumanRendering, which write files or open windows) or mapped to it in "
         "palaestra.runs.known_names (docs/known_names.md).",
     )

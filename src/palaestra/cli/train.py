@@ -34,8 +34,9 @@ def add_parser(sub: Any) -> None:
         "train",
         help="train an agent (" + ", ".join(settings_mod.ALGOS) + ") on an env",
         description="Train an agent. Settings come from the preset (the 'default' preset when "
-        "one exists for ALGO and ENV, else the algorithm's defaults), overridden by --config, "
-        "then by --set, then by --n-envs/--timesteps/--seed. Atari ids (ALE/Breakout-v5) train "
+        "one exists for ALGO and ENV, else the algorithm's defaults with the policy picked "
+        "from the observation space), overridden by --config, then by --set, then by "
+        "--env-kwargs, then by --n-envs/--timesteps/--seed. Atari ids (ALE/Breakout-v5) train "
         "on SB3's Atari recipe: AtariWrapper envs, 4 stacked frames, CnnPolicy. Ctrl-C or SIGTERM "
         "stops at the next step and saves a checkpoint that --resume continues (exit code 130, "
         "143 for SIGTERM); a second signal stops at once.",
@@ -47,7 +48,11 @@ def add_parser(sub: Any) -> None:
         help=" or ".join(settings_mod.ALGOS) + " (any case); not needed with --resume",
     )
     p.add_argument(
-        "env", nargs="?", metavar="ENV", help="env id, e.g. CartPole-v1 (see palaestra envs)"
+        "env",
+        nargs="?",
+        metavar="ENV",
+        help="env id, e.g. CartPole-v1 (see palaestra envs), or your own as MODULE:Name-v0: "
+        "MODULE (e.g. mygrid.py in the current folder) is imported and registers it",
     )
     p.add_argument("--preset", metavar="NAME", help="preset name (default: 'default' if any)")
     p.add_argument(
