@@ -367,3 +367,10 @@ def test_wrappers_that_write_files_need_the_flag_even_under_palaestra(workdir: P
     assert not target.exists() and not (workdir / "r").exists()
     for name in ("palaestra.wrappers.monitor:Monitor", "palaestra.wrappers.HumanRendering"):
         assert known_names.palaestra_name("env_wrapper", name) is None
+
+
+def test_wrapper_arguments_need_keyword_names(workdir: Path) -> None:
+    _write(workdir, "keys.yaml", "env_wrapper:\n  - gymnasium.wrappers.TimeLimit:\n      5: 7\n")
+    result = run_cli("train", "ppo", "CartPole-v1", "--config", "keys.yaml", "--out", workdir / "r")
+    assert result.code == 2 and result.err.count("\n") == 1, result.err
+    assert "config file 'keys.yaml': env_wrapper must be 'module:Class' or a list" in result.err

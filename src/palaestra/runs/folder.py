@@ -121,6 +121,7 @@ def check_imports(
             fix,
         )
     recorded = config.get("module_sha256") or {}
+    warned: set[str] = set()
     for setting, value, module in named:
         if recipe.locate_module(module) is None:
             raise RunError(
@@ -130,7 +131,8 @@ def check_imports(
             )
         note(f"importing module {module!r} for {setting} {value!r} of {source} (allowed)")
         now, then = recipe.module_sha256(module), recorded.get(module)
-        if then is not None and now != then:
+        if then is not None and now != then and module not in warned:
+            warned.add(module)
             print(
                 f"palaestra: warning: module {module!r} ({recipe.locate_module(module)}) is not "
                 f"the file {source} recorded (sha256 {then[:12]}..., now "
@@ -247,7 +249,11 @@ def _wrapper_args(item: dict[Any, Any]) -> bool:
     """Whether ``{name: kwargs}`` has a name and a mapping of keyword arguments (or null)."""
     ((name, kwargs),) = item.items()
     kwargs = {} if kwargs is None else kwargs
-    return isinstance(name, str) and isinstance(kwargs, dict) and all(map(str.isidentifier, kwargs))
+    return (
+        isinstance(name, str)
+        and isinstance(kwargs, dict)
+        and all(isinstance(k, str) and k.isidentifier() for k in kwargs)
+    )
 
 
 def _check_pipeline(config: dict[str, Any], source: str) -> None:
