@@ -91,7 +91,7 @@ def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str
                 args.algo,
                 args.env,
                 config=None if item == BASELINE else item,
-                allow_import=args.allow_import,
+                allow_import=() if item == BASELINE else args.allow_import,
                 seed=seed,
                 n_timesteps=args.timesteps,
             )
