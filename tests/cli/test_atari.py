@@ -141,7 +141,10 @@ def test_dqn_preset_trains_with_the_frame_buffer(
         (("ppo", BREAKOUT, "--set", "frame_stack=0"), "frame_stack must be a positive integer"),
         (("ppo", "CartPole-v1", "--set", "atari=true"), "CartPole-v1 is not an Atari game"),
         (("ppo", BREAKOUT, "--set", "normalize=true"), "normalize does not apply to the Atari"),
-        (("ppo", BREAKOUT, "--set", "atari.noop_max=-1"), "noop_max must be >= 0, got -1"),
+        (
+            ("ppo", BREAKOUT, "--set", "atari.noop_max=-1"),
+            "atari.noop_max must be a int from 0 to 10000, got -1",
+        ),
     ],
 )
 def test_bad_atari_settings_give_one_line(

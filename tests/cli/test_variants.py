@@ -72,8 +72,10 @@ def test_an_action_wrapper_is_kept_for_eval_and_record(
     cli: Callable[..., Result], workdir: Path
 ) -> None:
     out = workdir / "run"
+    # A settings file is data as a run folder is: its module is imported when allowed.
     r = cli("train", "dqn", "MountainCar-v0", *TINY, "--config", "two.json", "--seed", 0,
-            "--out", out, "--progress", "none", "--eval-episodes", 0)  # fmt: skip
+            "--out", out, "--progress", "none", "--eval-episodes", 0,
+            "--allow-import", "shaping_mod")  # fmt: skip
     assert r.code == 0, r.err
     # The run folder names the module; eval and record import it only when asked to.
     assert "--allow-import shaping_mod" in cli("eval", out, "--episodes", 1).err
@@ -110,7 +112,11 @@ def test_compare_trains_variants_then_reuses_them(
     cli: Callable[..., Result], workdir: Path
 ) -> None:
     args = ("compare", "preset", "better.yaml", "--algo", "dqn", "--env", "MountainCar-v0",
-            "--seeds", 0, 1, "--timesteps", 1000, "--out", "cmp.png")  # fmt: skip
+            "--seeds", 0, 1, "--timesteps", 1000, "--out", "cmp.png",
+            "--allow-import", "shaping_mod")  # fmt: skip
+    refused = cli(*args[:-2])
+    assert refused.code == 2 and "pass --allow-import shaping_mod to allow it" in refused.err
+    assert not (workdir / "runs").exists()
     r = cli(*args)
     assert r.code == 0, r.err
     root = workdir / "runs" / "compare-dqn-MountainCar-v0"

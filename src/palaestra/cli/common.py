@@ -25,15 +25,20 @@ def eprint(*parts: Any) -> None:
 
 
 def add_allow_import(parser: Any, what: str) -> None:
-    """The ``--allow-import MODULE`` option of a command that reads a run folder."""
+    """The ``--allow-import MODULE`` option of a command that reads a run folder or a
+    settings file."""
     parser.add_argument(
         "--allow-import",
         action="append",
         default=[],
         metavar="MODULE",
-        help=f"let {what} import MODULE when the run's config.json names it (env_wrapper "
-        "'MODULE:Class', env_id 'MODULE:Name-v0'); repeatable. Without it a run folder "
-        "runs no code.",
+        help=f"let {what} import MODULE (its top-level code runs) when a run folder's "
+        "config.json or a --config settings file names it: env_wrapper 'MODULE:Class', or "
+        "env_id 'MODULE:Name-v0' of a run folder; repeatable. Without it those files run no "
+        "code. Needed by no module given on the command line itself (ENV 'MODULE:Name-v0', "
+        "--set env_wrapper=...) and by no wrapper name under palaestra (but Monitor, "
+        "RecordVideo, HumanRendering, which write files or open windows) or mapped to it in "
+        "palaestra.runs.known_names (docs/known_names.md).",
     )
 
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.cli.common import CLIError, add_timesteps
+from palaestra.cli.common import CLIError, add_allow_import, add_timesteps
 
 __all__ = ["add_parser", "run"]
 
@@ -89,6 +89,7 @@ def add_parser(sub: Any) -> None:
         help="Ray cluster to run on with --backend ray: auto (the cluster this machine "
         "joined with `ray start`) or ray://HOST:10001 (default: a local Ray)",
     )
+    add_allow_import(p, "compare (a settings file's env_wrapper)")
     p.set_defaults(func=run)
 
 

@@ -102,9 +102,13 @@ def add_parser(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """The ``eval`` command."""
     from palaestra.runs import evaluate_run
+    from palaestra.runs.recipe import env_id_module, import_user_module
 
     if args.episodes < 1:
         raise CLIError(f"--episodes must be at least 1, got {args.episodes}", "e.g. --episodes 10")
+    module = env_id_module(args.env) if args.env else None
+    if module and not args.env.startswith("gymnasium:"):  # --env mygrid:Grid-v0: the user's own
+        import_user_module(module, f"--env {args.env!r}")
     played = evaluate_run(
         args.model,
         args.episodes,

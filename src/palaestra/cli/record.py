@@ -68,6 +68,11 @@ def run(args: argparse.Namespace) -> int:
         if not mp4_available():  # before playing, not after
             raise dependency_not_installed("imageio-ffmpeg", "video", "writing MP4 files")
     from palaestra.runs import evaluate_run
+    from palaestra.runs.recipe import env_id_module, import_user_module
+
+    module = env_id_module(args.env) if args.env else None
+    if module and not args.env.startswith("gymnasium:"):  # --env mygrid:Grid-v0: the user's own
+        import_user_module(module, f"--env {args.env!r}")
 
     played = evaluate_run(
         args.model,

@@ -37,8 +37,9 @@ def add_parser(sub: Any) -> None:
         "train",
         help="train an agent (" + ", ".join(settings_mod.ALGOS) + ") on an env",
         description="Train an agent. Settings come from the preset (the 'default' preset when "
-        "one exists for ALGO and ENV, else the algorithm's defaults), overridden by --config, "
-        "then by --set, then by --n-envs/--timesteps/--seed. Atari ids (ALE/Breakout-v5) train "
+        "one exists for ALGO and ENV, else the algorithm's defaults with the policy picked "
+        "from the observation space), overridden by --config, then by --set, then by "
+        "--env-kwargs, then by --n-envs/--timesteps/--seed. Atari ids (ALE/Breakout-v5) train "
         "on SB3's Atari recipe: AtariWrapper envs, 4 stacked frames, CnnPolicy. Ctrl-C or SIGTERM "
         "stops at the next step and saves a checkpoint that --resume continues (exit code 130, "
         "143 for SIGTERM); a second signal stops at once.",
@@ -50,7 +51,11 @@ def add_parser(sub: Any) -> None:
         help=" or ".join(settings_mod.ALGOS) + " (any case); not needed with --resume",
     )
     p.add_argument(
-        "env", nargs="?", metavar="ENV", help="env id, e.g. CartPole-v1 (see palaestra envs)"
+        "env",
+        nargs="?",
+        metavar="ENV",
+        help="env id, e.g. CartPole-v1 (see palaestra envs), or your own as MODULE:Name-v0: "
+        "MODULE (e.g. mygrid.py in the current folder) is imported and registers it",
     )
     p.add_argument("--preset", metavar="NAME", help="preset name (default: 'default' if any)")
     p.add_argument(
@@ -58,7 +63,9 @@ def add_parser(sub: Any) -> None:
         metavar="FILE",
         help="settings file, .json or .yaml (PyYAML): preset keys (hyperparams, n_envs, "
         "n_timesteps, policy, env_kwargs, normalize, env_wrapper ('module:Class'), atari, "
-        "frame_stack, seed) or hyperparameters at top level",
+        "frame_stack, seed) or hyperparameters at top level; a module its env_wrapper names "
+        "is imported only with --allow-import MODULE (palaestra's own names need none: "
+        "docs/known_names.md); the command line's values override the file's",
     )
     p.add_argument("--n-envs", type=int, metavar="N", help="number of parallel envs")
     add_timesteps(
@@ -87,7 +94,15 @@ def add_parser(sub: Any) -> None:
         help="continue the run in DIR (after Ctrl-C, or to a larger --timesteps) with its "
         "saved settings, model and replay buffer",
     )
-    add_allow_import(p, "--resume")
+    p.add_argument(
+        "--env-kwargs",
+        nargs="+",
+        default=None,
+        metavar="KEY:VALUE",
+        help="keyword arguments for the env, RL Zoo style: --env-kwargs size:5 slippery:False "
+        "(VALUE is JSON or a Python literal, else text); overrides the config file's env_kwargs",
+    )
+    add_allow_import(p, "train (a --config file's env_wrapper) and --resume")
     p.add_argument(
         "--device", default="auto", metavar="DEV", help="torch device: auto (default), cpu, cuda"
     )
@@ -150,6 +165,7 @@ def _refuse_resume_flags(args: argparse.Namespace) -> None:
             ("--config", args.config),
             ("--set", args.assignments),
             ("--n-envs", args.n_envs),
+            ("--env-kwargs", args.env_kwargs),
             ("--seed", args.seed),
             ("--out", args.out),
             ("--eval-freq", args.eval_freq),
@@ -162,6 +178,30 @@ def _refuse_resume_flags(args: argparse.Namespace) -> None:
             f"{', '.join(given)} cannot change them",
             "drop them, or start a new run",
         )
+
+
+def _env_kwargs(items: list[str]) -> dict[str, Any]:
+    """``["size:5", "slippery:False"]`` -> ``{"size": 5, "slippery": False}`` (RL Zoo's
+    ``--env-kwargs``; values that JSON cannot hold are refused, config.json records them)."""
+    import json
+
+    from palaestra.runs.settings import parse_value
+
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, text = item.partition(":")
+        if not sep or not key.strip():
+            raise CLIError(f"--env-kwargs {item!r} is not KEY:VALUE", "e.g. --env-kwargs size:5")
+        value = parse_value(text)
+        try:
+            json.dumps(value, allow_nan=False)
+        except (TypeError, ValueError):
+            raise CLIError(
+                f"--env-kwargs {item!r}: {value!r} is not plain data",
+                "use numbers, true/false, text, lists or dicts",
+            ) from None
+        out[key.strip()] = value
+    return out
 
 
 def _check_flags(args: argparse.Namespace) -> str:
@@ -200,12 +240,6 @@ def run(args: argparse.Namespace) -> int:
             expect={"algo": args.algo, "env_id": args.env},
         )
     else:
-        if args.allow_import:
-            raise CLIError(
-                "--allow-import applies to --resume (a new run imports what its --config "
-                "and --set name)",
-                "drop --allow-import",
-            )
         if args.algo is None or args.env is None:
             raise CLIError("train needs ALGO and ENV", "e.g. palaestra train ppo CartPole-v1")
         spec, notes = resolve_spec(
@@ -214,6 +248,8 @@ def run(args: argparse.Namespace) -> int:
             args.preset,
             config=args.config,
             assignments=args.assignments,
+            overrides={"env_kwargs": _env_kwargs(args.env_kwargs)} if args.env_kwargs else None,
+            allow_import=args.allow_import,
             seed=args.seed,
             n_envs=args.n_envs,
             n_timesteps=args.timesteps,

@@ -7,7 +7,8 @@ tutorial's baseline-vs-reward-shaping study is one command::
 
     palaestra compare preset naive.yaml better.yaml --algo dqn --env MountainCar-v0 --seeds 0 1 2
 
-with ``naive.yaml`` holding ``env_wrapper: shaping:NaiveRewardShaping``. The word ``algos``
+with ``naive.yaml`` holding ``env_wrapper: shaping:NaiveRewardShaping`` (a settings file runs
+no code unless the command line allows it: add ``--allow-import shaping``). The word ``algos``
 compares algorithms instead, each on its own preset for the env (``settings.ALGOS`` lists
 them)::
 
@@ -90,6 +91,7 @@ def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str
                 args.algo,
                 args.env,
                 config=None if item == BASELINE else item,
+                allow_import=() if item == BASELINE else args.allow_import,
                 seed=seed,
                 n_timesteps=args.timesteps,
             )

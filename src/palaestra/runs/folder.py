@@ -1,13 +1,17 @@
-"""A run folder read back by ``eval``, ``record`` and ``train --resume``: data, never code.
+"""A run folder read back by ``eval``, ``record`` and ``train --resume``, and a settings file
+read by ``train --config``, ``compare`` and a sweep's ``best.yaml``: data, never code.
 
-Users share run folders, so their files are checked like any input. Following what
-``config.json`` names can run code: an ``env_wrapper`` (``"shaping:BetterRewardShaping"``)
-imports its module, and an ``env_id`` of the form ``module:Name-v0`` imports ``module``
-(Gymnasium's convention). A run folder names such a module; only the command line may allow it:
-``--allow-import MODULE`` (repeatable). Without it the command stops with one line saying what
-was refused and how to allow it, before anything is imported; with it, a note says what will
-be imported. Settings given on the command line for a new run (``train --config``/``--set``,
-``compare`` settings files) are the user's own request and need no flag.
+Users share run folders and settings files, so their contents are checked like any input.
+Following what they name can run code: an ``env_wrapper`` (``"shaping:BetterRewardShaping"``)
+imports its module, and a run's ``env_id`` of the form ``module:Name-v0`` imports ``module``
+(Gymnasium's convention). Only the command line may allow that: ``--allow-import MODULE``
+(repeatable). Without it the command stops with one line saying what was refused and how to
+allow it, before anything is imported; with it, a note says what will be imported, a missing
+module is one line saying where it was looked for, and a module whose file differs from the
+sha256 the run recorded (``module_sha256``) gets a warning. Names that are palaestra's own
+(under ``palaestra``, or mapped by :mod:`palaestra.runs.known_names`) need no flag. What the
+command line itself names (``train ALGO mygrid:Grid-v0``, ``--set env_wrapper=...``) is the
+user's own request and needs no flag.
 
 The values are checked too before they reach a constructor: the keys ``train`` writes and
 their types, the sizes that allocate (``n_envs``, ``frame_stack``, the Atari screen) within
@@ -18,14 +22,16 @@ limits, and ``hyperparams`` through :func:`palaestra.algos.hyperparams.check_run
 from __future__ import annotations
 
 import math
+import os
 import re
 import reprlib
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from palaestra import presets
-from palaestra.runs import settings
+from palaestra.runs import known_names, recipe, settings
 from palaestra.runs.errors import RunError
 from palaestra.runs.files import CONFIG_FILE, note, read_json
 from palaestra.runs.recipe import wrapper_module
@@ -34,8 +40,10 @@ __all__ = [
     "CONFIG_KEYS",
     "RESUME_KEYS",
     "check_imports",
+    "check_inside",
     "check_run_config",
     "find_run_config",
+    "module_hashes",
     "modules_named",
     "read_run_config",
     "read_status",
@@ -46,12 +54,15 @@ CONFIG_KEYS = frozenset(
     {*presets.SETTINGS_KEYS, "seed", "algo", "env_id", "preset", "device", "palaestra_version"}
     | {"measured"}  # a preset's results, accepted by --config and dropped
     | {"evaluation"}  # train --eval-freq's schedule (runs.periodic_eval checks it)
+    | {"module_sha256"}  # the user modules' files when the run started
 )
+TABLE = "palaestra.runs.known_names (docs/known_names.md)"
 RESUME_KEYS = ("algo", "env_id", "policy", "n_envs", "n_timesteps", "hyperparams")
 MAX_N_ENVS = 4096
 MAX_FRAME_STACK = 256
 MAX_STEPS = 10**15
 _DEVICE = re.compile(r"auto|cpu|mps|cuda(:\d{1,3})?")
+_SHA256 = re.compile(r"[0-9a-f]{64}")
 _NORMALIZE_KEYS = {
     "training": bool,
     "norm_obs": bool,
@@ -73,43 +84,93 @@ _ATARI_LIMITS: dict[str, tuple[type, float, float]] = {
 
 
 # -- imports -----------------------------------------------------------------------------------
-def _env_id_module(env_id: str) -> str | None:
-    """The module ``palaestra.make(env_id)`` would import first (``resolve_id``'s rule), or
-    None. ``gymnasium:<id>`` uses the installed Gymnasium, whose own ``module:`` prefix counts."""
-    module, sep, _ = env_id.removeprefix("gymnasium:").rpartition(":")
-    return module if sep else None
-
-
 def modules_named(config: dict[str, Any]) -> list[tuple[str, str, str]]:
-    """``(setting, value, module)`` for each module following ``config`` would import."""
+    """``(setting, value, module)`` for each module following ``config`` would import that is
+    not palaestra's own (a name under ``palaestra``, or one :mod:`known_names` maps to it)."""
     out: list[tuple[str, str, str]] = []
     env_id = config.get("env_id")
-    if isinstance(env_id, str) and (module := _env_id_module(env_id)):
-        out.append(("env_id", env_id, module))
-    wrappers = config.get("env_wrapper") or []
-    for path in wrappers if isinstance(wrappers, list) else [wrappers]:
-        out.append(("env_wrapper", path, wrapper_module(path)[0]))
+    if isinstance(env_id, str):
+        module = recipe.env_id_module(env_id)
+        if module and not known_names.is_palaestra(module):
+            out.append(("env_id", env_id, module))
+    for path, _ in recipe.wrapper_items(config.get("env_wrapper") or []):
+        if known_names.palaestra_name("env_wrapper", path) is None:
+            out.append(("env_wrapper", path, wrapper_module(path)[0]))
     return out
 
 
-def check_imports(config: dict[str, Any], source: str, allowed: Sequence[str]) -> None:
-    """``RunError`` for the first module ``config`` names that ``allowed`` does not hold (the
-    fix lists every flag needed); a note on stderr for each module that will be imported."""
+def check_imports(
+    config: dict[str, Any], source: str, allowed: Sequence[str], what: str = "run folder"
+) -> None:
+    """``RunError`` for the first module ``config`` (read from a ``what``: ``"run folder"`` or
+    ``"settings file"``) names that ``allowed`` does not hold (the fix lists every flag
+    needed), or that cannot be found; a note on stderr for each module that will be imported,
+    and a warning when its file differs from the one ``config``'s ``module_sha256`` records."""
     named = modules_named(config)
     refused = [(s, v, m) for s, v, m in named if m not in allowed]
     if refused:
         setting, value, module = refused[0]
         flags = " ".join(f"--allow-import {m}" for m in dict.fromkeys(m for _, _, m in refused))
+        fix = f"pass {flags} to allow it"
+        if "." not in module and recipe.locate_module(module) is None:  # finding runs no code
+            fix = f"run from the folder that holds module {module!r}, and {fix}"
+        if setting == "env_wrapper":
+            fix += f"; wrapper names in {TABLE} need no flag"
         raise RunError(
             f"{source} names {setting} {value!r}, which would import module {module!r}; "
-            "palaestra runs no code named by a run folder",
-            f"pass {flags} to allow it",
+            f"palaestra runs no code named by a {what}",
+            fix,
         )
+    recorded = config.get("module_sha256") or {}
+    warned: set[str] = set()
     for setting, value, module in named:
+        if recipe.locate_module(module) is None:
+            raise RunError(
+                f"{source} names {setting} {value!r}, but module {module!r} is not found from "
+                f"{os.getcwd()}",
+                f"run from the folder that holds it, with --allow-import {module}",
+            )
         note(f"importing module {module!r} for {setting} {value!r} of {source} (allowed)")
+        now, then = recipe.module_sha256(module), recorded.get(module)
+        if then is not None and now != then and module not in warned:
+            warned.add(module)
+            print(
+                f"palaestra: warning: module {module!r} ({recipe.locate_module(module)}) is not "
+                f"the file {source} recorded (sha256 {then[:12]}..., now "
+                f"{(now or 'no file')[:12]}...): results may differ from the run's",
+                file=sys.stderr,
+                flush=True,
+            )
     unused = sorted(set(allowed) - {m for _, _, m in named})
     if unused:
         note(f"--allow-import {', '.join(unused)}: {source} names no such module")
+
+
+def module_hashes(config: dict[str, Any]) -> dict[str, str]:
+    """``{module: sha256 of its file}`` for the modules ``config`` names that are not
+    palaestra's own (what ``config.json`` records as ``module_sha256``, so that a later
+    ``eval`` can warn when the file changed); call it once they are imported."""
+    hashes: dict[str, str] = {}
+    for _, _, module in modules_named(config):
+        digest = recipe.module_sha256(module)
+        if digest is not None:
+            hashes[module] = digest
+    return hashes
+
+
+def check_inside(path: Path, root: Path, what: str) -> None:
+    """``RunError`` unless ``path`` (which may not exist yet) and the entries directly in it
+    are no symbolic links and stay inside ``root``: a shared folder whose ``trials/`` (or
+    ``trials/7``) links elsewhere must not make palaestra write there."""
+    base = root.resolve()
+    entries = [path, *(sorted(path.iterdir()) if path.is_dir() else [])]
+    for entry in entries:
+        target = entry.resolve()
+        if entry.is_symlink() or not target.is_relative_to(base):
+            raise RunError(
+                f"{what} {str(entry)!r} links to {str(target)!r}, outside {str(root)!r}",
+                "remove the link: palaestra writes only inside the folder",
+            )
 
 
 # -- values ------------------------------------------------------------------------------------
@@ -185,6 +246,17 @@ def _check_names(config: dict[str, Any], source: str) -> None:
         _integer(source, "seed", config["seed"], 0, 2**64 - 1)
 
 
+def _wrapper_args(item: dict[Any, Any]) -> bool:
+    """Whether ``{name: kwargs}`` has a name and a mapping of keyword arguments (or null)."""
+    ((name, kwargs),) = item.items()
+    kwargs = {} if kwargs is None else kwargs
+    return (
+        isinstance(name, str)
+        and isinstance(kwargs, dict)
+        and all(isinstance(k, str) and k.isidentifier() for k in kwargs)
+    )
+
+
 def _check_pipeline(config: dict[str, Any], source: str) -> None:
     """The env settings: sizes within limits, the shapes ``pipeline`` expects."""
     for key, high in (("n_envs", MAX_N_ENVS), ("n_timesteps", MAX_STEPS)):
@@ -199,10 +271,31 @@ def _check_pipeline(config: dict[str, Any], source: str) -> None:
         raise _fail(source, "env_kwargs", env_kwargs, "a mapping of keyword arguments")
     wrappers = config.get("env_wrapper")
     listed = wrappers if isinstance(wrappers, list) else [wrappers]
-    if wrappers is not None and not (len(listed) <= 16 and all(isinstance(w, str) for w in listed)):
-        raise _fail(source, "env_wrapper", wrappers, "'module:Class' or a list of them")
+    if wrappers is not None and not (
+        len(listed) <= 16
+        and all(
+            isinstance(w, str) or (isinstance(w, dict) and len(w) == 1 and _wrapper_args(w))
+            for w in listed
+        )
+    ):
+        raise _fail(
+            source,
+            "env_wrapper",
+            wrappers,
+            "'module:Class' or a list of them (each may be {'module:Class': {kwargs}})",
+        )
     _check_atari(source, config.get("atari"))
     _check_normalize(source, config.get("normalize"))
+    hashes = config.get("module_sha256")
+    if hashes is not None and not (
+        isinstance(hashes, dict)
+        and len(hashes) <= 64
+        and all(
+            isinstance(k, str) and 0 < len(k) <= 200 and isinstance(v, str) and _SHA256.fullmatch(v)
+            for k, v in hashes.items()
+        )
+    ):
+        raise _fail(source, "module_sha256", hashes, "a mapping of module names to sha256 digests")
 
 
 def check_run_config(
@@ -231,11 +324,12 @@ def read_run_config(
     env_id: str | None = None,
 ) -> dict[str, Any]:
     """``config.json`` at ``path``, checked (:func:`check_run_config`) and with every module it
-    names allowed by ``allowed`` (:func:`check_imports`). ``env_id`` (``--env``) replaces the
-    run's id, whose module is then not imported."""
+    names allowed by ``allowed`` (:func:`check_imports`). ``env_id`` (``--env``, the command
+    line's own) replaces the run's id, whose module is then not imported."""
     config = read_json(path, "run config")
     check_run_config(config, str(path), required)
-    check_imports(config if env_id is None else {**config, "env_id": env_id}, str(path), allowed)
+    gated = config if env_id is None else {k: v for k, v in config.items() if k != "env_id"}
+    check_imports(gated, str(path), allowed)
     return config
 
 

@@ -15,9 +15,15 @@ one ``palaestra.make`` env. Two settings change that:
   the episode log keeps the env's own returns: a reward-shaping wrapper changes what the agent
   learns from, not what the curves and ``compare`` report. The module is imported from the
   current folder first (``python -m`` style), so a ``shaping.py`` beside the run works; the
-  name must be a ``palaestra.Wrapper`` subclass. A module named by a run folder (``eval``,
-  ``record``, ``train --resume``) is imported only when the command line allows it
-  (:mod:`palaestra.runs.folder`).
+  name must be a ``palaestra.Wrapper`` subclass. Gymnasium's and SB3's wrapper names
+  (``gymnasium.wrappers.TimeLimit``) are palaestra's classes
+  (:mod:`palaestra.runs.known_names`). A module named by a run folder or a settings file is
+  imported only when the command line allows it (:mod:`palaestra.runs.folder`).
+
+An env id ``module:Name-v0`` (Gymnasium's convention) imports ``module`` from the current folder
+first, as ``palaestra.make`` does, so a user's ``mygrid.py`` that calls ``palaestra.register``
+trains from the command line. With no preset, :func:`choose_policy` picks the policy from the
+env's observation space, as SB3 users pick it by hand.
 
 Such a run is evaluated on the same pipeline with one env, and an evaluation episode is a
 whole game: the Monitor under the ``AtariWrapper`` reports it (all lives, unclipped score),
@@ -26,11 +32,16 @@ which is what SB3's ``evaluate_policy`` counts too.
 
 from __future__ import annotations
 
+import hashlib
 import importlib
+import importlib.util
+import inspect
+import os
 import sys
 from collections.abc import Callable
 from typing import Any
 
+from palaestra.runs import known_names
 from palaestra.runs.errors import RunError
 
 __all__ = [
@@ -38,11 +49,18 @@ __all__ = [
     "atari_defaults",
     "atari_kwargs",
     "check_pipeline",
+    "choose_policy",
+    "env_id_module",
     "env_wrapper",
+    "import_user_module",
     "is_atari_id",
+    "locate_module",
     "make_vec",
+    "module_sha256",
+    "registered_id",
     "render_fps",
     "uses_vec_pipeline",
+    "wrapper_items",
     "wrapper_module",
 ]
 
@@ -59,11 +77,83 @@ WRAPPER_KEYS = (
 )
 
 
+def env_id_module(env_id: str) -> str | None:
+    """The module ``palaestra.make(env_id)`` imports first (``module:Name-v0``), or None.
+    ``gymnasium:<id>`` uses the installed Gymnasium, whose own ``module:`` prefix counts.
+
+    >>> env_id_module("mygrid:GridWorld-v0"), env_id_module("CartPole-v1")
+    ('mygrid', None)
+    """
+    module, sep, _ = env_id.removeprefix("gymnasium:").rpartition(":")
+    return module if sep else None
+
+
+def registered_id(env_id: str) -> str:
+    """The id the registry holds for ``env_id``: without its ``module:`` part (Gymnasium ids
+    kept whole, ``palaestra.spec`` reads them).
+
+    >>> registered_id("mygrid:GridWorld-v0"), registered_id("ALE/Pong-v5")
+    ('GridWorld-v0', 'ALE/Pong-v5')
+    """
+    if env_id.startswith("gymnasium:"):
+        return env_id
+    return env_id.rpartition(":")[2]
+
+
+def _cwd_importable() -> None:
+    """As ``python -m`` does: the current folder first on the path. The console script does
+    not put it there, and a user's ``mygrid.py`` or ``shaping.py`` sits in it."""
+    if "" not in sys.path:
+        sys.path.insert(0, "")
+
+
+def import_user_module(module_name: str, what: str) -> Any:
+    """Import ``module_name`` (the current folder first on the path) for ``what`` (e.g.
+    ``"env id 'mygrid:GridWorld-v0'"``); ``RunError`` naming both when it cannot be imported.
+    The caller decides whether the module may run (:mod:`palaestra.runs.folder`)."""
+    _cwd_importable()
+    try:
+        return importlib.import_module(module_name)
+    except ImportError as exc:
+        raise RunError(
+            f"cannot import module {module_name!r} of {what}: {exc}",
+            "run from the folder that holds it, or fix the name",
+        ) from None
+
+
+def locate_module(module_name: str) -> str | None:
+    """Where ``module_name`` would be imported from (the current folder first on the path):
+    its file, ``"built-in"``, ..., or None when it cannot be found. Executes no module code for
+    a top-level name; a dotted name imports its parent packages, so ask that only for a module
+    allowed to run."""
+    _cwd_importable()
+    try:
+        found = importlib.util.find_spec(module_name)
+    except (ImportError, ValueError):
+        return None
+    if found is None:
+        return None
+    return str(found.origin or "namespace package")
+
+
+def module_sha256(module_name: str) -> str | None:
+    """The sha256 of the file ``module_name`` is imported from, or None when it has none (see
+    :func:`locate_module`)."""
+    origin = locate_module(module_name)
+    if origin is None or not os.path.isfile(origin):
+        return None
+    digest = hashlib.sha256()
+    with open(origin, "rb") as file:
+        for block in iter(lambda: file.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
 def is_atari_id(env_id: str) -> bool:
     """Whether ``env_id`` is registered as an ALE game (no ale-py import)."""
     import palaestra
 
-    return palaestra.spec(env_id).entry_point == ATARI_ENTRY_POINT
+    return palaestra.spec(registered_id(env_id)).entry_point == ATARI_ENTRY_POINT
 
 
 def atari_defaults() -> dict[str, Any]:
@@ -112,21 +202,41 @@ def wrapper_module(path: Any) -> tuple[str, str]:
     return module_name, name
 
 
+def wrapper_items(value: Any) -> list[tuple[str, dict[str, Any]]]:
+    """A run's ``env_wrapper`` as ``[(name, kwargs)]``, innermost first: a name, a one-key
+    mapping ``{name: kwargs}`` (RL Zoo's form, e.g. ``{"gymnasium.wrappers.TimeLimit":
+    {"max_episode_steps": 100}}``), or a list of them. Imports nothing.
+
+    >>> wrapper_items(["a:W", {"b:V": {"k": 1}}, {"c:U": None}])
+    [('a:W', {}), ('b:V', {'k': 1}), ('c:U', {})]
+    """
+    out = []
+    for item in value if isinstance(value, list) else [value]:
+        if isinstance(item, dict) and len(item) == 1:
+            ((name, kwargs),) = item.items()
+            if kwargs is None:
+                kwargs = {}
+            if not (isinstance(kwargs, dict) and all(isinstance(k, str) for k in kwargs)):
+                raise RunError(
+                    f"env_wrapper {name!r} takes a mapping of keyword arguments, got {kwargs!r}",
+                    "e.g. {'gymnasium.wrappers.TimeLimit': {'max_episode_steps': 100}}",
+                )
+            out.append((name, dict(kwargs)))
+        else:
+            out.append((item, {}))
+    for name, _ in out:
+        wrapper_module(name)
+    return out
+
+
 def _import_wrapper(path: Any) -> type[Any]:
     """The wrapper class named by ``"module:Class"``: a ``palaestra.Wrapper`` subclass, never
     just any callable (``"os:system"`` would run a shell command on the env's repr)."""
     from palaestra.core import Wrapper
 
-    module_name, name = wrapper_module(path)
-    if "" not in sys.path:  # the console script does not put the current folder on the path
-        sys.path.insert(0, "")
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as exc:
-        raise RunError(
-            f"cannot import module {module_name!r} of env_wrapper {path!r}: {exc}",
-            "run from the folder that holds it, or fix the name",
-        ) from None
+    wrapper_module(path)  # a malformed name fails as itself, before the table is asked
+    module_name, name = wrapper_module(known_names.palaestra_name("env_wrapper", path) or path)
+    module = import_user_module(module_name, f"env_wrapper {path!r}")
     cls = getattr(module, name, None)
     if cls is None:
         raise RunError(f"module {module_name!r} has no class {name!r} (env_wrapper)", WRAPPER_FIX)
@@ -141,18 +251,56 @@ def _import_wrapper(path: Any) -> type[Any]:
 
 def env_wrapper(config: dict[str, Any]) -> Callable[[Any], Any] | None:
     """The run's ``env_wrapper`` setting as one callable (a list applies innermost first), or
-    None when it has none."""
+    None when it has none. ``RunError`` when a wrapper does not take its keyword arguments."""
     value = config.get("env_wrapper")
     if not value:
         return None
-    classes = [_import_wrapper(v) for v in (value if isinstance(value, list) else [value])]
+    classes = []
+    for name, kwargs in wrapper_items(value):
+        cls = _import_wrapper(name)
+        try:  # the env comes first; the kwargs must fit the rest of the signature
+            inspect.signature(cls).bind(None, **kwargs)
+        except TypeError as exc:
+            raise RunError(
+                f"env_wrapper {name!r} does not take {kwargs}: {exc}", "fix its arguments"
+            ) from None
+        except ValueError:  # no signature to check against (a builtin): the call will tell
+            pass
+        classes.append((cls, kwargs))
 
     def wrap(env: Any) -> Any:
-        for cls in classes:
-            env = cls(env)
+        for cls, kwargs in classes:
+            env = cls(env, **kwargs)
         return env
 
     return wrap
+
+
+def choose_policy(settings: dict[str, Any], env_id: str) -> tuple[str, str]:
+    """``(policy, why)`` for a run with no preset, from the observation space of one env of
+    its recipe (env kwargs and wrapper applied): ``MultiInputPolicy`` for a ``Dict`` space,
+    ``CnnPolicy`` for an image ``Box`` (SB3's ``is_image_space``), else ``MlpPolicy``."""
+    import palaestra
+    from palaestra import spaces
+    from palaestra.algos.spaces_util import is_image_space
+
+    try:
+        env = palaestra.make(env_id, **(settings.get("env_kwargs") or {}))
+    except (TypeError, ValueError) as exc:  # an env kwarg the env does not take, or refuses
+        kwargs = settings.get("env_kwargs") or {}
+        raise RunError(
+            f"cannot make {env_id} with env_kwargs {kwargs}: {exc}", "fix env_kwargs"
+        ) from None
+    try:
+        wrap = env_wrapper(settings)
+        space = (wrap(env) if wrap is not None else env).observation_space
+    finally:
+        env.close()
+    if isinstance(space, spaces.Dict):
+        return "MultiInputPolicy", "Dict observations"
+    if is_image_space(space):
+        return "CnnPolicy", f"image observations {space.shape}"
+    return "MlpPolicy", f"{type(space).__name__} observations"
 
 
 def check_pipeline(settings: dict[str, Any], env_id: str) -> None:

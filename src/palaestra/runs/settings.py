@@ -4,6 +4,11 @@ Settings are plain data in the preset format (``policy``, ``n_envs``, ``n_timest
 ``hyperparams``, ``env_kwargs``, ``normalize``, ``env_wrapper``, and for Atari ``atari`` and
 ``frame_stack``; see :mod:`palaestra.runs.recipe`) plus ``seed``; ``config.json`` records them
 exactly as resolved, so a run's ``config.json`` is itself a valid ``--config`` file.
+
+A settings file is data as a run folder is (people pass sweep folders around): its values are
+held to a run folder's limits and the modules it names are imported only when the command
+line allows them (:mod:`palaestra.runs.folder`); YAML is read with ``safe_load``, and a
+``!!python/...`` tag is refused by name.
 """
 
 from __future__ import annotations
@@ -11,14 +16,16 @@ from __future__ import annotations
 import ast
 import inspect
 import json
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from palaestra import presets
+from palaestra.runs import known_names
 from palaestra.runs.errors import RunError
-from palaestra.runs.files import REPLAY_ALGOS
-from palaestra.runs.recipe import atari_defaults, check_pipeline, is_atari_id
+from palaestra.runs.files import REPLAY_ALGOS, note
+from palaestra.runs.recipe import atari_defaults, check_pipeline, choose_policy, is_atari_id
 
 __all__ = [
     "ALGOS",
@@ -64,6 +71,9 @@ _NOT_HYPERPARAMS = {"self", "policy", "env", "_init_setup_model", "verbose", "se
 _NOT_HYPERPARAMS |= {"tensorboard_log"}
 # Keys a --config file may carry that describe the run rather than configure it.
 _RUN_KEYS = {"algo", "env_id", "preset", "device", "palaestra_version", "measured", "evaluation"}
+_RUN_KEYS |= {"module_sha256"}
+# What PyYAML's safe_load reports for a !!python/... tag it refuses to construct.
+_PYTHON_TAG = re.compile(r"tag:yaml\.org,2002:python/([^'\s]*)")
 _TOP_KEYS = (*presets.SETTINGS_KEYS, "seed")
 
 
@@ -120,6 +130,13 @@ def load_config_file(path: str) -> dict[str, Any]:
             where = getattr(exc, "problem_mark", None)
             at = f" at line {where.line + 1}, column {where.column + 1}" if where else ""
             problem = getattr(exc, "problem", None) or type(exc).__name__
+            tag = _PYTHON_TAG.search(str(problem))
+            if tag:  # safe_load builds no Python object; say so rather than "malformed"
+                raise RunError(
+                    f"config file {path!r} uses the YAML tag '!!python/{tag.group(1)}'{at}; "
+                    "palaestra reads settings files as plain data and builds no Python object",
+                    "remove the tag: write the value as plain YAML",
+                ) from None
             raise RunError(f"malformed YAML in {path!r}{at}: {problem}", "fix the file") from None
     if not isinstance(data, dict):
         raise RunError(
@@ -153,6 +170,11 @@ def _split(algo: str, data: dict[str, Any], source: str) -> dict[str, Any]:
                 f"{source}: unknown {algo} setting {key!r}",
                 f"valid keys: {', '.join(_valid_keys(algo))}",
             )
+    kwargs = hyper.get("policy_kwargs")
+    if isinstance(kwargs, dict) and isinstance(kwargs.get("activation_fn"), str):
+        # RL Zoo writes nn.ReLU / th.nn.Tanh; presets name torch's activations "relu", "tanh"
+        name = known_names.palaestra_name("activation_fn", kwargs["activation_fn"])
+        hyper["policy_kwargs"] = {**kwargs, "activation_fn": name or kwargs["activation_fn"]}
     if hyper:
         out["hyperparams"] = hyper
     return out
@@ -195,6 +217,26 @@ def parse_set(algo: str, assignments: list[str]) -> dict[str, Any]:
     return _split(algo, data, "--set")
 
 
+def _load_file(
+    algo: str, env_id: str, path: str, allow_import: Sequence[str]
+) -> tuple[dict[str, Any], str]:
+    """A settings file's settings, held to a run folder's rules: no module it names is
+    imported unless ``allow_import`` holds it (its ``env_id`` must be the command line's, which
+    is the user's own), and its values within a run folder's limits."""
+    from palaestra.runs import folder  # folder imports this module for ALGOS
+
+    source = f"config file {path!r}"
+    data = load_config_file(path)
+    _check_run_keys(algo, env_id, data, source)
+    settings = _split(algo, data, source)
+    try:
+        folder.check_run_config({**settings, "algo": algo}, source, required=())
+    except RunError as exc:
+        raise RunError(exc.what, "fix the file") from None
+    folder.check_imports(settings, source, allow_import, "settings file")
+    return settings, source
+
+
 def resolve_settings(
     algo: str,
     env_id: str,
@@ -202,10 +244,16 @@ def resolve_settings(
     config: str | Path | Mapping[str, Any] | None = None,
     assignments: Sequence[str] = (),
     overrides: Mapping[str, Any] | None = None,
+    allow_import: Sequence[str] = (),
 ) -> tuple[dict[str, Any], str | None, list[str]]:
     """``(settings, preset name used or None, notes for the user)``: the preset (the
     ``default`` one when it exists), then ``config`` (a settings file, or a mapping of the same
-    keys), then ``assignments`` (``"key=value"`` strings), then ``overrides`` (nested settings)."""
+    keys), then ``assignments`` (``"key=value"`` strings), then ``overrides`` (nested settings).
+
+    A settings file is data like a run folder: the modules it names are imported only when
+    ``allow_import`` holds them (a mapping, ``assignments`` and ``overrides`` are the caller's
+    own). With no preset, the policy follows the env's observations unless given
+    (:func:`~palaestra.runs.recipe.choose_policy`)."""
     notes: list[str] = []
     if preset is not None:
         try:
@@ -223,20 +271,28 @@ def resolve_settings(
         )
     else:
         settings, used = presets.base_settings(), None
-        notes.append(f"no preset for {algo} on {env_id}: using the {algo.upper()} defaults")
     settings.pop("measured", None)
     settings = {**presets.base_settings(), **settings}
-    if config is not None:
-        if isinstance(config, Mapping):
-            data, source = dict(config), "settings"
-        else:
-            data, source = load_config_file(str(config)), f"config file {str(config)!r}"
-        _check_run_keys(algo, env_id, data, source)
-        settings = presets.merge(settings, _split(algo, data, source))
+    given: list[dict[str, Any]] = []
+    if isinstance(config, Mapping):
+        given.append(_split(algo, dict(config), "settings"))
+    elif config is not None:
+        given.append(_load_file(algo, env_id, str(config), allow_import)[0])
+    elif allow_import:
+        note(f"--allow-import {', '.join(allow_import)}: no settings file to apply it to")
     if assignments:
-        settings = presets.merge(settings, parse_set(algo, list(assignments)))
+        given.append(parse_set(algo, list(assignments)))
     if overrides:
-        settings = presets.merge(settings, _split(algo, dict(overrides), "overrides"))
+        given.append(_split(algo, dict(overrides), "overrides"))
+    for layer in given:
+        settings = presets.merge(settings, layer)
+    if used is None and not is_atari_id(env_id):
+        defaults = f"no preset for {algo} on {env_id}: using the {algo.upper()} defaults (SB3's)"
+        if any("policy" in layer for layer in given):
+            notes.append(f"{defaults} with the policy given, {settings['policy']}")
+        else:
+            settings["policy"], why = choose_policy(settings, env_id)
+            notes.append(f"{defaults} with {settings['policy']}, chosen for its {why}")
     return settings, used, notes
 
 

@@ -41,12 +41,15 @@ class RunSpec:
     hyperparams: dict[str, Any] = dataclasses.field(default_factory=dict)
     env_kwargs: dict[str, Any] = dataclasses.field(default_factory=dict)
     normalize: bool | dict[str, Any] = False
-    env_wrapper: str | list[str] | None = None
+    env_wrapper: str | dict[str, Any] | list[str | dict[str, Any]] | None = None
     atari: bool | dict[str, Any] | None = None
     frame_stack: int | None = None
     seed: int | None = None
     device: str = "auto"
     preset: str | None = None
+    # sha256 of the files of the user modules the run imports (its env id's, its wrappers'),
+    # recorded so that a later eval can warn when they changed
+    module_sha256: dict[str, str] = dataclasses.field(default_factory=dict)
 
     # -- building --------------------------------------------------------------------------
     @classmethod
@@ -58,13 +61,23 @@ class RunSpec:
         *,
         config: str | Path | Mapping[str, Any] | None = None,
         overrides: Mapping[str, Any] | None = None,
+        allow_import: Sequence[str] = (),
         **top: Any,
     ) -> RunSpec:
         """The preset for ``algo`` on ``env_id`` (its ``default`` one when it exists, else
         the algorithm's defaults), updated by ``config`` (a settings file or mapping), then
         ``overrides`` (nested settings, e.g. ``{"hyperparams": {"gamma": 0.98}}``), then the
-        top-level keywords (``seed=``, ``n_envs=``, ``n_timesteps=``, ``device=``)."""
-        return resolve_spec(algo, env_id, preset, config=config, overrides=overrides, **top)[0]
+        top-level keywords (``seed=``, ``n_envs=``, ``n_timesteps=``, ``device=``).
+        ``allow_import``: the modules a ``config`` file may import."""
+        return resolve_spec(
+            algo,
+            env_id,
+            preset,
+            config=config,
+            overrides=overrides,
+            allow_import=allow_import,
+            **top,
+        )[0]
 
     @classmethod
     def from_config(
@@ -114,6 +127,8 @@ class RunSpec:
         for key in ("atari", "frame_stack", "env_wrapper"):
             if getattr(self, key) is not None:
                 out[key] = getattr(self, key)
+        if self.module_sha256:
+            out["module_sha256"] = dict(self.module_sha256)
         out["seed"] = self.seed
         out["device"] = self.device
         out["palaestra_version"] = __version__
@@ -146,16 +161,20 @@ def resolve_spec(
     config: str | Path | Mapping[str, Any] | None = None,
     assignments: Sequence[str] = (),
     overrides: Mapping[str, Any] | None = None,
+    allow_import: Sequence[str] = (),
     **top: Any,
 ) -> tuple[RunSpec, list[str]]:
     """:meth:`RunSpec.from_preset` with ``assignments`` (``"key=value"`` strings, as ``--set``
-    takes them) and the notes for the user (e.g. that no preset exists); validated."""
-    from palaestra.runs import settings
+    takes them) and the notes for the user (e.g. that no preset exists); validated, and held
+    to a run folder's limits. ``allow_import``: the modules a ``config`` file may import (a
+    settings file runs no code otherwise; :mod:`palaestra.runs.folder`). An env id
+    ``module:Name-v0`` imports ``module`` (the caller's own request, as ``palaestra.make``)."""
+    from palaestra.runs import folder, settings
 
     algo = settings.check_algo(algo)
     _check_env_id(env_id)
     resolved, used, notes = settings.resolve_settings(
-        algo, env_id, preset, config, assignments, overrides
+        algo, env_id, preset, config, assignments, overrides, allow_import
     )
     unknown = sorted(set(top) - {"seed", "n_envs", "n_timesteps", "device"})
     if unknown:
@@ -167,15 +186,28 @@ def resolve_spec(
     device = resolved.pop("device", "auto")
     spec = RunSpec(algo=algo, env_id=env_id, preset=used, device=device, **resolved)
     spec.validate()
+    try:  # what --set, --n-envs... gave, held to the limits a run folder is held to
+        folder.check_run_config(spec.to_config(), "settings", required=())
+    except RunError as exc:
+        raise RunError(exc.what, "check --set, --n-envs, --timesteps and the config file") from None
+    spec.module_sha256 = folder.module_hashes(spec.to_config())
     return spec, notes
 
 
 def _check_env_id(env_id: str) -> None:
-    """``RunError`` for an id no registry holds, with Gymnasium's "did you mean"."""
+    """``RunError`` for an id no registry holds, with Gymnasium's "did you mean"; an id
+    ``module:Name-v0`` imports ``module`` first (the current folder first on the path)."""
     import palaestra
     from palaestra import error
+    from palaestra.runs import recipe
 
+    module = recipe.env_id_module(env_id)
+    if module and not env_id.startswith("gymnasium:"):
+        recipe.import_user_module(module, f"env id {env_id!r}")
     try:
-        palaestra.spec(env_id)
+        palaestra.spec(recipe.registered_id(env_id))
     except (error.UnregisteredEnv, error.DeprecatedEnv) as exc:
         raise RunError(str(exc), "run `palaestra envs` to list the ids") from None
+    except error.Error as exc:  # "No registered env with id: ..." after importing the module
+        where = f" (module {module!r} registers no such id)" if module else ""
+        raise RunError(f"{exc}{where}", "run `palaestra envs` to list the ids") from None

@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.runs.errors import RunError, first_line, one_line
+from palaestra.runs.folder import check_inside
 from palaestra.runs.space import Param, distributions, settings_of
 from palaestra.runs.spec import RunSpec, resolve_spec
 
@@ -232,6 +233,7 @@ def run_sweep(
     ray = connect_ray(address) if backend == "ray" else None  # a bad address: before any file
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
+    check_inside(folder / "trials", folder, "the sweep's trials folder")
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     rdb, url = _storage(storage, folder)
     study_name = f"{base.algo}-{base.env_id}"
