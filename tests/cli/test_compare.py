@@ -289,6 +289,8 @@ def test_compare_statistics_agree_everywhere(
         "Band: 95% confidence interval, percentile bootstrap over seeds"
     )
     assert figure["footnote"].endswith(f"Seeds per variant: a2c {n_seeds}, ppo {n_seeds}.")
+    few = "none with 1 seed; with 2 or 3 seeds, their whole range. Seeds"
+    assert (few in figure["footnote"]) == (n_seeds == 2)
     for text in [figure["title"], figure["ylabel"], figure["footnote"], *figure["legend"]]:
         assert text in drawn  # what summary.json says is what matplotlib drew
     assert drawn.count(figure["ylabel"]) == 2  # both panels: env steps and wall-clock seconds
