@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.cli.common import CLIError
-from palaestra.runs.stats import CONFIDENCE_LEVEL, INTERVAL_METHOD, RESAMPLES, STATISTIC
+from palaestra.runs.stats import CONFIDENCE_LEVEL, method_note
 
 __all__ = ["add_parser", "run"]
 
@@ -175,7 +175,6 @@ def _print_table(rows: list[Any], last: int) -> None:
         seconds = "-" if wall is None else f"{wall:.2f} s"
         print(f"{label:<{width}}  {n:>5}  {value:>16.2f}  {ci:<20}  {rate:>7}  {seconds:>9}")
     print(
-        f"(final return: each seed's mean return over its last {last} episodes; IQM: "
-        f"{STATISTIC}, over seeds; CI: {INTERVAL_METHOD}, {RESAMPLES:,} resamples, none with "
-        "one seed; wall time: training seconds per run, averaged over seeds)"
+        f"(final return: each seed's mean return over its last {last} episodes; "
+        f"{method_note()}; wall time: training seconds per run, averaged over seeds)"
     )
