@@ -14,6 +14,14 @@ IQMs: the interval never contains an impossible return (a t-interval over two Ca
 reached -1,500 for returns in [0, 500]). BCa needs a jackknife that two seeds cannot give and
 returns NaN on degenerate data. The bootstrap is seeded, so the same runs give the same
 interval.
+
+The paper's performance profile (rliable's ``create_performance_profile`` with score
+distributions) is, at each threshold tau, the fraction of runs whose score is above tau, with a
+percentile-bootstrap band over runs at each tau. For one task, a bootstrap resample's count
+above tau is Binomial(n, k / n) (n runs, k of them above tau), so the band is computed exactly
+from binomial quantiles (``scipy.stats.binom``) rather than by resampling (rliable draws 2,000
+resamples): it is the limit of the resampled band, the same every time, inside [0, 1], and it
+contains the fraction itself (a binomial whose mean n * (k / n) = k is an integer has median k).
 """
 
 from __future__ import annotations
@@ -29,12 +37,18 @@ from palaestra.error import dependency_not_installed
 __all__ = [
     "CONFIDENCE_LEVEL",
     "INTERVAL_METHOD",
+    "PROFILE_INTERVAL_METHOD",
+    "PROFILE_STATISTIC",
     "RESAMPLES",
     "STATISTIC",
     "Estimate",
+    "Profile",
     "iqm",
     "iqm_interval",
     "method_note",
+    "performance_profile",
+    "profile_thresholds",
+    "score_distribution",
 ]
 
 STATISTIC = "interquartile mean (25% trimmed mean; the plain mean below 4 seeds)"
@@ -42,6 +56,11 @@ INTERVAL_METHOD = "percentile bootstrap over seeds (scipy.stats.bootstrap)"
 CONFIDENCE_LEVEL = 0.95
 RESAMPLES = 9999  # scipy's default; rliable's 50,000 changes the 2nd decimal at most
 BOOTSTRAP_SEED = 0  # a fixed generator: the same per-seed values give the same interval
+PROFILE_STATISTIC = "fraction of runs (seeds) whose final return is above the threshold"
+PROFILE_INTERVAL_METHOD = (
+    "percentile bootstrap over runs at each threshold, exact (a resample's count above it is "
+    "binomial: scipy.stats.binom quantiles)"
+)
 
 
 class Estimate(NamedTuple):
@@ -139,3 +158,77 @@ def iqm_interval(
         raise ValueError(f"the bootstrap of {values!r} gave no interval ({low}, {high})")
     # Percentiles of resampled IQMs lie in [min, max]; the clip only undoes float rounding.
     return Estimate(value, float(np.clip(low, lo, hi)), float(np.clip(high, lo, hi)))
+
+
+class Profile(NamedTuple):
+    """A performance profile: at each threshold the fraction of runs above it, and its
+    confidence band (``low``, ``high`` None below 2 runs)."""
+
+    thresholds: np.ndarray  # [T]
+    fraction: np.ndarray  # [T] in [0, 1]
+    low: np.ndarray | None  # [T]
+    high: np.ndarray | None  # [T]
+    seeds: int
+
+
+def _thresholds(thresholds: Sequence[float] | np.ndarray) -> np.ndarray:
+    array = np.asarray(thresholds, dtype=np.float64)
+    if array.ndim != 1 or not len(array) or not np.isfinite(array).all():
+        raise ValueError(f"expected a non-empty list of finite thresholds, got {thresholds!r}")
+    return array
+
+
+def score_distribution(
+    values: Sequence[float] | np.ndarray, thresholds: Sequence[float] | np.ndarray
+) -> np.ndarray:
+    """At each threshold tau, the fraction of ``values`` strictly above tau (rliable's
+    ``run_score_deviation``).
+
+    >>> score_distribution([1.0, 2.0, 3.0, 4.0], [0.0, 2.0, 2.5, 4.0]).tolist()
+    [1.0, 0.5, 0.5, 0.0]
+    """
+    array, taus = _values(values), _thresholds(thresholds)
+    return (array[:, None] > taus[None, :]).mean(axis=0)
+
+
+def profile_thresholds(values: Sequence[float] | np.ndarray) -> np.ndarray:
+    """Thresholds at which a profile of ``values`` is exact: every distinct value (where the
+    fraction steps down) and one point 5% of their range below the lowest (every run above it)
+    and above the highest (none), so a step plot shows the whole profile.
+
+    >>> profile_thresholds([40.0, 20.0, 20.0]).tolist()
+    [19.0, 20.0, 40.0, 41.0]
+    """
+    array = _values(values)
+    lo, hi = float(array.min()), float(array.max())
+    margin = 0.05 * ((hi - lo) or max(abs(lo), 1.0))
+    return np.concatenate([[lo - margin], np.unique(array), [hi + margin]])
+
+
+def performance_profile(
+    values: Sequence[float] | np.ndarray,
+    thresholds: Sequence[float] | np.ndarray,
+    level: float = CONFIDENCE_LEVEL,
+) -> Profile:
+    """The score distribution of per-seed ``values`` at ``thresholds`` with its ``level``
+    percentile-bootstrap band over runs, exact (see the module docstring); one value has no
+    band. The band lies in [0, 1] and contains the fraction.
+
+    >>> profile = performance_profile([1.0, 2.0, 3.0, 4.0, 5.0], [1.0, 4.0])
+    >>> profile.fraction.tolist(), profile.low.tolist(), profile.high.tolist()
+    ([0.8, 0.2], [0.4, 0.0], [1.0, 0.6])
+    """
+    if not 0.0 < level < 1.0:
+        raise ValueError(f"confidence level must be in (0, 1), got {level!r}")
+    array, taus = _values(values), _thresholds(thresholds)
+    fraction = score_distribution(array, taus)
+    n = len(array)
+    if n < 2:
+        return Profile(taus, fraction, None, None, n)
+    binom = _scipy_stats().binom
+    tail = (1.0 - level) / 2.0
+    # With k of n runs above tau (fraction k / n), a resample's count above it is
+    # Binomial(n, k / n); ppf is the percentile bootstrap's quantile of it.
+    low = binom.ppf(tail, n, fraction) / n
+    high = binom.ppf(1.0 - tail, n, fraction) / n
+    return Profile(taus, fraction, low, high, n)
