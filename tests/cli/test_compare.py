@@ -72,9 +72,35 @@ def test_compare_table_and_plot(tmp_path: Path, four_runs: list[Path]) -> None:
         "wall time: training seconds per run, averaged over seeds)\n"
     ) in result.out
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    profile_png = tmp_path / "cmp_profile.png"
+    assert profile_png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     summary, curves = tmp_path / "summary.json", tmp_path / "curves.csv"
-    assert result.out.strip().endswith(f"wrote {plot}, {summary}, {curves}")
+    assert result.out.strip().endswith(f"wrote {plot}, {profile_png}, {summary}, {curves}")
     record = json.loads(summary.read_text())
+    assert record["files"] == {"plot": "cmp.png", "curves": "curves.csv",
+                               "profile": "cmp_profile.png"}  # fmt: skip
+    # Performance profiles by hand. Final returns 20, 40 (gamma=0.9) and 100, 110: thresholds
+    # are each of them and 5% of their range (90) beyond both ends. Fraction strictly above
+    # each; band of 2 seeds: 1 of 2 above -> Binomial(2, 1/2) quantiles 0 and 2 -> [0, 1].
+    thresholds = [15.5, 20.0, 40.0, 100.0, 110.0, 114.5]
+    assert record["variants"][0]["profile"] == {
+        "thresholds": thresholds,
+        "fraction": [1.0, 0.5, 0.0, 0.0, 0.0, 0.0],
+        "low": [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        "high": [1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+    }
+    assert record["variants"][1]["profile"] == {
+        "thresholds": thresholds,
+        "fraction": [1.0, 1.0, 1.0, 0.5, 0.0, 0.0],
+        "low": [1.0, 1.0, 1.0, 0.0, 0.0, 0.0],
+        "high": [1.0, 1.0, 1.0, 1.0, 0.0, 0.0],
+    }
+    assert record["profile"]["statistic"] == (
+        "fraction of runs (seeds) whose final return is above the threshold"
+    )
+    assert record["profile"]["interval_method"].startswith(
+        "percentile bootstrap over runs at each threshold, exact"
+    )
     assert record["variants"][0]["per_seed_values"] == [20.0, 40.0]
     assert record["variants"][0]["seeds"] == [1, 2]
     assert record["variants"][0]["episodes_per_seed"] == [3, 3]
@@ -112,6 +138,14 @@ def test_one_seed_has_no_interval(tmp_path: Path, four_runs: list[Path]) -> None
                                           "gamma=0.99 (1 seed, no interval)"]  # fmt: skip
     rows = _curves(tmp_path / "curves.csv")
     assert rows and all(row["low"] == row["high"] == "" for row in rows)
+    # the profile of one seed: 1 above each threshold below its value, no band
+    assert [v["profile"] for v in record["variants"]] == [
+        {"thresholds": [16.0, 20.0, 100.0, 104.0], "fraction": [1.0, 0.0, 0.0, 0.0],
+         "low": None, "high": None},
+        {"thresholds": [16.0, 20.0, 100.0, 104.0], "fraction": [1.0, 1.0, 0.0, 0.0],
+         "low": None, "high": None},
+    ]  # fmt: skip
+    assert record["profile"]["figure"]["legend"] == record["figure"]["legend"]
 
 
 def test_read_episodes_fallbacks(tmp_path: Path) -> None:
@@ -265,6 +299,40 @@ def test_compare_statistics_agree_everywhere(
     for text in [figure["title"], figure["ylabel"], figure["footnote"], *figure["legend"]]:
         assert text in drawn  # what summary.json says is what matplotlib drew
     assert drawn.count(figure["ylabel"]) == 2  # both panels: env steps and wall-clock seconds
+
+    # The performance profile: from the per-seed values checked above, by hand.
+    assert (plot.parent / "cmp_profile.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert summary["files"]["profile"] == "cmp_profile.png"
+    pooled = {v for variant in summary["variants"] for v in variant["per_seed_values"]}
+    for variant in summary["variants"]:
+        finals, profile = variant["per_seed_values"], variant["profile"]
+        taus = profile["thresholds"]
+        assert taus == sorted(taus) and set(taus[1:-1]) == pooled  # a step at every value
+        assert profile["fraction"] == [sum(f > t for f in finals) / n_seeds for t in taus]
+        assert profile["fraction"][0] == 1.0 and profile["fraction"][-1] == 0.0
+        for fraction, low, high in zip(profile["fraction"], profile["low"], profile["high"]):
+            assert 0.0 <= low <= fraction <= high <= 1.0
+            assert low * n_seeds == int(low * n_seeds)  # a resample's fraction: k / n
+            if fraction in (0.0, 1.0):  # every resample alike
+                assert low == high == fraction
+            elif n_seeds == 2:  # 1 of 2 above: a resample has 0, 1 or 2 above
+                assert (low, high) == (0.0, 1.0)
+    words = summary["profile"]["figure"]
+    assert words["title"] == ("CartPole-v1: performance profile of final returns, 95% bootstrap CI")
+    assert words["xlabel"] == f"final return τ (mean of last {window} episodes)"
+    assert words["ylabel"] == "fraction of runs with final return > τ"
+    assert words["legend"] == figure["legend"]
+    assert words["footnote"] == (
+        "Line: fraction of runs (seeds) whose final return is above the threshold τ; a "
+        "run's final return is each seed's mean return over its last "
+        f"{window} episodes of training.\nBand: 95% confidence interval, percentile bootstrap "
+        "over runs at each threshold, exact (a resample's count above it is binomial: "
+        "scipy.stats.binom quantiles); none with 1 seed. "
+        f"Seeds per variant: a2c {n_seeds}, ppo {n_seeds}."
+    )
+    for text in [words["title"], words["xlabel"], words["ylabel"], words["footnote"],
+                 *words["legend"]]:  # fmt: skip
+        assert text in drawn
 
 
 @pytest.mark.parametrize(

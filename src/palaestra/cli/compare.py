@@ -1,9 +1,10 @@
 """``palaestra compare``: runs that differ only by seed form one variant; a table of each
 variant's final return (interquartile mean over seeds, 95% percentile-bootstrap interval) and
 training wall time, and the learning curves of all variants (the same statistic at every point)
-on one plot against env steps and on a second against wall-clock seconds, with
-``summary.json`` and ``curves.csv`` beside the plot (:mod:`palaestra.runs.compare` computes
-them).
+on one plot against env steps and on a second against wall-clock seconds; each variant's
+performance profile (the fraction of its seeds whose final return is above each threshold) in
+``<plot>_profile.png``; ``summary.json`` and ``curves.csv`` beside the plot
+(:mod:`palaestra.runs.compare` computes them).
 
 ``palaestra compare algos --env CartPole-v1 --algos a2c ppo dqn --seeds 0 1 2 3 4`` trains
 each algorithm's preset on each seed first (see :mod:`palaestra.cli.variants`), locally or on
@@ -30,7 +31,9 @@ def add_parser(sub: Any) -> None:
         "final return as the interquartile mean (IQM) over seeds with a 95% percentile-bootstrap "
         "confidence interval (Agarwal et al. 2021; no interval with one seed) and its success "
         "rate, and plot every variant's learning curve (the same IQM and interval at each "
-        "point); summary.json and curves.csv beside the plot record the numbers. "
+        "point), and each variant's performance profile (the fraction of its seeds whose final "
+        "return is above each threshold, with a bootstrap band) in PLOT_profile.png; "
+        "summary.json and curves.csv beside the plot record the numbers. "
         "Settings files among the arguments are variants trained first, one run per seed: "
         "palaestra compare preset shaped.yaml --algo dqn --env MountainCar-v0 --seeds 0 1 2 "
         "(shaped.yaml: env_wrapper: shaping:BetterRewardShaping). 'algos' compares "
@@ -69,8 +72,8 @@ def add_parser(sub: Any) -> None:
         "--out",
         default="compare.png",
         metavar="PLOT.png",
-        help="where to write the plot (default: compare.png); summary.json and curves.csv go "
-        "beside it",
+        help="where to write the plot (default: compare.png); the performance profile "
+        "(PLOT_profile.png), summary.json and curves.csv go beside it",
     )
     p.add_argument(
         "--last",
@@ -106,11 +109,12 @@ def run(args: argparse.Namespace) -> int:
         SUMMARY_FILE,
         default_labels,
         group_runs,
+        profiles,
         summarize,
         write_curves,
         write_summary,
     )
-    from palaestra.runs.curves import plot_compare, variant_band
+    from palaestra.runs.curves import plot_compare, plot_profile, variant_band
     from palaestra.runs.recipe import atari_kwargs
 
     if args.last < 1:
@@ -154,12 +158,22 @@ def run(args: argparse.Namespace) -> int:
     envs = sorted({str(v.config.get("env_id")) for v in variants if v.config})
     # Against wall-clock time only when every variant's runs logged their times.
     timed = time_bands if len(time_bands) == len(bands) else None
-    figure = plot_compare(bands, plot, " / ".join(envs) or "learning curves", timed)
+    title = " / ".join(envs) or "learning curves"
+    figure = plot_compare(bands, plot, title, timed)
     summary, curves = plot.with_name(SUMMARY_FILE), plot.with_name(CURVES_FILE)
     write_curves(curves, {"env_steps": bands, **({"wall_seconds": timed} if timed else {})})
     files = {"plot": plot.name, "curves": curves.name}
-    write_summary(summary, rows, figure, files)
-    print(f"wrote {plot}, {summary}, {curves}")
+    row_profiles = profiles(rows)
+    drawn = [(row.label, p) for row, p in zip(rows, row_profiles) if p is not None]
+    profile_figure, written = None, [plot]
+    if drawn:
+        profile_png = plot.with_name(f"{plot.stem}_profile{plot.suffix}")
+        fewest = min(n for row in rows for n in row.episodes_per_run)
+        profile_figure = plot_profile(drawn, profile_png, title, last, fewest)
+        files["profile"] = profile_png.name
+        written.append(profile_png)
+    write_summary(summary, rows, figure, files, row_profiles, profile_figure)
+    print(f"wrote {', '.join(str(p) for p in [*written, summary, curves])}")
     return 1 if failed else 0
 
 

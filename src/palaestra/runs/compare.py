@@ -1,7 +1,9 @@
 """Runs compared: runs that differ only by seed form one variant; each variant's final return
 as the interquartile mean over seeds with a 95% percentile-bootstrap interval
 (:mod:`palaestra.runs.stats`), its success rate (goal envs) and training wall time; and the
-record of a comparison, ``summary.json`` and ``curves.csv``, beside its plot.
+record of a comparison, ``summary.json`` and ``curves.csv``, beside its plot; and each
+variant's performance profile (Agarwal et al. 2021): the fraction of its seeds whose final
+return is above each threshold, with a bootstrap band.
 
 A seed's final return is its mean return over its last ``last`` episodes (all of them when it
 has fewer): the same rolling mean the curves plot (:func:`palaestra.runs.curves.variant_band`),
@@ -25,9 +27,14 @@ from palaestra.runs.stats import (
     BOOTSTRAP_SEED,
     CONFIDENCE_LEVEL,
     INTERVAL_METHOD,
+    PROFILE_INTERVAL_METHOD,
+    PROFILE_STATISTIC,
     RESAMPLES,
     STATISTIC,
+    Profile,
     iqm_interval,
+    performance_profile,
+    profile_thresholds,
 )
 from palaestra.utils.atomic_write import atomic_write
 
@@ -38,6 +45,7 @@ __all__ = [
     "Variant",
     "default_labels",
     "group_runs",
+    "profiles",
     "summarize",
     "write_curves",
     "write_summary",
@@ -192,18 +200,49 @@ def summarize(variants: list[Variant], labels: list[str], last: int = 100) -> li
     return rows
 
 
+def profiles(rows: list[Row]) -> list[Profile | None]:
+    """Each row's performance profile of its final returns, all at the same thresholds (every
+    final return of every variant, and one point beyond each end); None for a row without
+    runs."""
+    finals = [value for row in rows for value in row.finals]
+    if not finals:
+        return [None for _ in rows]
+    thresholds = profile_thresholds(finals)
+    return [performance_profile(row.finals, thresholds) if row.finals else None for row in rows]
+
+
+def _profile_record(profile: Profile | None) -> dict[str, Any] | None:
+    if profile is None:
+        return None
+    low, high = profile.low, profile.high
+    return {
+        "thresholds": profile.thresholds.tolist(),
+        "fraction": profile.fraction.tolist(),
+        "low": None if low is None else low.tolist(),
+        "high": None if high is None else high.tolist(),
+    }
+
+
 def _number(value: float | None) -> float | None:
     return None if value is None or not np.isfinite(value) else float(value)
 
 
 def write_summary(
-    path: Path, rows: list[Row], figure: dict[str, Any], files: dict[str, str]
+    path: Path,
+    rows: list[Row],
+    figure: dict[str, Any],
+    files: dict[str, str],
+    row_profiles: list[Profile | None] | None = None,
+    profile_figure: dict[str, Any] | None = None,
 ) -> None:
-    """``summary.json``: what was computed, how, and from which runs, per variant."""
+    """``summary.json``: what was computed, how, and from which runs, per variant; with
+    ``row_profiles`` (one per row, :func:`profiles`), each variant's performance profile and
+    how it was computed."""
+    row_profiles = row_profiles or [None for _ in rows]
     last = rows[0].window if rows else None
     fewest = min((n for r in rows for n in r.episodes_per_run), default=last or 0)
     variants = []
-    for row in rows:
+    for row, profile in zip(rows, row_profiles):
         variants.append(
             {
                 "label": row.label,
@@ -216,8 +255,18 @@ def write_summary(
                 "interval": None if row.low is None else [row.low, row.high],
                 "success_percent": row.success,
                 "wall_time_s": row.wall_time_s,
+                "profile": _profile_record(profile),
             }
         )
+    profile_record = None
+    if any(p is not None for p in row_profiles):
+        profile_record = {
+            "statistic": PROFILE_STATISTIC,
+            "interval_method": PROFILE_INTERVAL_METHOD,
+            "confidence_level": CONFIDENCE_LEVEL,
+            "no_interval_below_seeds": 2,
+            "figure": profile_figure,
+        }
     write_json(
         path,
         {
@@ -231,6 +280,7 @@ def write_summary(
             "no_interval_below_seeds": 2,
             "files": files,
             "figure": figure,
+            "profile": profile_record,
             "variants": variants,
         },
     )

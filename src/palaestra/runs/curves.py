@@ -34,9 +34,12 @@ from palaestra.runs.files import EPISODES_FILE
 from palaestra.runs.stats import (
     CONFIDENCE_LEVEL,
     INTERVAL_METHOD,
+    PROFILE_INTERVAL_METHOD,
+    PROFILE_STATISTIC,
     RESAMPLES,
     STATISTIC,
     Estimate,
+    Profile,
     iqm_interval,
 )
 from palaestra.utils.atomic_write import atomic_write, complete_text
@@ -50,6 +53,8 @@ __all__ = [
     "learning_curve_label",
     "plot_compare",
     "plot_learning_curve",
+    "plot_profile",
+    "profile_text",
     "read_episodes",
     "rolling_mean",
     "save_figure",
@@ -308,7 +313,15 @@ def smoothing_text(window: int, min_episodes: int, when: str = "finished by then
 
 def legend_label(band: Band) -> str:
     """``"ppo (5 seeds)"``; ``"ppo (1 seed, no interval)"``."""
-    return f"{band.label} ({seeds_text(band.seeds)}{', no interval' if band.low is None else ''})"
+    return _legend(band.label, band.seeds, band.low is not None)
+
+
+def _legend(label: str, seeds: int, interval: bool) -> str:
+    return f"{label} ({seeds_text(seeds)}{'' if interval else ', no interval'})"
+
+
+def _seeds_per_variant(pairs: list[tuple[str, int]]) -> str:
+    return "Seeds per variant: " + ", ".join(f"{label} {n}" for label, n in pairs) + "."
 
 
 def figure_text(bands: list[Band], title: str) -> dict[str, Any]:
@@ -330,9 +343,8 @@ def figure_text(bands: list[Band], title: str) -> dict[str, Any]:
         "none with 1 seed"
         # P(a resample of n seeds is all the lowest) = n^-n >= 1/27 > 2.5% for n <= 3
         + ("; with 2 or 3 seeds, their whole range" if any(1 < b.seeds < 4 for b in bands) else "")
-        + ". Seeds per variant: "
-        + ", ".join(f"{b.label} {b.seeds}" for b in bands)
-        + "."
+        + ". "
+        + _seeds_per_variant([(b.label, b.seeds) for b in bands])
     )
     return {
         "title": f"{title}: IQM over seeds, {level} bootstrap CI",
@@ -362,7 +374,64 @@ def plot_compare(
         ax.set(xlabel=xlabel, ylabel=text["ylabel"])
         ax.legend(loc="best")
     fig.suptitle(text["title"])
-    fig.text(0.01, 0.01, text["footnote"], fontsize=8, va="bottom", ha="left", wrap=True)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    _footnote(fig, text["footnote"])
+    save_figure(fig, path)
+    return text
+
+
+def _footnote(fig: Any, text: str) -> None:
+    """``text`` in small print along the bottom of ``fig``, wrapped, with room kept for it
+    below the axes (the lines it wraps to estimated from the figure's width)."""
+    fig.text(0.01, 0.01, text, fontsize=8, va="bottom", ha="left", wrap=True)
+    width_in, height_in = fig.get_size_inches()
+    per_line = int(width_in * 16)  # 8-point characters per inch of width (~17.5), rounded down
+    lines = sum(-(-max(len(p), 1) // per_line) for p in text.split("\n"))
+    bottom = (0.15 + lines * 8 * 1.3 / 72) / height_in  # inches of text over the height
+    fig.tight_layout(rect=(0, min(bottom, 0.5), 1, 1))
+
+
+def profile_text(
+    profiles: list[tuple[str, Profile]], title: str, window: int, min_episodes: int
+) -> dict[str, Any]:
+    """The words of the performance-profile figure: what the line and the band are, over
+    how many seeds, and what a run's final return is. ``plot_profile`` draws exactly these
+    (and returns them for ``summary.json``)."""
+    level = f"{CONFIDENCE_LEVEL:.0%}"
+    footnote = (
+        f"Line: {PROFILE_STATISTIC} τ; a run's final return is "
+        f"{smoothing_text(window, min_episodes, 'of training')}.\n"
+        f"Band: {level} confidence interval, {PROFILE_INTERVAL_METHOD}; none with 1 seed. "
+        + _seeds_per_variant([(label, p.seeds) for label, p in profiles])
+    )
+    return {
+        "title": f"{title}: performance profile of final returns, {level} bootstrap CI",
+        "xlabel": f"final return τ (mean of last {window} episodes)",
+        "ylabel": "fraction of runs with final return > τ",
+        "legend": [_legend(label, p.seeds, p.low is not None) for label, p in profiles],
+        "footnote": footnote,
+    }
+
+
+def plot_profile(
+    profiles: list[tuple[str, Profile]], path: Path, title: str, window: int, min_episodes: int
+) -> dict[str, Any]:
+    """Each variant's performance profile (Agarwal et al. 2021): the fraction of its runs
+    whose final return is above each threshold, a step at every run's value, with its
+    confidence band. Returns the figure's words (:func:`profile_text`)."""
+    plt = _pyplot()
+    text = profile_text(profiles, title, window, min_episodes)
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for (_, profile), legend in zip(profiles, text["legend"]):
+        # fraction above tau drops at each run's value: constant from one threshold to the next
+        (line,) = ax.step(profile.thresholds, profile.fraction, where="post", lw=2, label=legend)
+        if profile.low is not None and profile.high is not None:
+            ax.fill_between(profile.thresholds, profile.low, profile.high, step="post",
+                            color=line.get_color(), alpha=0.2)  # fmt: skip
+    ax.set(xlabel=text["xlabel"], ylabel=text["ylabel"], ylim=(-0.03, 1.03))
+    ax.set_yticks([0.0, 0.25, 0.5, 0.75, 1.0])
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best")
+    fig.suptitle(text["title"])
+    _footnote(fig, text["footnote"])
     save_figure(fig, path)
     return text
