@@ -16,10 +16,12 @@ preset) on 10 seeds: 30 runs, described as :class:`palaestra.runs.RunSpec` and t
 (``--backend ray``) or a cluster (``--address``), with the same results either way. The shaping
 wrappers sit *outside* the ``Monitor`` that ``make_vec_env`` adds, so the learning curves show
 the true return (-episode length) for all variants. Each trained agent plays 100 deterministic
-episodes (Monitor returns: the true reward). Printed: per variant the mean final return with
-its 95% confidence interval over seeds (Student t), the success rate (episodes that reach the
-flag) and the training time; plotted: the learning curves of all variants, mean over seeds
-with a 95% band, in ``learning_curves.png``.
+episodes (Monitor returns: the true reward). Printed: per variant the interquartile mean (IQM)
+over seeds of each seed's mean evaluation return, with its 95% percentile-bootstrap confidence
+interval (:mod:`palaestra.runs.stats`, as ``palaestra compare``: Agarwal et al. 2021), the
+success rate (episodes that reach the flag) and the training time; plotted: the learning
+curves of all variants, the same IQM and interval over seeds at every point, in
+``learning_curves.png``.
 
 Run::
 
@@ -42,7 +44,7 @@ from palaestra.runs import RunSpec, evaluate_run
 from palaestra.runs.compare import group_runs, summarize
 from palaestra.runs.curves import plot_compare, variant_band
 from palaestra.runs.grid import GridRun, run_grid
-from palaestra.runs.stats import confidence_interval
+from palaestra.runs.stats import CONFIDENCE_LEVEL, iqm_interval, method_note
 
 ENV_ID = "MountainCar-v0"
 
@@ -138,22 +140,28 @@ def main(argv: list[str] | None = None) -> None:
         score = f"return {result.mean_return:7.1f}, success {result.success_rate:4.0%}"
         print(f"  {run.label:9s} seed {run.spec.seed}: {score}, {outcome.seconds:.1f} s")
 
-    head = f"{'variant':9s} {'mean return [95% CI]':>26s} {'success':>8s} {'train s':>8s}"
-    print(f"\n{head}  per-seed returns ({len(args.seeds)} seeds, {episodes} episodes each)")
+    ci_head = f"IQM return [{CONFIDENCE_LEVEL:.0%} CI]"
+    head = f"{'variant':9s} {'seeds':>5s} {ci_head:>26s} {'success':>8s} {'train s':>8s}"
+    print(f"\n{head}  per-seed returns ({episodes} episodes each)")
     for variant, results in played.items():
+        if not results:  # every seed failed
+            print(f"{variant:9s} {0:5d} {'n/a':>26s}")
+            continue
         means = [r.mean_return for r, _ in results]
-        mean, low, high = confidence_interval(means)
+        value, low, high = iqm_interval(means)
         success = np.mean([r.success_rate for r, _ in results])
         seconds = np.mean([t for _, t in results])
-        per_seed = " ".join(f"{m:.0f}" for m in means)
-        ci = f"{mean:7.1f} [{low:7.1f}, {high:7.1f}]"
-        print(f"{variant:9s} {ci:>26s} {success:8.0%} {seconds:8.1f}  {per_seed}")
+        per_seed = " ".join(f"{m:.1f}" for m in means)
+        interval = "n/a (one seed)" if low is None else f"[{low:7.1f}, {high:7.1f}]"
+        ci = f"{value:7.1f} {interval}"
+        print(f"{variant:9s} {len(means):5d} {ci:>26s} {success:8.0%} {seconds:8.1f}  {per_seed}")
+    print(f"(return: each seed's mean over its {episodes} evaluation episodes; {method_note()})")
 
     rows = summarize(group_runs([o.run.run_dir for o in finished]), args.variants)
     bands = [band for row in rows if (band := variant_band(row.label, row.episodes))]
     png = args.out / "learning_curves.png"
-    title = f"DQN on {ENV_ID}: true return while training (mean, 95% band over seeds)"
-    plot_compare(bands, png, title)
+    # plot_compare adds what the line and band are, the seeds per variant and the window.
+    plot_compare(bands, png, f"DQN on {ENV_ID}: true return while training")
     print(f"\nwrote {png}")
 
 

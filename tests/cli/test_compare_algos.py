@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -89,6 +90,41 @@ def test_compare_algos_trains_each_preset_then_reuses(
     assert "ppo seed 1: reusing" in again.out and "training ->" not in again.out
 
 
+def test_compare_trains_tiny_runs_and_records_what_it_shows(
+    cli: Callable[..., Result], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """End to end: two seeds of A2C trained for 200 steps, then summary.json, curves.csv and
+    the printed table agree: the per-seed values are the runs' own episodes, the interval lies
+    inside them, the curves' last points are the table's figure."""
+    monkeypatch.chdir(tmp_path)
+    r = cli("compare", "algos", "--env", "CartPole-v1", "--algos", "a2c", "--seeds", 0, 1,
+            "--timesteps", 200, "--out", "out/cmp.png")  # fmt: skip
+    assert r.code == 0, r.err
+    summary = json.loads(Path("out/summary.json").read_text())
+    (variant,) = summary["variants"]
+    runs = [Path("runs/compare-algos-CartPole-v1/a2c/seed0"), Path(str(variant["runs"][1]))]
+    assert variant["runs"] == [str(run) for run in runs] and variant["seeds"] == [0, 1]
+    for run, value in zip(runs, variant["per_seed_values"]):
+        with open(run / "episodes.csv", newline="") as f:
+            returns = [float(row["return"]) for row in csv.DictReader(f)]
+        assert value == pytest.approx(np.mean(returns[-100:]), abs=1e-9)
+    finals = variant["per_seed_values"]
+    assert variant["interval"] == [min(finals), max(finals)]  # 2 seeds: [min, max]
+    assert variant["value"] == pytest.approx(np.mean(finals), abs=1e-9)  # 2 seeds: the mean
+    with open("out/curves.csv", newline="") as f:
+        points = list(csv.DictReader(f))
+    for axis in ("env_steps", "wall_seconds"):
+        last = [p for p in points if p["axis"] == axis][-1]
+        assert float(last["iqm"]) == variant["value"]
+        assert [float(last["low"]), float(last["high"])] == variant["interval"]
+    table = re.search(r"^a2c +2 +(\S+) +\[(\S+), (\S+)\]", r.out, re.MULTILINE)
+    assert table is not None, r.out
+    assert table.groups() == tuple(f"{v:.2f}" for v in (variant["value"], *variant["interval"]))
+    assert summary["figure"]["legend"] == ["a2c (2 seeds)"]
+    assert "last 100 episodes" in summary["figure"]["ylabel"]
+    assert _png_width(tmp_path / "out" / "cmp.png") == 1600
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
@@ -122,19 +158,36 @@ def test_compare_algos_errors(
 
 
 def test_band_against_wall_clock_time() -> None:
-    """Each seed's rolling mean on a common grid of seconds; no band when a run has no times."""
+    """Each seed's rolling mean as of its last episode finished by each grid point (seconds
+    here), from the first point every seed has a value to the end of the longest run; IQM
+    over seeds with its bootstrap interval; no band when a run has no times."""
     a = Episodes(np.array([10, 20]), np.array([1.0, 3.0]), np.array([10, 10]), None,
                  np.array([1.0, 2.0]))  # fmt: skip
     b = Episodes(np.array([10, 20]), np.array([3.0, 5.0]), np.array([10, 10]), None,
                  np.array([1.0, 3.0]))  # fmt: skip
     band = variant_band("x", [a, b], points=3, x="times")
-    assert band is not None
-    np.testing.assert_allclose(band.steps, [1.0, 1.5, 2.0])  # the seconds both runs cover
-    # a: rolling mean (window 1) 1 -> 3 over 1..2 s; b: 3 -> 5 over 1..3 s
-    np.testing.assert_allclose(band.mean, [2.0, (2.0 + 3.5) / 2, (3.0 + 4.0) / 2])
+    assert band is not None and (band.seeds, band.window, band.min_episodes) == (2, 100, 2)
+    np.testing.assert_array_equal(band.steps, [1.0, 2.0, 3.0])  # to the end of the longest
+    # rolling means (window 100: all so far): a 1 -> 2 at 1 s, 2 s; b 3 -> 4 at 1 s, 3 s.
+    # At 1 s: a 1, b 3; at 2 s: a 2, b 3; at 3 s: a 2 (its last), b 4. Two seeds: IQM = mean,
+    # 95% percentile bootstrap = [min, max] (both minima resampled: probability 1/4).
+    np.testing.assert_array_equal(band.iqm, [2.0, 2.5, 3.0])
+    np.testing.assert_array_equal(band.low, [1.0, 2.0, 2.0])
+    np.testing.assert_array_equal(band.high, [3.0, 3.0, 4.0])
+    # window 1: the last return; at 2 s both seeds have 3.0: the interval is [3, 3], not NaN
+    one = variant_band("x", [a, b], points=3, x="times", window=1)
+    assert one is not None
+    np.testing.assert_array_equal(one.iqm, [2.0, 3.0, 4.0])
+    np.testing.assert_array_equal(one.low, [1.0, 3.0, 3.0])
+    np.testing.assert_array_equal(one.high, [3.0, 3.0, 5.0])
+    alone = variant_band("x", [a], points=2)
+    assert alone is not None and alone.low is None and alone.high is None
+    np.testing.assert_array_equal(alone.iqm, [1.0, 2.0])
     untimed = a._replace(times=None)
     assert variant_band("x", [untimed, b], x="times") is None
     assert variant_band("x", [untimed, b]) is not None  # against steps it still draws
+    with pytest.raises(ValueError, match="smoothing window must be at least 1 episode, got 0"):
+        variant_band("x", [a, b], window=0)
 
 
 def test_episode_log_keeps_the_columns_of_a_resumed_old_file(tmp_path: Path) -> None:

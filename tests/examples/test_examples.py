@@ -56,10 +56,27 @@ def test_reward_shaping(tmp_path: Path) -> None:
 
     out = run_example("reward_shaping.py", "--out", tmp_path)
     for variant in ("baseline", "naive", "progress"):
-        assert len(re.findall(rf"^  {variant} +seed \d: return +{NUMBER}, success", out, re.M)) == 2
-        row = rf"^{variant} +{NUMBER} \[ *{NUMBER}, *{NUMBER}\] +\d+% +{NUMBER}  "
-        assert re.search(row, out, re.M), out
-    assert "mean return [95% CI]" in out
+        played = re.findall(rf"^  {variant} +seed \d: return +({NUMBER}), success", out, re.M)
+        assert len(played) == 2, out
+        row = (
+            rf"^{variant} +2 +({NUMBER}) \[ *({NUMBER}), *({NUMBER})\] +\d+% +{NUMBER}  "
+            rf"({NUMBER}) ({NUMBER})$"
+        )
+        match = re.search(row, out, re.M)
+        assert match, out
+        value, low, high, *per_seed = match.groups()
+        assert per_seed == played
+        # Two seeds: the IQM is their mean and the 95% percentile bootstrap their [min, max]
+        # (the same floats, printed alike), never the t-interval's impossible returns.
+        seeds = sorted(float(v) for v in played)
+        assert [float(low), float(high)] == seeds
+        assert float(value) == pytest.approx(sum(seeds) / 2, abs=0.051)
+    assert re.search(r"^variant +seeds +IQM return \[95% CI\] +success +train s  ", out, re.M)
+    assert (
+        "(return: each seed's mean over its 5 evaluation episodes; IQM: interquartile mean "
+        "(25% trimmed mean; the plain mean below 4 seeds), over seeds; CI: percentile "
+        "bootstrap over seeds (scipy.stats.bootstrap), 9,999 resamples, none with one seed)\n"
+    ) in out
     with Image.open(tmp_path / "learning_curves.png") as png:
         assert png.format == "PNG" and png.size[0] > 300
 
