@@ -182,6 +182,12 @@ def cli_compare_and_sweep(cwd: Path) -> None:
         "--out", str(cwd / "cmp" / "compare.png"),
     )  # fmt: skip
     assert (cwd / "cmp" / "compare.png").stat().st_size > 1000, out
+    summary = json.loads((cwd / "cmp" / "summary.json").read_text())
+    for variant in summary["variants"]:
+        low, high = variant["interval"]
+        values = variant["per_seed_values"]
+        assert min(values) <= low <= high <= max(values), variant
+    assert (cwd / "cmp" / "curves.csv").is_file()
     (cwd / "space.yaml").write_text("learning_rate: {low: 1.0e-4, high: 1.0e-3, log: true}\n")
     out = palaestra(
         cwd, "sweep", str(cwd / "space.yaml"), "--algo", "ppo", "--env", "CartPole-v1",
@@ -189,6 +195,11 @@ def cli_compare_and_sweep(cwd: Path) -> None:
     )  # fmt: skip
     for name in ("study.db", "trials.csv", "best.yaml"):
         assert (cwd / "sweep" / name).is_file(), f"{name}\n{out}"
+    palaestra(
+        cwd, "train", "ppo", "CartPole-v1", "--config", str(cwd / "sweep" / "best.yaml"),
+        "--timesteps", "512", "--out", str(cwd / "from-best"), "--progress", "none",
+        "--eval-episodes", "0",
+    )  # fmt: skip
 
 
 # -- the command line on the user's own env module ------------------------------------------------
@@ -244,6 +255,19 @@ def cli_on_a_user_env_module(cwd: Path) -> None:
     out = palaestra(user, "eval", str(run), "--episodes", "2", "--allow-import", "mygrid")
     assert "mean return" in out, out
     palaestra(user, "record", str(run), "--out", str(user / "grid.gif"), "--allow-import", "mygrid")
+    (user / "shaping.py").write_text(
+        "import palaestra as gym\n\n"
+        "class Shaped(gym.RewardWrapper):\n"
+        "    def reward(self, reward):\n"
+        "        return 2 * reward\n",
+        encoding="utf-8",
+    )
+    (user / "shaped.yaml").write_text("env_wrapper: shaping:Shaped\n", encoding="utf-8")
+    train = ["train", "ppo", "CartPole-v1", "--config", "shaped.yaml", "--timesteps", "256",
+             "--progress", "none", "--eval-episodes", "0"]  # fmt: skip
+    refused = palaestra(user, *train, "--out", "runs/shaped", ok=False)
+    assert "--allow-import shaping" in refused and not (user / "runs" / "shaped").exists(), refused
+    palaestra(user, *train, "--out", "runs/shaped", "--allow-import", "shaping")
     elsewhere = cwd / "elsewhere"
     elsewhere.mkdir()
     missing = palaestra(elsewhere, "eval", str(run), "--allow-import", "mygrid", ok=False)
