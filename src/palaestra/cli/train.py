@@ -189,12 +189,8 @@ def run(args: argparse.Namespace) -> int:
             device=args.device,
         )
         run_dir = Path(args.out) if args.out else _default_out(spec.algo, spec.env_id)
-        if (run_dir / "config.json").exists():
-            raise CLIError(
-                f"{run_dir} already holds a run", f"choose another --out, or --resume {run_dir}"
-            )
         progress_mode = _check_flags(args)
-        run_ = open_run(spec, run_dir)
+        run_ = open_run(spec, run_dir)  # a folder in use or holding a run: its error line
         run_.notes[:0] = notes
     for note in run_.notes:  # after every check: bad input gets its error line only
         eprint(f"note: {note}")
