@@ -123,6 +123,7 @@ def _plots(study: Any, folder: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     from palaestra.runs.curves import save_figure
 
@@ -154,6 +155,7 @@ def _plots(study: Any, folder: Path) -> None:
     if others:
         summary += f", {others} failed or interrupted (not drawn)"
     ax.set_xlabel("trial")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # trials are numbered
     ax.set_ylabel("return")
     ax.set_title(f"{study.study_name}: {summary}", fontsize=10)
     ax.legend()
