@@ -49,7 +49,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument(
         "--address",
         metavar="ADDR",
-        help="Ray cluster with --backend ray: auto or ray://HOST:10001 (default: a local Ray)",
+        help="Ray cluster with --backend ray: auto (the cluster this machine joined with `ray "
+        "start`) or HEAD:6379; with token authentication export RAY_AUTH_MODE=token first "
+        "(default: a local Ray)",
     )
     p.add_argument(
         "--storage",

@@ -7,7 +7,7 @@ folder). :func:`run_grid` trains each one that has not finished yet and reports 
 - ``backend="local"``: in this process, one after another.
 - ``backend="ray"``: each run is one Ray task (``num_cpus=1``) that trains into its run
   folder; ``address=None`` starts a local Ray in this process using this machine's cores,
-  ``"auto"`` or ``"ray://host:10001"`` joins a cluster (whose nodes must see the same
+  ``"auto"`` or ``"head:6379"`` joins a cluster (whose nodes must see the same
   filesystem path for the run folders, or the folders stay on the node that trained them).
 
 The same spec trains the same bits either way: a run's randomness comes from its seed only
@@ -182,12 +182,28 @@ def ray_session(address: str | None, num_cpus: int | None = None) -> Iterator[An
     if not started:
         yield ray
         return
-    installed = {}
-    for signum, handler in before.items():
-        if handler in (signal.SIG_DFL, None):
-            installed[signum] = signal.signal(signum, _exit_on_signal)
+    received: list[int] = []
+
+    def exit_on_signal(signum: int, frame: Any) -> None:
+        received.append(signum)
+        name = signal.Signals(signum).name
+        print(
+            f"\npalaestra: {name} received: stopping the runs and the local Ray (finished runs "
+            "are kept; the same command trains the rest)",
+            file=sys.stderr,
+            flush=True,
+        )
+        raise SystemExit(128 + signum)
+
+    installed = [s for s, handler in before.items() if handler in (signal.SIG_DFL, None)]
+    for signum in installed:
+        signal.signal(signum, exit_on_signal)
     try:
         yield ray
+    except SystemExit:
+        if received:  # raised inside ray.wait, Ray turns it into SystemExit(1): the signal's
+            raise SystemExit(128 + received[0]) from None
+        raise
     finally:
         ray.shutdown()
         for signum in installed:
@@ -202,17 +218,6 @@ def _initialized() -> bool:
     return bool(ray.is_initialized())
 
 
-def _exit_on_signal(signum: int, frame: Any) -> None:
-    name = signal.Signals(signum).name
-    print(
-        f"\npalaestra: {name} received: stopping the runs and the local Ray (finished runs "
-        "are kept; the same command trains the rest)",
-        file=sys.stderr,
-        flush=True,
-    )
-    raise SystemExit(128 + signum)
-
-
 def _probe(address: str, timeout: float = 5.0) -> None:
     """``RunError`` unless something listens at ``address`` (``host:port`` or
     ``ray://host:port``)."""
@@ -223,7 +228,8 @@ def _probe(address: str, timeout: float = 5.0) -> None:
     if not sep or not host or not port.isdigit():
         raise RunError(
             f"cannot read the Ray address {address!r}",
-            "use auto, HOST:PORT (the head's GCS, port 6379) or ray://HOST:10001",
+            "use auto, HOST:PORT (the head's GCS, port 6379) or ray://HOST:10001 (Ray Client: "
+            'pip install "ray[client]")',
         )
     try:
         socket.create_connection((host, int(port)), timeout=timeout).close()
