@@ -125,6 +125,7 @@ def test_a_killed_sweep_continues_losing_only_the_trial_in_flight(tmp_path: Path
     finished = [t for t in trials if t.state.name in ("COMPLETE", "PRUNED")]
     lost = [t for t in trials if t.user_attrs.get("interrupted")]
     assert len(finished) == 4 and len(lost) == 1
+    assert lost[0].user_attrs["reason"] == "interrupted: the sweep was killed while it ran"
     assert f"({4 - done_before} run now)" in r.out
 
 
