@@ -105,6 +105,7 @@ def test_a_local_ray_is_shut_down_on_sigterm(monkeypatch: pytest.MonkeyPatch) ->
     fake = FakeRay()
     monkeypatch.setattr(grid, "_initialized", lambda: False)
     monkeypatch.setattr(grid, "connect_ray", lambda address, num_cpus=None: fake)
+    monkeypatch.setattr(grid.reaper, "start", lambda: None)  # no real Ray to watch
     previous = signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
         with pytest.raises(SystemExit) as info, grid.ray_session(None) as session:
@@ -149,7 +150,12 @@ def _running(pids: set[int]) -> set[int]:
 
 @pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads /proc")
-def test_sigterm_to_compare_on_a_local_ray_leaves_no_ray_process(tmp_path: Path) -> None:
+@pytest.mark.parametrize("signame", ["SIGTERM", "SIGKILL"])
+def test_a_signal_to_compare_on_a_local_ray_leaves_no_ray_process(
+    tmp_path: Path, signame: str
+) -> None:
+    """SIGTERM: the command shuts its Ray down and exits 143. SIGKILL: Ray's reaper stops the
+    GCS and raylet, palaestra's watcher (runs.reaper) the agents Ray's leaves."""
     import signal
     import subprocess
     import sys
@@ -177,15 +183,18 @@ def test_sigterm_to_compare_on_a_local_ray_leaves_no_ray_process(tmp_path: Path)
             time.sleep(0.2)
         ray_procs = _tree(proc.pid)
         assert len(ray_procs) >= 4, ray_procs  # gcs, raylet, agents, workers...
-        proc.send_signal(signal.SIGTERM)
+        proc.send_signal(getattr(signal, signame))
         code = proc.wait(timeout=60)
         err = proc.stderr.read() if proc.stderr else ""
-        assert code == 143, err
-        assert "SIGTERM received: stopping the runs and the local Ray" in err
+        if signame == "SIGTERM":
+            assert code == 143, err
+            assert "SIGTERM received: stopping the runs and the local Ray" in err
+        else:
+            assert code == -signal.SIGKILL
         deadline = time.monotonic() + 20
         while _running(ray_procs) and time.monotonic() < deadline:
             time.sleep(0.2)
-        assert not _running(ray_procs)
+        assert not _running(ray_procs), err
     finally:
         proc.kill()
 
@@ -249,3 +258,41 @@ def test_the_readme_cluster_steps_with_token_authentication(tmp_path: Path) -> N
             except OSError:
                 pass
         shutil.rmtree(temp, ignore_errors=True)
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads /proc")
+def test_the_reaper_kills_the_ray_processes_of_a_sigkilled_driver(tmp_path: Path) -> None:
+    """A driver with a stand-in for a Ray process (its command line names a ``/ray/`` path)
+    is SIGKILLed: no handler runs, and the watcher kills what it left."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import palaestra
+
+    driver_code = (
+        "import subprocess, sys, time\n"
+        "child = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(120)', "
+        "'/stand-in/ray/worker'])\n"
+        "from palaestra.runs import reaper\n"
+        "watcher = reaper.start()\n"
+        "print(child.pid, watcher.pid, flush=True)\n"
+        "time.sleep(120)\n"
+    )
+    src = str(Path(palaestra.__file__).parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")])}
+    driver = subprocess.Popen([sys.executable, "-c", driver_code], stdout=subprocess.PIPE,
+                              text=True, env=env)  # fmt: skip
+    try:
+        assert driver.stdout is not None
+        child, watcher = map(int, driver.stdout.readline().split())
+        assert _running({child, watcher}) == {child, watcher}
+        driver.send_signal(signal.SIGKILL)
+        driver.wait(timeout=10)
+        deadline = time.monotonic() + 15
+        while _running({child, watcher}) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not _running({child, watcher})  # the stand-in killed, the watcher gone
+    finally:
+        driver.kill()

@@ -33,6 +33,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+from palaestra.runs import reaper
 from palaestra.runs.errors import RunError, first_line, one_line
 from palaestra.runs.files import CONFIG_FILE, STATUS_FILE, read_json
 from palaestra.runs.lock import FolderLock
@@ -175,7 +176,8 @@ def ray_session(address: str | None, num_cpus: int | None = None) -> Iterator[An
     """``ray`` connected (:func:`connect_ray`) for the block. A local Ray the block starts is
     shut down when it ends, however it ends: an error, Ctrl-C, and SIGTERM or SIGHUP too (while
     no handler of the command's own takes them, they exit through ``SystemExit``, so the
-    shutdown runs instead of leaving Ray's processes behind)."""
+    shutdown runs instead of leaving Ray's processes behind); :mod:`palaestra.runs.reaper`
+    kills what a SIGKILLed command leaves."""
     started = address is None and not _initialized()
     before = _handlers()
     ray = connect_ray(address, num_cpus)
@@ -198,6 +200,7 @@ def ray_session(address: str | None, num_cpus: int | None = None) -> Iterator[An
     installed = [s for s, handler in before.items() if handler in (signal.SIG_DFL, None)]
     for signum in installed:
         signal.signal(signum, exit_on_signal)
+    watcher = reaper.start()  # for the ends no handler sees: SIGKILL, the OOM killer
     try:
         yield ray
     except SystemExit:
@@ -206,6 +209,7 @@ def ray_session(address: str | None, num_cpus: int | None = None) -> Iterator[An
         raise
     finally:
         ray.shutdown()
+        reaper.stop(watcher)
         for signum in installed:
             signal.signal(signum, before[signum])
 
