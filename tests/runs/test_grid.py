@@ -172,3 +172,61 @@ def test_a_sweep_runs_its_trials_as_ray_tasks(local_ray: Path, tmp_path: Path) -
     reported = [t for t in study.get_trials() if t.intermediate_values]
     assert reported  # the workers' evaluations reached the study
     assert result.best_file is not None and result.best_file.is_file()
+
+
+def test_a_grid_folder_another_process_writes_is_refused(tmp_path: Path) -> None:
+    from tests.runs.test_lock import holder
+
+    runs = _grid(tmp_path)
+    proc = holder(tmp_path / "a2c")  # e.g. a second `compare` with the same --runs-dir
+    try:
+        with pytest.raises(RunError, match=f"^{tmp_path / 'a2c'} is in use by process {proc.pid} "):
+            run_grid(runs, "local")
+        assert not (tmp_path / "ppo").exists() or not any((tmp_path / "ppo").iterdir())
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+def test_a_sweep_folder_another_process_writes_is_refused(tmp_path: Path) -> None:
+    pytest.importorskip("optuna")
+    from tests.runs.test_lock import holder
+
+    from palaestra.runs.space import space_from_mapping
+    from palaestra.runs.sweep import run_sweep
+
+    proc = holder(tmp_path / "sw")
+    try:
+        space = space_from_mapping({"n_steps": [8, 16]}, "a2c")
+        with pytest.raises(RunError, match=f"in use by process {proc.pid} .*this sweep folder"):
+            run_sweep(space, "a2c", "CartPole-v1", 1, 1, tmp_path / "sw", 64)
+        assert sorted(p.name for p in (tmp_path / "sw").iterdir()) == [".palaestra.lock"]
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+def test_a_stopped_ray_sweep_cancels_its_trials_and_says_why(
+    local_ray: Path, tmp_path: Path
+) -> None:
+    pytest.importorskip("optuna")
+    from palaestra.runs.space import space_from_mapping
+    from palaestra.runs.sweep import run_sweep
+
+    told: list[dict] = []
+
+    def stop() -> str | None:  # a SIGTERM once the first trial is in
+        return "interrupted by SIGTERM" if told else None
+
+    space = space_from_mapping({"n_steps": [8, 16]}, "a2c")
+    result = run_sweep(space, "a2c", "CartPole-v1", trials=6, seeds=1, out=tmp_path,
+                       n_timesteps=2000, backend="ray", evaluations=0, eval_episodes=1,
+                       on_trial=told.append, stop_requested=stop)  # fmt: skip
+    assert result.stopped == "interrupted by SIGTERM"
+    assert told[0]["state"] == "complete"
+    cancelled = told[1:]
+    assert cancelled and all(row["state"] == "interrupted" for row in cancelled)
+    assert {row["reason"] for row in cancelled} == {
+        "interrupted by SIGTERM: cancelled while it ran on Ray"
+    }
+    assert result.ran == 1 and len(result.trials) == 1 + len(cancelled)

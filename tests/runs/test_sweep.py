@@ -5,17 +5,19 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 from tests.cli.conftest import run_cli
 
 from palaestra.runs import RunError
-from palaestra.runs.space import Choice, Range, space_from_mapping
+from palaestra.runs.space import Choice, Range, distributions, space_from_mapping
 from palaestra.runs.sweep import run_sweep
 
 optuna = pytest.importorskip("optuna")
@@ -123,6 +125,7 @@ def test_a_killed_sweep_continues_losing_only_the_trial_in_flight(tmp_path: Path
     finished = [t for t in trials if t.state.name in ("COMPLETE", "PRUNED")]
     lost = [t for t in trials if t.user_attrs.get("interrupted")]
     assert len(finished) == 4 and len(lost) == 1
+    assert lost[0].user_attrs["reason"] == "interrupted: the sweep was killed while it ran"
     assert f"({4 - done_before} run now)" in r.out
 
 
@@ -174,3 +177,104 @@ def test_without_ray_or_optuna_the_commands_name_the_extra(
                 "--timesteps", 64, "--runs-dir", tmp_path / "c", "--backend", "ray")  # fmt: skip
     assert c.code == 1 and c.err.count("\n") == 1
     assert 'ray is not installed, run `pip install "palaestra[ray]"`' in c.err
+
+
+def test_sigterm_stops_a_sweep_like_train_with_the_study_intact(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from palaestra.runs import sweep
+
+    evaluate = sweep._evaluate
+
+    def sigterm_in_trial_1(run: Any, episodes: int) -> float:
+        if "trials/1/" in str(run.run_dir) and not sent:
+            sent.append(True)
+            os.kill(os.getpid(), signal.SIGTERM)  # as `timeout` or a scheduler sends it
+        return evaluate(run, episodes)
+
+    sent: list[bool] = []
+    monkeypatch.setattr(sweep, "_evaluate", sigterm_in_trial_1)
+    space = tmp_path / "space.yaml"
+    space.write_text(SPACE)
+    out = tmp_path / "sw"
+    previous = signal.getsignal(signal.SIGTERM)
+    r = run_cli(*_sweep_args(space, out, 3))
+    assert r.code == 143, r.err
+    assert "SIGTERM received: stopping at the next step" in r.err
+    assert r.err.splitlines()[-1] == (
+        f"palaestra: sweep interrupted by SIGTERM; the study in {out / 'study.db'} keeps every "
+        "finished trial (run the same command again to continue it)"
+    )
+    assert signal.getsignal(signal.SIGTERM) is previous
+    line = next(x for x in r.out.splitlines() if x.startswith("trial 1: "))
+    assert line.startswith("trial 1: interrupted {")
+    why = r"interrupted by SIGTERM: stopped at step \d+ of 320 \(seed 0\)"
+    assert re.search(f": {why}$", line), line
+    with open(out / "trials.csv", newline="") as file:
+        rows = {row["trial"]: row for row in csv.DictReader(file)}
+    assert rows["1"]["state"] == "interrupted"
+    assert re.fullmatch(why, rows["1"]["reason"])
+    study = optuna.load_study(study_name="a2c-CartPole-v1", storage=f"sqlite:///{out}/study.db")
+    assert [t.state.name for t in study.get_trials()] == ["COMPLETE", "FAIL"]
+    monkeypatch.setattr(sweep, "_evaluate", evaluate)
+    again = run_cli(*_sweep_args(space, out, 3))  # continues: trial 1's settings run again
+    assert again.code == 0, again.err
+    assert "(2 run now)" in again.out
+    study = optuna.load_study(study_name="a2c-CartPole-v1", storage=f"sqlite:///{out}/study.db")
+    states = [t.state.name for t in study.get_trials()]
+    assert states.count("FAIL") == 1 and len(states) == 4
+
+
+def test_trials_csv_says_why_each_trial_ended_and_history_draws_pruned_trials(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from optuna.trial import TrialState, create_trial
+
+    from palaestra.runs import curves
+    from palaestra.runs.spec import RunSpec
+    from palaestra.runs.sweep_report import write_outputs
+
+    space = space_from_mapping({"n_steps": [8, 16]}, "a2c")
+    dist = distributions(space)
+    study = optuna.create_study(study_name="a2c-CartPole-v1", direction="maximize")
+    for value in (20.0, 35.0):
+        study.add_trial(create_trial(value=value, params={"n_steps": "8"}, distributions=dist))
+    reason = "pruned at step 96 of 320: seed 0's evaluation 9.50 was behind the other trials'"
+    study.add_trial(create_trial(state=TrialState.PRUNED, params={"n_steps": "16"},
+                                 distributions=dist, intermediate_values={64: 12.0, 96: 9.5},
+                                 user_attrs={"reason": reason}))  # fmt: skip
+    study.add_trial(create_trial(state=TrialState.FAIL, params={"n_steps": "16"},
+                                 distributions=dist,
+                                 user_attrs={"reason": "RuntimeError: boom"}))  # fmt: skip
+    figures: dict[str, object] = {}
+    save = curves.save_figure
+
+    def keep(fig: object, path: Path) -> None:
+        figures[path.name] = fig
+        save(fig, path)
+
+    monkeypatch.setattr(curves, "save_figure", keep)
+    base = RunSpec.from_preset("a2c", "CartPole-v1", n_timesteps=320)
+    rows, _, _ = write_outputs(study, space, tmp_path, base, None)
+    assert [(r["number"], r["state"], r["reason"]) for r in rows] == [
+        (1, "complete", None), (0, "complete", None), (2, "pruned", reason),
+        (3, "failed", "RuntimeError: boom"),
+    ]  # fmt: skip
+    with open(tmp_path / "trials.csv", newline="") as file:
+        assert [row["reason"] for row in csv.DictReader(file)] == [
+            "",
+            "",
+            reason,
+            "RuntimeError: boom",
+        ]
+    ax = figures["history.png"].axes[0]  # type: ignore[attr-defined]
+    labels = ax.get_legend_handles_labels()[1]
+    assert sorted(labels) == ["best so far", "complete: mean return over seeds",
+                              "pruned: its last evaluation (first seed)"]  # fmt: skip
+    pruned = next(c for c in ax.collections if c.get_label().startswith("pruned"))
+    assert pruned.get_offsets().tolist() == [[2.0, 9.5]]  # trial 2 at its last evaluation
+    assert (
+        ax.get_title()
+        == "a2c-CartPole-v1: 2 complete, 1 pruned, 1 failed or interrupted (not drawn)"
+    )
+    assert (tmp_path / "history.png").read_bytes()[:4] == b"\x89PNG"

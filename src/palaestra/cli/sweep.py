@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
+from pathlib import Path
 from typing import Any
 
-from palaestra.cli.common import CLIError, add_timesteps
+from palaestra.cli.common import CLIError, add_timesteps, eprint
 
 __all__ = ["add_parser", "run"]
 
@@ -24,7 +26,9 @@ def add_parser(sub: Any) -> None:
         "on --seeds seeds and scores their mean deterministic return. The study is kept in "
         "OUT/study.db (or --storage): run the same command again to continue it. Writes "
         "OUT/trials.csv (best first), OUT/best.yaml (for train --config), history.png and "
-        "importance.png.",
+        "importance.png. Ctrl-C or SIGTERM stops the trial in progress at the next step and "
+        "ends the search with the study intact (exit code 130, 143 for SIGTERM): the same "
+        "command continues it; a second signal stops at once.",
     )
     p.add_argument("space", metavar="SPACE.yaml", help="the search space (.yaml or .json)")
     p.add_argument("--algo", required=True, metavar="ALGO", help="algorithm to tune")
@@ -45,7 +49,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument(
         "--address",
         metavar="ADDR",
-        help="Ray cluster with --backend ray: auto or ray://HOST:10001 (default: a local Ray)",
+        help="Ray cluster with --backend ray: auto (the cluster this machine joined with `ray "
+        "start`) or HEAD:6379; with token authentication export RAY_AUTH_MODE=token first "
+        "(default: a local Ray)",
     )
     p.add_argument(
         "--storage",
@@ -70,6 +76,7 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """The ``sweep`` command."""
+    from palaestra.cli.progress import GracefulStop
     from palaestra.runs.settings import check_algo
     from palaestra.runs.space import load_space
     from palaestra.runs.sweep import run_sweep
@@ -82,28 +89,57 @@ def run(args: argparse.Namespace) -> int:
 
     def progress(row: dict[str, Any]) -> None:
         value = "" if row.get("value") is None else f" {row['value']:.2f}"
-        why = f": {row['error']}" if row.get("error") else ""
+        why = f": {row['reason']}" if row.get("reason") else ""
         params = json.dumps(row["params"], sort_keys=True)
         print(f"trial {row['number']}: {row['state']}{value} {params}{why}", flush=True)
 
-    result = run_sweep(
-        space,
-        algo,
-        args.env,
-        args.trials,
-        args.seeds,
-        out,
-        args.timesteps,
-        args.preset,
-        args.backend,
-        args.address,
-        args.storage,
-        args.evaluations,
-        args.eval_episodes,
-        args.sampler_seed,
-        not args.no_prune,
-        on_trial=progress,
+    stop = GracefulStop()  # a stop between two steps of a trial, as train's
+    study = args.storage or str(Path(out) / "study.db")
+    kept = (
+        f"the study in {study} keeps every finished trial (run the same command again to "
+        "continue it)"
     )
+
+    def stop_requested() -> str | None:
+        if not stop.requested:
+            return None
+        return f"interrupted by {signal.Signals(stop.signum or signal.SIGINT).name}"
+
+    stop.install()
+    try:
+        result = run_sweep(
+            space,
+            algo,
+            args.env,
+            args.trials,
+            args.seeds,
+            out,
+            args.timesteps,
+            args.preset,
+            args.backend,
+            args.address,
+            args.storage,
+            args.evaluations,
+            args.eval_episodes,
+            args.sampler_seed,
+            not args.no_prune,
+            on_trial=progress,
+            callbacks=[stop],
+            stop_requested=stop_requested,
+        )
+    except KeyboardInterrupt:  # a second signal: the trial in progress is lost, the rest kept
+        eprint(f"palaestra: sweep stopped at once; {kept}")
+        return stop.exit_code
+    finally:
+        stop.uninstall()
+    _print_result(result, algo, args.env, out)
+    if result.stopped is not None:
+        eprint(f"palaestra: sweep {result.stopped}; {kept}")
+        return stop.exit_code  # 130 after Ctrl-C, 143 after SIGTERM
+    return 0
+
+
+def _print_result(result: Any, algo: str, env: str, out: str) -> None:
     print(f"{len(result.trials)} trials in {out} ({result.ran} run now); best first:")
     print(f"{'rank':>4}  {'trial':>5}  {'state':<8}  {'mean return':>11}  settings")
     for rank, row in enumerate(result.trials[:10], 1):
@@ -114,7 +150,6 @@ def run(args: argparse.Namespace) -> int:
         )
     if result.best_file is not None:
         print(
-            f"best settings: {result.best_file} (palaestra train {algo} {args.env} --config "
+            f"best settings: {result.best_file} (palaestra train {algo} {env} --config "
             f"{result.best_file})"
         )
-    return 0

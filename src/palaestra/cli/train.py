@@ -256,11 +256,8 @@ def run(args: argparse.Namespace) -> int:
             device=args.device,
         )
         run_dir = Path(args.out) if args.out else _default_out(spec.algo, spec.env_id)
-        if (run_dir / "config.json").exists():
-            raise CLIError(
-                f"{run_dir} already holds a run", f"choose another --out, or --resume {run_dir}"
-            )
         progress_mode = _check_flags(args)
+        # a folder in use or holding a run: its error line
         run_ = open_run(spec, run_dir, eval_freq=args.eval_freq, eval_episodes=args.eval_episodes)
         shortfall = presets.measured_shortfall(spec.algo, spec.env_id, spec.preset, spec.seed)
         run_.notes[:0] = [*notes, *([shortfall] if shortfall else [])]

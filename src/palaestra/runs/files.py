@@ -117,19 +117,26 @@ def model_file(path: str | Path) -> Path:
 
 
 def write_status(
-    run_dir: Path, state: str, steps: int, total: int, wall: float, checkpoint: str | None
+    run_dir: Path,
+    state: str,
+    steps: int,
+    total: int,
+    wall: float,
+    checkpoint: str | None,
+    error: str | None = None,
 ) -> None:
-    """``status.json``: where the run stands and which checkpoint a resume continues."""
-    write_json(
-        run_dir / STATUS_FILE,
-        {
-            "status": state,
-            "num_timesteps": int(steps),
-            "total_timesteps": int(total),
-            "wall_time_s": round(wall, 3),
-            "checkpoint": checkpoint,
-        },
-    )
+    """``status.json``: where the run stands and which checkpoint a resume continues; a
+    ``"failed"`` run also says why (``error``)."""
+    status: dict[str, Any] = {
+        "status": state,
+        "num_timesteps": int(steps),
+        "total_timesteps": int(total),
+        "wall_time_s": round(wall, 3),
+        "checkpoint": checkpoint,
+    }
+    if error is not None:
+        status["error"] = error
+    write_json(run_dir / STATUS_FILE, status)
 
 
 def note(text: str) -> None:

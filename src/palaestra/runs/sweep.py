@@ -25,6 +25,7 @@ ALGO ENV --config best.yaml``), ``history.png`` and ``importance.png``.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -33,6 +34,7 @@ from typing import Any
 
 from palaestra.runs.errors import RunError, first_line, one_line
 from palaestra.runs.folder import check_inside
+from palaestra.runs.lock import FolderLock
 from palaestra.runs.space import Param, distributions, settings_of
 from palaestra.runs.spec import RunSpec, resolve_spec
 
@@ -57,10 +59,14 @@ def run_trial(
     evaluations: int,
     eval_episodes: int,
     report: Callable[[float, int], bool] | None = None,
+    callbacks: Sequence[Any] = (),
 ) -> dict[str, Any]:
     """Train one trial's runs (one per seed) into ``folder``/seed<s> and score them:
-    ``{"state": "complete"|"pruned", "value", "values", "seconds"}``. ``report(value, step)``
-    hears the first run's evaluations and returns False to prune the trial."""
+    ``{"state": "complete"|"pruned"|"interrupted", "value", "values", "seconds", "reason"}``.
+    ``report(value, step)`` hears the first run's evaluations and returns False to prune the
+    trial; ``callbacks`` go to every run's ``learn`` (one that stops it, as a Ctrl-C or
+    SIGTERM handler does, ends the trial ``"interrupted"``). ``reason`` says why a trial
+    ended early: where it was pruned or stopped."""
     import shutil
 
     from palaestra.runs.training import open_run
@@ -73,24 +79,54 @@ def run_trial(
         if run_dir.exists():  # an attempt that was killed: this trial starts again
             shutil.rmtree(run_dir)
         run = open_run(spec, run_dir)
-        pruned = False
+        pruned: tuple[int, float] | None = None  # (step, evaluation) where the pruner stopped it
         if i == 0 and report is not None and evaluations > 0:
             every = max(1, spec.n_timesteps // (evaluations + 1))
 
             def check(model: Any, run: Any = run) -> bool:
                 nonlocal pruned
-                keep = report(_evaluate(run, eval_episodes), int(model.num_timesteps))
-                pruned = not keep
+                value, step = _evaluate(run, eval_episodes), int(model.num_timesteps)
+                keep = report(value, step)
+                pruned = None if keep else (step, value)
                 return keep
 
-            run.train(checkpoint_every=0, evaluate_every=every, on_evaluate=check)
+            result = run.train(
+                callbacks, checkpoint_every=0, evaluate_every=every, on_evaluate=check
+            )
         else:
-            run.train(checkpoint_every=0)
-        if pruned:
-            return {"state": "pruned", "value": None, "values": values, "seconds": _since(start)}
+            result = run.train(callbacks, checkpoint_every=0)
+        if pruned is not None:
+            step, value = pruned
+            reason = (
+                f"pruned at step {step:,} of {spec.n_timesteps:,}: seed {spec.seed}'s "
+                f"evaluation {value:.2f} was behind the other trials' at that step"
+            )
+            return _ended("pruned", values, start, reason)
+        if result.status == "interrupted":  # a callback stopped learn (Ctrl-C, SIGTERM)
+            reason = (
+                f"stopped at step {result.num_timesteps:,} of {spec.n_timesteps:,} "
+                f"(seed {spec.seed})"
+            )
+            return _ended("interrupted", values, start, reason)
         values.append(_evaluate(run, eval_episodes))
     mean = float(sum(values) / len(values))
-    return {"state": "complete", "value": mean, "values": values, "seconds": _since(start)}
+    return {
+        "state": "complete",
+        "value": mean,
+        "values": values,
+        "seconds": _since(start),
+        "reason": None,
+    }
+
+
+def _ended(state: str, values: list[float], start: float, reason: str) -> dict[str, Any]:
+    return {
+        "state": state,
+        "value": None,
+        "values": values,
+        "seconds": _since(start),
+        "reason": reason,
+    }
 
 
 def _since(start: float) -> float:
@@ -144,6 +180,7 @@ class SweepResult:
     best: dict[str, Any] | None  # the best trial's row
     best_file: Path | None
     ran: int  # trials run by this call
+    stopped: str | None = None  # why this call stopped early ("interrupted by SIGTERM"), if so
 
 
 def _storage(url: str | None, folder: Path) -> tuple[Any, str]:
@@ -167,13 +204,16 @@ def _engine_kwargs(url: str) -> dict[str, Any]:
 
 
 def _mark_interrupted(storage: Any, study: Any) -> int:
-    """Trials a killed sweep left running: marked failed (and ``interrupted``) so that they
-    are run again; their count."""
+    """Trials a killed sweep left running: marked failed (and ``interrupted``, with the
+    reason) so that they are run again; their count."""
     from optuna.trial import TrialState
 
     lost = study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
     for trial in lost:
         storage.set_trial_user_attr(trial._trial_id, "interrupted", True)
+        storage.set_trial_user_attr(
+            trial._trial_id, "reason", "interrupted: the sweep was killed while it ran"
+        )
         storage.set_trial_state_values(trial._trial_id, state=TrialState.FAIL)
     return len(lost)
 
@@ -207,9 +247,17 @@ def run_sweep(
     sampler_seed: int | None = 0,
     prune: bool = True,
     on_trial: Callable[[dict[str, Any]], None] | None = None,
+    callbacks: Sequence[Any] = (),
+    stop_requested: Callable[[], str | None] | None = None,
 ) -> SweepResult:
     """Run the search until the study holds ``trials`` finished trials (see the module's
-    docstring); continues the study already in ``out`` (or at ``storage``)."""
+    docstring); continues the study already in ``out`` (or at ``storage``). The folder is
+    locked for the call (:mod:`palaestra.runs.lock`).
+
+    ``callbacks`` go to the ``learn`` of every local trial; ``stop_requested()`` returns why
+    the search should stop (``"interrupted by SIGTERM"``) or None: a trial that a callback
+    stopped, and then the search, end there, the trial recorded as interrupted (run again
+    by the next call) and the outputs written; ``SweepResult.stopped`` holds the reason."""
     from palaestra.error import dependency_not_installed
 
     try:
@@ -218,7 +266,7 @@ def run_sweep(
         raise dependency_not_installed("optuna", "sweep", "hyperparameter sweeps") from None
     from optuna.trial import TrialState
 
-    from palaestra.runs.grid import check_backend, connect_ray
+    from palaestra.runs.grid import check_backend, ray_session
 
     check_backend(backend, address)
     for name, value, low in (
@@ -230,116 +278,144 @@ def run_sweep(
             raise RunError(f"{name} must be an integer >= {low}, got {value!r}")
     base, _ = resolve_spec(algo, env_id, preset, n_timesteps=n_timesteps)
     searched = distributions(space)
-    ray = connect_ray(address) if backend == "ray" else None  # a bad address: before any file
     folder = Path(out)
-    folder.mkdir(parents=True, exist_ok=True)
-    check_inside(folder / "trials", folder, "the sweep's trials folder")
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
-    rdb, url = _storage(storage, folder)
-    study_name = f"{base.algo}-{base.env_id}"
-    pruner = {"enabled": prune, "startup": 3}
-    study = optuna.create_study(
-        study_name=study_name,
-        storage=rdb,
-        direction="maximize",
-        sampler=optuna.samplers.TPESampler(seed=sampler_seed),
-        pruner=_make_pruner(pruner),
-        load_if_exists=True,
-    )
-    _check_same_space(study, searched)
-    _mark_interrupted(rdb, study)
-    if sampler_seed is not None:  # a continued study draws new settings, not the first ones again
-        study.sampler = optuna.samplers.TPESampler(seed=sampler_seed + len(study.trials))
-    todo = max(0, trials - _finished(study))
+    stopped_why = stop_requested or (lambda: None)
+    # Ray first: a bad address fails before any file. Two sweeps in one folder would mark
+    # each other's running trials lost: the folder is locked.
+    session = ray_session(address) if backend == "ray" else contextlib.nullcontext()
+    with session as ray, FolderLock(folder, "sweep folder"):
+        check_inside(folder / "trials", folder, "the sweep's trials folder")
+        optuna.logging.set_verbosity(optuna.logging.WARNING)
+        rdb, url = _storage(storage, folder)
+        study_name = f"{base.algo}-{base.env_id}"
+        pruner = {"enabled": prune, "startup": 3}
+        study = optuna.create_study(
+            study_name=study_name,
+            storage=rdb,
+            direction="maximize",
+            sampler=optuna.samplers.TPESampler(seed=sampler_seed),
+            pruner=_make_pruner(pruner),
+            load_if_exists=True,
+        )
+        _check_same_space(study, searched)
+        _mark_interrupted(rdb, study)
+        # A continued study draws new settings, not the first ones again.
+        if sampler_seed is not None:
+            study.sampler = optuna.samplers.TPESampler(seed=sampler_seed + len(study.trials))
+        todo = max(0, trials - _finished(study))
 
-    def specs(params: Mapping[str, Any]) -> list[str]:
-        overrides = settings_of(params, space)
-        return [
-            resolve_spec(
-                base.algo,
-                base.env_id,
-                preset,
-                overrides=overrides,
-                seed=s,
-                n_timesteps=base.n_timesteps,
-            )[0].to_json()
-            for s in range(seeds)
-        ]
+        def specs(params: Mapping[str, Any]) -> list[str]:
+            overrides = settings_of(params, space)
+            return [
+                resolve_spec(
+                    base.algo,
+                    base.env_id,
+                    preset,
+                    overrides=overrides,
+                    seed=s,
+                    n_timesteps=base.n_timesteps,
+                )[0].to_json()
+                for s in range(seeds)
+            ]
 
-    def tell(trial: Any, outcome: dict[str, Any]) -> None:
-        trial_row = {"number": trial.number, **outcome, "params": settings_of(trial.params, space)}
-        if outcome["state"] == "complete":
-            study.tell(trial, outcome["value"])
-        elif outcome["state"] == "pruned":
-            study.tell(trial, state=TrialState.PRUNED)
-        else:
-            rdb.set_trial_user_attr(trial._trial_id, "error", outcome.get("error"))
-            study.tell(trial, state=TrialState.FAIL)
-        if on_trial is not None:
-            on_trial(trial_row)
+        def tell(trial: Any, outcome: dict[str, Any]) -> None:
+            trial_row = {
+                "number": trial.number,
+                **outcome,
+                "params": settings_of(trial.params, space),
+            }
+            if outcome.get("reason"):
+                rdb.set_trial_user_attr(trial._trial_id, "reason", outcome["reason"])
+            if outcome["state"] == "complete":
+                study.tell(trial, outcome["value"])
+            elif outcome["state"] == "pruned":
+                study.tell(trial, state=TrialState.PRUNED)
+            else:  # failed, or interrupted (then run again by the next call)
+                if outcome["state"] == "interrupted":
+                    rdb.set_trial_user_attr(trial._trial_id, "interrupted", True)
+                study.tell(trial, state=TrialState.FAIL)
+            if on_trial is not None:
+                on_trial(trial_row)
 
-    ran = 0
-    if backend == "local":
-        for _ in range(todo):
-            trial = study.ask(searched)
-            try:
-                outcome = run_trial(
-                    specs(trial.params),
-                    str(folder / "trials" / str(trial.number)),
-                    evaluations,
-                    eval_episodes,
-                    _reporter(trial) if prune else None,
-                )
-            except Exception as exc:  # a trial that raises is recorded; the study goes on
-                outcome = {"state": "failed", "value": None, "error": one_line(exc), "seconds": 0.0}
-            tell(trial, outcome)
-            ran += 1
-    else:
-        if url.startswith("sqlite") and address is not None:
-            from palaestra.runs.files import note
+        def interrupted(trial: Any, where: str) -> None:
+            why = stopped_why() or "interrupted"
+            tell(trial, {"state": "interrupted", "value": None, "reason": f"{why}: {where}"})
 
-            note(
-                "a SQLite study file is reachable only where this folder is: on a cluster, pass "
-                "--storage with a database URL (e.g. postgresql://...)"
-            )
-        assert ray is not None
-        task = ray.remote(num_cpus=1, max_retries=2)(_remote_trial)
-        slots = max(1, int(ray.available_resources().get("CPU", 1)))
-        pending: dict[Any, Any] = {}
-        asked = 0
-        while asked < todo or pending:
-            while asked < todo and len(pending) < slots:
+        ran = 0
+        stopped: str | None = None
+        if backend == "local":
+            for _ in range(todo):
+                if (stopped := stopped_why()) is not None:
+                    break
                 trial = study.ask(searched)
-                ref = task.remote(
-                    specs(trial.params),
-                    str((folder / "trials" / str(trial.number)).resolve()),
-                    evaluations,
-                    eval_episodes,
-                    url,
-                    study_name,
-                    trial._trial_id,
-                    pruner,
-                )
-                pending[ref] = trial
-                asked += 1
-            done, _ = ray.wait(list(pending), num_returns=1)
-            trial = pending.pop(done[0])
-            try:
-                outcome = ray.get(done[0])
-            except Exception as exc:  # the trial raised, or its worker died past its retries
-                cause = getattr(exc, "cause", None) or exc
-                outcome = {
-                    "state": "failed",
-                    "value": None,
-                    "error": one_line(cause),
-                    "seconds": 0.0,
-                }
-            tell(trial, outcome)
-            ran += 1
-    from palaestra.runs.sweep_report import write_outputs
+                try:
+                    outcome = run_trial(
+                        specs(trial.params),
+                        str(folder / "trials" / str(trial.number)),
+                        evaluations,
+                        eval_episodes,
+                        _reporter(trial) if prune else None,
+                        callbacks,
+                    )
+                except KeyboardInterrupt:  # stopped at once: mid-update, nothing of it is kept
+                    interrupted(trial, "stopped at once, mid-trial")
+                    raise
+                except Exception as exc:  # a trial that raises is recorded; the study goes on
+                    outcome = {"state": "failed", "value": None, "reason": one_line(exc)}
+                if outcome["state"] == "interrupted":
+                    interrupted(trial, outcome["reason"])
+                    stopped = stopped_why() or "interrupted"
+                    break
+                tell(trial, outcome)
+                ran += 1
+        else:
+            if url.startswith("sqlite") and address is not None:
+                from palaestra.runs.files import note
 
-    rows, best, best_file = write_outputs(study, space, folder, base, preset)
-    return SweepResult(folder, rows, best, best_file, ran)
+                note(
+                    "a SQLite study file is reachable only where this folder is: on a cluster, "
+                    "pass --storage with a database URL (e.g. postgresql://...)"
+                )
+            assert ray is not None
+            task = ray.remote(num_cpus=1, max_retries=2)(_remote_trial)
+            slots = max(1, int(ray.available_resources().get("CPU", 1)))
+            pending: dict[Any, Any] = {}
+            asked = 0
+            while asked < todo or pending:
+                if (stopped := stopped_why()) is not None:
+                    for ref, trial in pending.items():  # their workers stop; the next call reruns
+                        ray.cancel(ref, force=True)
+                        interrupted(trial, "cancelled while it ran on Ray")
+                    break
+                while asked < todo and len(pending) < slots:
+                    trial = study.ask(searched)
+                    ref = task.remote(
+                        specs(trial.params),
+                        str((folder / "trials" / str(trial.number)).resolve()),
+                        evaluations,
+                        eval_episodes,
+                        url,
+                        study_name,
+                        trial._trial_id,
+                        pruner,
+                    )
+                    pending[ref] = trial
+                    asked += 1
+                done, _ = ray.wait(list(pending), num_returns=1, timeout=0.5)  # signals get a look
+                if not done:
+                    continue
+                trial = pending.pop(done[0])
+                try:
+                    outcome = ray.get(done[0])
+                except Exception as exc:  # the trial raised, or its worker died past its retries
+                    cause = getattr(exc, "cause", None) or exc
+                    outcome = {"state": "failed", "value": None, "reason": one_line(cause)}
+                tell(trial, outcome)
+                ran += 1
+        from palaestra.runs.sweep_report import write_outputs
+
+        rows, best, best_file = write_outputs(study, space, folder, base, preset)
+        return SweepResult(folder, rows, best, best_file, ran, stopped)
 
 
 def _check_same_space(study: Any, searched: Mapping[str, Any]) -> None:

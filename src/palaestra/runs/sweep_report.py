@@ -1,4 +1,5 @@
-"""What a sweep leaves in its folder: the ranked ``trials.csv``, ``best.yaml`` (a ``train
+"""What a sweep leaves in its folder: the ranked ``trials.csv`` (each trial's state: complete,
+pruned, failed or interrupted, and for the last three the reason), ``best.yaml`` (a ``train
 --config`` file) and the ``history.png`` and ``importance.png`` plots."""
 
 from __future__ import annotations
@@ -36,13 +37,14 @@ def write_outputs(
         rows.append(
             {
                 "number": trial.number,
-                "state": trial.state.name.lower(),
+                "state": _state(trial),
                 "value": trial.value,
                 "params": settings_of(trial.params, space),
-                "error": trial.user_attrs.get("error"),
+                # "error": what studies written before the reasons were recorded kept
+                "reason": trial.user_attrs.get("reason") or trial.user_attrs.get("error"),
             }
         )
-    # Complete trials by value, then pruned ones (their last evaluation), then failed ones.
+    # Complete trials by value, then pruned ones, then failed and interrupted ones.
     order = {"complete": 0, "pruned": 1}
     rows.sort(key=lambda r: (order.get(r["state"], 2), -(r["value"] or 0.0), r["number"]))
     _write_table(rows, folder / TRIALS_FILE)
@@ -58,12 +60,21 @@ def write_outputs(
     return rows, best, best_file
 
 
+def _state(trial: Any) -> str:
+    """``complete``, ``pruned``, ``failed`` or ``interrupted`` (a failed trial that a stop or
+    a killed sweep ended; the next call runs it again)."""
+    name = trial.state.name.lower()
+    if name == "fail":
+        return "interrupted" if trial.user_attrs.get("interrupted") else "failed"
+    return str(name)
+
+
 def _write_table(rows: list[dict[str, Any]], path: Path) -> None:
     from palaestra.utils.atomic_write import atomic_write
 
     with atomic_write(path, "w", encoding="utf-8", newline="") as file:
         writer = csv.writer(file)
-        writer.writerow(["rank", "trial", "state", "value", "params", "error"])
+        writer.writerow(["rank", "trial", "state", "value", "params", "reason"])
         for rank, row in enumerate(rows, 1):
             value = "" if row["value"] is None else f"{row['value']:.4f}"
             writer.writerow(
@@ -73,7 +84,7 @@ def _write_table(rows: list[dict[str, Any]], path: Path) -> None:
                     row["state"],
                     value,
                     json.dumps(row["params"], sort_keys=True),
-                    row["error"] or "",
+                    row["reason"] or "",
                 ]
             )
 
@@ -112,21 +123,41 @@ def _plots(study: Any, folder: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     from palaestra.runs.curves import save_figure
 
-    complete = [t for t in study.get_trials(deepcopy=False) if t.state == TrialState.COMPLETE]
-    if not complete:
+    trials = study.get_trials(deepcopy=False)
+    complete = [t for t in trials if t.state == TrialState.COMPLETE]
+    # A pruned trial has no final score: it is drawn at its last evaluation (first seed).
+    pruned = [t for t in trials if t.state == TrialState.PRUNED and t.intermediate_values]
+    if not complete and not pruned:
         return
     fig, ax = plt.subplots(figsize=(8, 4.5))
-    numbers = [t.number for t in complete]
-    values = [t.value for t in complete]
-    best = [max(values[: i + 1]) for i in range(len(values))]
-    ax.scatter(numbers, values, label="trial", color="tab:blue")
-    ax.step(numbers, best, where="post", label="best so far", color="tab:orange")
+    if complete:
+        numbers = [t.number for t in complete]
+        values = [t.value for t in complete]
+        best = [max(values[: i + 1]) for i in range(len(values))]
+        ax.scatter(numbers, values, label="complete: mean return over seeds", color="tab:blue")
+        ax.step(numbers, best, where="post", label="best so far", color="tab:orange")
+    if pruned:
+        last = [t.intermediate_values[max(t.intermediate_values)] for t in pruned]
+        ax.scatter(
+            [t.number for t in pruned],
+            last,
+            marker="x",
+            color="tab:gray",
+            label="pruned: its last evaluation (first seed)",
+        )
+    counts = {"complete": len(complete), "pruned": len(pruned)}
+    others = sum(t.state == TrialState.FAIL for t in trials)
+    summary = ", ".join(f"{n} {state}" for state, n in counts.items())
+    if others:
+        summary += f", {others} failed or interrupted (not drawn)"
     ax.set_xlabel("trial")
-    ax.set_ylabel("mean return over seeds")
-    ax.set_title(study.study_name)
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # trials are numbered
+    ax.set_ylabel("return")
+    ax.set_title(f"{study.study_name}: {summary}", fontsize=10)
     ax.legend()
     save_figure(fig, folder / "history.png")
     if len(complete) < 2 or not complete[0].params:

@@ -26,7 +26,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from palaestra.runs.errors import RunError
+from palaestra.runs.errors import RunError, one_line
 from palaestra.runs.files import (
     CONFIG_FILE,
     EPISODES_FILE,
@@ -38,6 +38,7 @@ from palaestra.runs.files import (
     write_json,
     write_status,
 )
+from palaestra.runs.lock import FolderLock
 from palaestra.runs.spec import RunSpec
 
 if TYPE_CHECKING:
@@ -130,7 +131,9 @@ def _logger(run_dir: Path, verbose: bool) -> Any:
 @dataclasses.dataclass
 class Run:
     """A run folder with its model built, ready to train (:func:`open_run`,
-    :func:`open_resume`)."""
+    :func:`open_resume`). It holds the folder's lock (:mod:`palaestra.runs.lock`) until
+    :meth:`train` ends or :meth:`close` is called (also a context manager), so no other
+    process writes the folder meanwhile."""
 
     spec: RunSpec
     run_dir: Path
@@ -145,6 +148,18 @@ class Run:
         """The step count training will end at: ``spec.n_timesteps`` rounded up to whole
         rollouts (PPO, A2C) or ``train_freq`` collections (off-policy), as SB3's loops do."""
         return int(self.model.final_timesteps(self.spec.n_timesteps))
+    lock: FolderLock | None = dataclasses.field(default=None, repr=False)
+
+    def close(self) -> None:
+        """Release the run folder's lock (idempotent; :meth:`train` does it when it ends)."""
+        if self.lock is not None:
+            self.lock.release()
+
+    def __enter__(self) -> Run:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
     def train(
         self,
@@ -175,6 +190,7 @@ class Run:
         from palaestra.runs.logs import EpisodeLog
 
         if checkpoint_every is not None and checkpoint_every < 0:
+            self.close()
             raise RunError(f"checkpoint_every must be >= 0, got {checkpoint_every}", "e.g. 10000")
         model, run_dir, total = self.model, self.run_dir, self.spec.n_timesteps
         model.set_logger(_logger(run_dir, verbose))
@@ -189,45 +205,57 @@ class Run:
         saved = latest_checkpoint(run_dir)  # what a stop at once leaves to resume from
         stopped = False
         start = time.perf_counter()
-        try:
-            first = not self.resumed
-            while model.num_timesteps < total:
-                due.plan(model.num_timesteps)
-                evaluation.plan(model.num_timesteps)
-                model.learn(
-                    total - model.num_timesteps,
-                    callback=CallbackList([episodes, due, evaluation, *periodic, *callbacks]),
-                    reset_num_timesteps=first,
-                )
-                first = False
-                steps = model.num_timesteps
-                checkpoint, evaluate = due.reached(steps), evaluation.reached(steps)
-                if steps >= total or not (checkpoint or evaluate):
-                    stopped = steps < total  # a callback stopped learn
-                    break
-                if checkpoint:
-                    saved, _ = write_checkpoint(model, run_dir, self.spec.algo)
-                    wall = self.wall_before + time.perf_counter() - start
-                    write_status(run_dir, "running", steps, total, wall, _rel(saved, run_dir))
-                if evaluate and on_evaluate is not None and not on_evaluate(model):
-                    stopped = True
-                    break
-        except KeyboardInterrupt:
+
+        def leave(state: str, error: str | None = None) -> None:
+            """``status.json`` for a session that ends early: it points at the checkpoint
+            a resume continues, never at what was half-done."""
             wall = self.wall_before + time.perf_counter() - start
             steps = checkpoint_steps(saved) if saved else 0
-            write_status(run_dir, "interrupted", steps, total, wall, _rel(saved, run_dir))
+            write_status(run_dir, state, steps, total, wall, _rel(saved, run_dir), error)
+
+        try:
+            try:
+                first = not self.resumed
+                while model.num_timesteps < total:
+                    due.plan(model.num_timesteps)
+                    evaluation.plan(model.num_timesteps)
+                    model.learn(
+                        total - model.num_timesteps,
+                        callback=CallbackList([episodes, due, evaluation, *periodic, *callbacks]),
+                        reset_num_timesteps=first,
+                    )
+                    first = False
+                    steps = model.num_timesteps
+                    checkpoint, evaluate = due.reached(steps), evaluation.reached(steps)
+                    if steps >= total or not (checkpoint or evaluate):
+                        stopped = steps < total  # a callback stopped learn
+                        break
+                    if checkpoint:
+                        saved, _ = write_checkpoint(model, run_dir, self.spec.algo)
+                        wall = self.wall_before + time.perf_counter() - start
+                        write_status(run_dir, "running", steps, total, wall, _rel(saved, run_dir))
+                    if evaluate and on_evaluate is not None and not on_evaluate(model):
+                        stopped = True
+                        break
+            finally:
+                seconds = time.perf_counter() - start
+                episodes.close()
+                for each in periodic:
+                    each.close()
+                model.logger.close()
+            folder, _ = write_checkpoint(model, run_dir, self.spec.algo)
+            publish(folder, run_dir)
+            state = "interrupted" if stopped else "finished"
+            wall = self.wall_before + seconds
+            write_status(run_dir, state, model.num_timesteps, total, wall, _rel(folder, run_dir))
+        except KeyboardInterrupt:  # the model may be mid-update: the last checkpoint stands
+            _quietly(leave, "interrupted")
+            raise
+        except BaseException as exc:  # a disk that filled up, an env that raised, sys.exit
+            _quietly(leave, "failed", one_line(exc))
             raise
         finally:
-            seconds = time.perf_counter() - start
-            episodes.close()
-            for each in periodic:
-                each.close()
-            model.logger.close()
-        folder, _ = write_checkpoint(model, run_dir, self.spec.algo)
-        publish(folder, run_dir)
-        state = "interrupted" if stopped else "finished"
-        wall = self.wall_before + seconds
-        write_status(run_dir, state, model.num_timesteps, total, wall, _rel(folder, run_dir))
+            self.close()  # the folder is complete: another command may write it now
         return TrainResult(
             run_dir,
             self.spec,
@@ -239,6 +267,15 @@ class Run:
             wall,
             model,
         )
+
+
+def _quietly(write: Callable[..., None], *args: Any) -> None:
+    """Record how a session ended, unless that write fails too (the disk that filled up):
+    the error being raised is the one to report."""
+    try:
+        write(*args)
+    except OSError:
+        pass
 
 
 def _rel(folder: Path | None, run_dir: Path) -> str | None:
@@ -254,27 +291,38 @@ def _one_thread() -> None:
 def open_run(
     spec: RunSpec, run_dir: str | Path, *, eval_freq: int = 0, eval_episodes: int = 10
 ) -> Run:
-    """Check ``spec``, build its env and model, and write ``config.json`` into ``run_dir``
-    (``RunError`` when ``run_dir`` already holds a run). ``eval_freq`` > 0: evaluate
-    ``eval_episodes`` deterministic episodes every ``eval_freq`` env steps counted over all envs
+    """Check ``spec``, lock ``run_dir`` (``RunError`` naming the PID of a process that holds
+    it), build its env and model, and write ``config.json`` into ``run_dir`` (``RunError``
+    when ``run_dir`` already holds a run). ``eval_freq`` > 0: evaluate ``eval_episodes``
+    deterministic episodes every ``eval_freq`` env steps counted over all envs
     (:mod:`palaestra.runs.periodic_eval`)."""
     from palaestra.runs.periodic_eval import EvalSchedule, PeriodicEvaluation
 
     run_dir = Path(run_dir)
     spec.validate()
     schedule = EvalSchedule.from_arguments(eval_freq, eval_episodes)
-    if (run_dir / CONFIG_FILE).exists():
-        raise RunError(
-            f"{run_dir} already holds a run", f"choose another --out, or --resume {run_dir}"
-        )
-    _one_thread()
-    model = make_model(spec, make_env(spec, spec.seed))
-    run_dir.mkdir(parents=True, exist_ok=True)
-    config = spec.to_config()
-    if schedule is not None:
-        config["evaluation"] = schedule.to_config()
-    write_json(run_dir / CONFIG_FILE, config)
-    run = Run(spec, run_dir, model, False, 0.0, [])
+    existed = run_dir.exists()
+    lock = FolderLock(run_dir).acquire()  # before the check: two processes cannot both pass it
+    try:
+        if (run_dir / CONFIG_FILE).exists():
+            raise RunError(
+                f"{run_dir} already holds a run", f"choose another --out, or --resume {run_dir}"
+            )
+        _one_thread()
+        model = make_model(spec, make_env(spec, spec.seed))
+        config = spec.to_config()
+        if schedule is not None:
+            config["evaluation"] = schedule.to_config()
+        write_json(run_dir / CONFIG_FILE, config)
+    except BaseException:
+        lock.release()
+        if not existed:  # bad settings leave no folder behind
+            try:
+                run_dir.rmdir()
+            except OSError:
+                pass
+        raise
+    run = Run(spec, run_dir, model, False, 0.0, [], lock=lock)
     if schedule is not None:
         run.evaluation = PeriodicEvaluation(run_dir, schedule)
     run.notes.extend(_rounding_note(run))
@@ -316,14 +364,33 @@ def open_resume(
     """The run in ``run_dir`` with the model and env of its newest complete checkpoint (a
     resume is exact when the checkpoint holds the env's state; ``Run.notes`` says when it is
     not). ``n_timesteps`` extends the budget; ``allow_import``: the modules its config may
-    import; ``expect``: ``{"algo": ..., "env_id": ...}`` the caller believes it resumes."""
+    import; ``expect``: ``{"algo": ..., "env_id": ...}`` the caller believes it resumes.
+    The folder is locked as :func:`open_run` locks it."""
+    run_dir = Path(run_dir)
+    # A missing folder is read_run_config's error to report; an existing one is locked first.
+    lock = FolderLock(run_dir).acquire() if run_dir.is_dir() else None
+    try:
+        run = _open_resume(run_dir, n_timesteps, allow_import, expect)
+    except BaseException:
+        if lock is not None:
+            lock.release()
+        raise
+    run.lock = lock
+    return run
+
+
+def _open_resume(
+    run_dir: Path,
+    n_timesteps: int | None,
+    allow_import: Sequence[str],
+    expect: dict[str, str] | None,
+) -> Run:
     from palaestra.algos.model_io import ModelFileError
     from palaestra.runs import folder as run_folder
     from palaestra.runs import settings
     from palaestra.runs.checkpoint import latest_checkpoint, load_env_state, trim_logs
     from palaestra.runs.periodic_eval import EvalSchedule, PeriodicEvaluation, best_return
 
-    run_dir = Path(run_dir)
     config = run_folder.read_run_config(run_dir / CONFIG_FILE, allow_import, run_folder.RESUME_KEYS)
     for key, value in (expect or {}).items():
         if value is not None and str(value).lower() != str(config.get(key)).lower():
