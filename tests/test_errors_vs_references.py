@@ -163,8 +163,91 @@ def test_reset_options_that_are_not_a_dict(env_id: str, options: Any) -> None:
     assert ours_env.observation_space.contains(obs)
 
 
-def test_batched_reset_options_that_are_not_a_dict() -> None:
-    envs = pal.make_vec("Pendulum-v1", 2)
-    ours = _raised(lambda: envs.reset(seed=0, options="x"))
-    assert type(ours) is error.InvalidOptions and "got 'x'" in str(ours)
-    assert "(keys 'x_init', 'y_init')" in str(ours)
+VECTOR_OPTIONS = "Reset options must be None or a dict (of the sub-envs' options and 'reset_mask')"
+
+
+@pytest.mark.parametrize("mode", [None, "sync", "async"])
+def test_vector_reset_options_that_are_not_a_dict(mode: str | None) -> None:
+    kwargs = {} if mode is None else {"vectorization_mode": mode}
+    with pal.make_vec("Pendulum-v1", 2, **kwargs) as envs:
+        ours = _raised(lambda: envs.reset(seed=0, options=-1))
+        assert envs.reset(seed=0, options={"x_init": 0.0, "y_init": 0.0})[0].shape == (2, 3)
+    theirs = None
+    if _has("gymnasium"):
+        import gymnasium
+
+        their_envs = gymnasium.make_vec("Pendulum-v1", 2, **kwargs)
+        theirs = _raised(lambda: their_envs.reset(seed=0, options=-1))
+        their_envs.close()
+        assert type(theirs) is TypeError
+    assert_compatible(ours, theirs)
+    assert type(ours) is error.InvalidOptions
+    assert str(ours) == f"{VECTOR_OPTIONS}, got -1"
+
+
+# -- vector env construction ----------------------------------------------------------------
+@pytest.mark.parametrize("n_envs", [0, -1, "2", 2.0, None, True])
+def test_make_vec_env_n_envs(n_envs: Any) -> None:
+    ours = _raised(lambda: make_vec_env("CartPole-v1", n_envs=n_envs))
+    theirs = None
+    if _has("stable_baselines3") and n_envs is not True:  # SB3 takes True as 1
+        from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
+
+        theirs = _raised(lambda: sb3_make_vec_env("CartPole-v1", n_envs=n_envs))
+        assert type(theirs) in (TypeError, IndexError)
+    assert_compatible(ours, theirs)
+    assert type(ours) is error.InvalidNumEnvs and isinstance(ours, ValueError)
+    assert str(ours) == f"make_vec_env: n_envs must be an int >= 1, got {n_envs!r}"
+
+
+def _faces() -> dict[str, Any]:
+    from palaestra.vec_env import DummyVecEnv, SubprocVecEnv
+    from palaestra.vector import AsyncVectorEnv, SyncVectorEnv
+
+    return {
+        "DummyVecEnv": DummyVecEnv,
+        "SubprocVecEnv": lambda fns: SubprocVecEnv(fns, start_method="fork"),
+        "SyncVectorEnv": SyncVectorEnv,
+        "AsyncVectorEnv": lambda fns: AsyncVectorEnv(fns, context="fork"),
+    }
+
+
+@pytest.mark.parametrize(
+    "face", ["DummyVecEnv", "SubprocVecEnv", "SyncVectorEnv", "AsyncVectorEnv"]
+)
+def test_an_env_where_a_function_making_one_belongs(face: str) -> None:
+    env = pal.make("CartPole-v1")
+    ours = _raised(lambda: _faces()[face]([env]))
+    theirs = None
+    if _has("gymnasium") and face in ("DummyVecEnv", "SyncVectorEnv"):
+        import gymnasium
+
+        their_env = gymnasium.make("CartPole-v1")
+        if face == "SyncVectorEnv":
+            theirs = _raised(lambda: gymnasium.vector.SyncVectorEnv([their_env]))
+        elif _has("stable_baselines3"):
+            from stable_baselines3.common.vec_env import DummyVecEnv as SB3Dummy
+
+            theirs = _raised(lambda: SB3Dummy([their_env]))
+        assert theirs is None or type(theirs) is TypeError  # "'TimeLimit' object is not callable"
+    assert_compatible(ours, theirs)
+    assert type(ours) is error.InvalidEnvFunction
+    assert str(ours) == (
+        f"{face}: env_fns[0] is {env!r}, not a function that makes an env: pass e.g. "
+        "`lambda: palaestra.make(...)`, which makes a new env at each call"
+    )
+
+
+def test_a_vec_env_wrapper_around_something_else() -> None:
+    ours = _raised(lambda: VecNormalize(1))  # type: ignore[arg-type]
+    theirs = None
+    if _has("stable_baselines3"):
+        from stable_baselines3.common.vec_env import VecNormalize as SB3VecNormalize
+
+        theirs = _raised(lambda: SB3VecNormalize(1))
+        assert type(theirs) is AttributeError  # 'int' object has no attribute 'num_envs'
+    assert_compatible(ours, theirs)
+    assert type(ours) is error.NotAVecEnv and isinstance(ours, TypeError)
+    assert str(ours) == (
+        "VecNormalize expects a palaestra.vec_env.VecEnv to wrap, got 1 (<class 'int'>)"
+    )

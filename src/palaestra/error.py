@@ -168,6 +168,16 @@ class VecEnvAlreadySet(Error, ValueError):
     ``ValueError``, as in SB3)."""
 
 
+class InvalidEnvFunction(Error, TypeError):
+    """A vector env's ``env_fns`` entry that is not callable (often an env instead of a
+    function making one). A ``TypeError``, as Gymnasium and SB3 raise calling it."""
+
+
+class InvalidNumEnvs(Error, ValueError, TypeError, IndexError):
+    """``n_envs`` that is not an int >= 1. A ``ValueError``; also what SB3's ``make_vec_env``
+    raises for such values by accident: ``TypeError`` (not an int), ``IndexError`` (< 1)."""
+
+
 class InvalidCallback(Error, TypeError):
     """A ``callback`` argument that is not a callback instance, a function or a list of them
     (e.g. the class itself). Also a ``TypeError``, which is what SB3 raises for these."""

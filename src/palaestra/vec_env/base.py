@@ -244,7 +244,10 @@ class VecEnvWrapper(VecEnv):
         action_space: Space[Any] | None = None,
     ) -> None:
         if not isinstance(venv, VecEnv):
-            raise TypeError(f"Expected a palaestra.vec_env.VecEnv, got {type(venv)}")
+            raise error.NotAVecEnv(
+                f"{type(self).__name__} expects a palaestra.vec_env.VecEnv to wrap, got "
+                f"{venv!r:.200} ({type(venv)})"
+            )
         self.venv = venv
         super().__init__(
             venv.num_envs,
