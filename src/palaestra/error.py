@@ -28,6 +28,11 @@ class VersionNotFound(UnregisteredEnv):
     """The version of the requested id does not exist."""
 
 
+class InvalidEnvId(Error, ValueError):
+    """An id that is not ``[module:][namespace/]Name[-vN]``: more than one ``:``, or nothing
+    before it. Also a ``ValueError``, which is what Gymnasium's ``make`` raises for these."""
+
+
 class DeprecatedEnv(Error):
     """An older version than the latest registered one was requested."""
 
@@ -59,6 +64,17 @@ class InvalidAction(Error, ValueError):
     Also a ``ValueError``: Gymnasium's vector envs raise ValueError for a batch of the wrong
     size, and code written for them catches that.
     """
+
+
+class InvalidOptions(Error, TypeError):
+    """Reset options that are neither ``None`` nor a dict (or, for ``VecEnv.set_options``, one
+    dict per env). Also a ``TypeError``: what Gymnasium's envs and SB3's ``VecEnv.reset`` raise
+    for such options when they fail at all."""
+
+
+class OptionsCountError(Error, ValueError, IndexError):
+    """``VecEnv.set_options`` got a list with one entry per env, but not ``num_envs`` of them.
+    A ``ValueError``; also an ``IndexError``, which is what SB3's ``reset`` raises then."""
 
 
 class MissingArgument(Error):
@@ -133,6 +149,38 @@ def dependency_not_installed(package: str, extra: str, purpose: str) -> Dependen
 class UnsupportedSpace(Error, TypeError):
     """An algorithm was given an observation or action space it cannot learn on (a TypeError,
     as palaestra has always raised it)."""
+
+
+class InvalidObservation(Error, ValueError, AssertionError):
+    """An observation (or an env's observation space) that does not fit the model's or the
+    wrapper's. A ``ValueError``; also an ``AssertionError``, which is what SB3 raises in the same
+    places (``predict`` of a dict on a non-Dict space, ``VecNormalize.set_venv``)."""
+
+
+class NotAVecEnv(Error, TypeError, AttributeError):
+    """Something that is not a ``palaestra.vec_env.VecEnv`` where one is needed. A
+    ``TypeError``; also an ``AttributeError``, which is what SB3's ``VecNormalize.set_venv``
+    raises (reading ``venv.num_envs``)."""
+
+
+class VecEnvAlreadySet(Error, ValueError):
+    """``VecNormalize.set_venv`` on a wrapper that already wraps a vector env (a
+    ``ValueError``, as in SB3)."""
+
+
+class InvalidEnvFunction(Error, TypeError):
+    """A vector env's ``env_fns`` entry that is not callable (often an env instead of a
+    function making one). A ``TypeError``, as Gymnasium and SB3 raise calling it."""
+
+
+class InvalidNumEnvs(Error, ValueError, TypeError, IndexError):
+    """``n_envs`` that is not an int >= 1. A ``ValueError``; also what SB3's ``make_vec_env``
+    raises for such values by accident: ``TypeError`` (not an int), ``IndexError`` (< 1)."""
+
+
+class InvalidCallback(Error, TypeError):
+    """A ``callback`` argument that is not a callback instance, a function or a list of them
+    (e.g. the class itself). Also a ``TypeError``, which is what SB3 raises for these."""
 
 
 # Run state (exact resume)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import sys
-
 import pytest
 
 from palaestra.vector.worker import EMPTY_OK, decode, encode, encode_error
@@ -25,7 +23,6 @@ def test_plain_exception_round_trips_with_its_traceback_text():
 def test_class_pickle_cannot_name_comes_back_as_the_same_class():
     # A local class stands for a script's class rebuilt by value in a spawn worker: plain pickle
     # cannot find it by name, cloudpickle sends it by value and its tracking maps it back.
-    pytest.importorskip("cloudpickle")
 
     class LocalError(Exception):
         pass
@@ -44,23 +41,40 @@ def test_exception_that_cannot_be_rebuilt_becomes_a_runtime_error_naming_it():
     assert "TwoArgs" in text
 
 
-def test_answers_by_value_without_cloudpickle_raise_the_pickling_error(monkeypatch):
-    class Local:
-        pass
-
-    assert encode(True, {}) == EMPTY_OK and decode(EMPTY_OK) == (True, {})
-    monkeypatch.setitem(sys.modules, "cloudpickle", None)
-    with pytest.raises(AttributeError, match="Can't pickle local object"):
-        encode(True, Local())
-
-
-def test_local_env_function_without_cloudpickle_says_what_to_do(monkeypatch):
+def test_local_env_functions_travel_by_value_and_module_ones_by_name():
     import pickle
 
     from palaestra.vector.worker import Payload
 
-    monkeypatch.setitem(sys.modules, "cloudpickle", None)
-    with pytest.raises(TypeError, match=r"cannot send the env function <function .*<lambda>.* "
-                       r"pass a module-level function, or `pip install cloudpickle`"):  # fmt: skip
-        pickle.dumps(Payload(lambda: None))
+    scale = 3
+
+    class Local:
+        def __init__(self) -> None:
+            self.scale = scale
+
+    assert encode(True, {}) == EMPTY_OK and decode(EMPTY_OK) == (True, {})
+    assert pickle.loads(pickle.dumps(Payload(lambda: scale * 2))).fn() == 6
+    assert pickle.loads(pickle.dumps(Payload(Local))).fn().scale == 3
     assert pickle.loads(pickle.dumps(Payload(sorted))).fn is sorted
+    ok, answer = decode(encode(True, Local()))
+    assert ok is True and type(answer) is Local and answer.scale == 3
+
+
+def test_env_function_that_cannot_be_pickled_names_itself_and_the_cause():
+    import pickle
+    import threading
+
+    from palaestra.vector.worker import Payload
+
+    lock = threading.Lock()
+
+    def make_env():
+        return lock
+
+    expected = (
+        r"cannot send the env function <function .*make_env.*> to a worker process: cannot "
+        r"pickle '_thread.lock' object \(it, or something it refers to, cannot be pickled; "
+        r"build that inside the function\)"
+    )
+    with pytest.raises(TypeError, match=expected):
+        pickle.dumps(Payload(make_env))

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.error import dependency_not_installed
+from palaestra.error import InvalidCallback, dependency_not_installed
 from palaestra.utils.atomic_write import atomic_write
 
 __all__ = [
@@ -162,9 +162,17 @@ def convert_callback(callback: Any) -> BaseCallback:
         return CallbackList([convert_callback(cb) for cb in callback])
     if isinstance(callback, BaseCallback):
         return callback
+    expected = "a BaseCallback instance, a function f(locals, globals) or a list of them"
+    if isinstance(callback, type):
+        # a class is callable, but calling it with (locals, globals) builds a callback instead
+        # of running one: SB3 fails there with an argument-count TypeError
+        raise InvalidCallback(
+            f"callback={callback!r} is a class: pass an instance, e.g. "
+            f"callback={callback.__name__}(...) (expected {expected})"
+        )
     if callable(callback):
         return ConvertCallback(callback)
-    raise TypeError(f"callback must be a BaseCallback, a function or a list, got {callback!r}")
+    raise InvalidCallback(f"callback must be {expected}, got {callback!r:.200}")
 
 
 class EventCallback(BaseCallback):

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from palaestra import spaces
-from palaestra.error import UnsupportedSpace
+from palaestra.error import InvalidObservation, UnsupportedSpace
 
 __all__ = [
     "allocate",
@@ -55,11 +55,20 @@ def is_vectorized_observation(obs: Any, space: spaces.Space[Any]) -> bool:
     """
     if isinstance(space, spaces.Dict):
         if not isinstance(obs, dict):
-            raise ValueError(f"Expected a dict observation for {space}, got {type(obs).__name__}")
+            raise InvalidObservation(
+                f"Expected a dict observation for {space}, got {obs!r:.200} ({type(obs).__name__})"
+            )
         flags = {key: is_vectorized_observation(obs[key], sub) for key, sub in space.spaces.items()}
         if len(set(flags.values())) > 1:
             raise ValueError(f"Observation keys disagree on batching: {flags}")
         return next(iter(flags.values()))
+    if isinstance(obs, dict):
+        # SB3 asserts this; without the check the dict becomes an object array and fails deep
+        # in torch
+        raise InvalidObservation(
+            f"The observation {obs!r:.200} is a dict, but the observation space is {space}: "
+            "pass an observation of that space (or a batch of them)"
+        )
     shape = np.shape(obs)
     single: tuple[int, ...] = (
         tuple(space.shape or ()) if not isinstance(space, spaces.Discrete) else ()

@@ -18,7 +18,13 @@ import re
 from typing import Any
 
 import numpy as np
-import torch
+
+from palaestra.error import dependency_not_installed
+
+try:
+    import torch
+except ImportError as exc:  # the one dependency from_sb3 has: say which extra ships it
+    raise dependency_not_installed("torch", "train", "palaestra.compat.from_sb3") from exc
 
 from palaestra import spaces
 from palaestra.algos import DQN, PPO

@@ -231,6 +231,11 @@ def spec(env_id: str) -> EnvSpec:
 def resolve_id(env_id: str) -> EnvSpec:
     """Resolve ``[module:]id``: import ``module`` first, then fall back to the latest version."""
     module, _, env_name = env_id.rpartition(":")
+    if ":" in env_id and (not module or ":" in module):
+        raise error.InvalidEnvId(
+            f"{env_id!r} is not an environment id: expected 'Name-vN' or 'module:Name-vN' "
+            "(one ':' after the name of a module to import, which registers the id)"
+        )
     if module:
         try:
             importlib.import_module(module)

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.core import Env
-from palaestra.error import DependencyNotInstalled, dependency_not_installed
+from palaestra.error import dependency_not_installed
 
 __all__ = ["MissingKeysToAction", "PlayPlot", "PlayableGame", "display_arr", "play"]
 
@@ -26,10 +26,8 @@ class MissingKeysToAction(Exception):
 def _pygame() -> Any:
     try:
         import pygame
-    except ImportError as exc:  # not an extra: palaestra renders without pygame elsewhere
-        raise DependencyNotInstalled(
-            "pygame is not installed, run `pip install pygame` (needed for palaestra.utils.play)"
-        ) from exc
+    except ImportError as exc:
+        raise dependency_not_installed("pygame", "play", "palaestra.utils.play") from exc
     return pygame
 
 

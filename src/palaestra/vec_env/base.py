@@ -9,12 +9,13 @@ set with :meth:`VecEnv.seed` / :meth:`VecEnv.set_options` apply at the next ``re
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from copy import deepcopy
 from typing import Any
 
 import numpy as np
 
+from palaestra import error
 from palaestra.spaces import Space
 from palaestra.utils import run_state
 from palaestra.utils.run_state import State
@@ -165,13 +166,31 @@ class VecEnv:
         return self._seeds
 
     def set_options(self, options: list[dict[str, Any]] | dict[str, Any] | None = None) -> None:
-        """Reset options for the next ``reset()``: one dict for all envs or one per env."""
+        """Reset options for the next ``reset()``: one dict for all envs or one per env.
+
+        Anything else is refused here (``InvalidOptions``, a ``TypeError``; a list of the wrong
+        length: ``OptionsCountError``), where SB3 accepts it and fails in ``reset``.
+        """
+        n = self.num_envs
+        expected = f"a dict (the same options for every env) or a list of {n} dicts (one per env)"
         if options is None:
             options = {}
-        if isinstance(options, dict):
-            self._options = [deepcopy(options) for _ in range(self.num_envs)]
-        else:
-            self._options = deepcopy(list(options))
+        if isinstance(options, Mapping):
+            self._options = [deepcopy(dict(options)) for _ in range(n)]
+            return
+        if not isinstance(options, (list, tuple)):
+            raise error.InvalidOptions(f"set_options expects {expected}, got {options!r:.200}")
+        bad = [o for o in options if o is not None and not isinstance(o, Mapping)]
+        if bad:
+            raise error.InvalidOptions(
+                f"set_options expects {expected}, got {options!r:.200}: "
+                f"{bad[0]!r:.100} is not a dict"
+            )
+        if len(options) != n:
+            raise error.OptionsCountError(
+                f"set_options expects {expected}, got a list of {len(options)}: {options!r:.200}"
+            )
+        self._options = [{} if o is None else deepcopy(dict(o)) for o in options]
 
     def _reset_seeds(self) -> None:
         self._seeds = [None] * self.num_envs
@@ -225,7 +244,10 @@ class VecEnvWrapper(VecEnv):
         action_space: Space[Any] | None = None,
     ) -> None:
         if not isinstance(venv, VecEnv):
-            raise TypeError(f"Expected a palaestra.vec_env.VecEnv, got {type(venv)}")
+            raise error.NotAVecEnv(
+                f"{type(self).__name__} expects a palaestra.vec_env.VecEnv to wrap, got "
+                f"{venv!r:.200} ({type(venv)})"
+            )
         self.venv = venv
         super().__init__(
             venv.num_envs,

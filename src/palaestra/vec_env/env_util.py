@@ -8,7 +8,9 @@ from collections.abc import Callable
 from dataclasses import asdict
 from typing import Any
 
-from palaestra import logger
+import numpy as np
+
+from palaestra import error, logger
 from palaestra.core import Env
 from palaestra.vec_env.atari_vec_env import AtariGameMonitor, AtariVecEnv, atari_wrapper_settings
 from palaestra.vec_env.base import VecEnv
@@ -67,6 +69,8 @@ def make_vec_env(
     from palaestra.envs.registration import make
     from palaestra.wrappers.monitor import Monitor
 
+    if isinstance(n_envs, bool) or not isinstance(n_envs, (int, np.integer)) or n_envs < 1:
+        raise error.InvalidNumEnvs(f"make_vec_env: n_envs must be an int >= 1, got {n_envs!r}")
     env_kwargs = env_kwargs or {}
     vec_env_kwargs = vec_env_kwargs or {}
     monitor_kwargs = monitor_kwargs or {}

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from palaestra import error
 from palaestra.spaces import Box, Dict, Space
 from palaestra.vec_env import normalize_file
 from palaestra.vec_env.base import StepReturn, VecEnv, VecEnvWrapper
@@ -213,6 +214,42 @@ class VecNormalize(VecEnvWrapper):
         """The last rewards before normalisation."""
         return self.old_reward.copy()
 
+    # -- pickling and set_venv (SB3's semantics) --------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        """The statistics and settings without the wrapped env (SB3 pickles it this way):
+        attach one with :meth:`set_venv` before use."""
+        state = self.__dict__.copy()
+        del state["venv"], state["returns"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.venv = None  # type: ignore[assignment]
+
+    def set_venv(self, venv: VecEnv) -> None:
+        """Wrap ``venv`` (after unpickling, which leaves the wrapper without one); its
+        observation shapes must be the ones the statistics were gathered on, its number of
+        envs may differ (the running returns start again at 0)."""
+        if self.venv is not None:
+            raise error.VecEnvAlreadySet(
+                f"Trying to set venv of already initialized VecNormalize wrapper: it wraps "
+                f"{self.venv!r}; set_venv({venv!r}) expects a VecNormalize without one "
+                "(unpickled). Wrap the new env in VecNormalize, or VecNormalize.load the "
+                "saved statistics around it."
+            )
+        if not isinstance(venv, VecEnv):
+            raise error.NotAVecEnv(
+                f"VecNormalize.set_venv expects a palaestra.vec_env.VecEnv, got {venv!r:.200}"
+            )
+        _check_same_shapes(self.observation_space, venv.observation_space)
+        self.venv = venv
+        self.num_envs = venv.num_envs
+        self.render_mode = venv.render_mode
+        self.metadata = venv.metadata
+        self._reset_seeds()
+        self._reset_options()
+        self.returns = np.zeros(self.num_envs)
+
     # -- saving ---------------------------------------------------------------------------
     def save(self, save_path: str | os.PathLike[str]) -> None:
         """Write the statistics and settings to ``save_path`` (an ``.npz``; no pickle)."""
@@ -226,6 +263,23 @@ class VecNormalize(VecEnvWrapper):
         that is not one ``save`` wrote, or whose statistics do not fit ``venv``.
         """
         return normalize_file.load(load_path, venv, VecNormalize)
+
+
+def _check_same_shapes(ours: Space[Any], theirs: Space[Any]) -> None:
+    """SB3's ``check_shape_equal``: the same ``Dict`` keys and ``Box`` shapes, recursively."""
+    if isinstance(ours, Dict):
+        if not isinstance(theirs, Dict) or set(ours.spaces) != set(theirs.spaces):
+            raise error.InvalidObservation(
+                f"VecNormalize.set_venv: the env's observation space {theirs} does not have the "
+                f"keys of the one the statistics were gathered on, {ours}"
+            )
+        for key, sub in ours.spaces.items():
+            _check_same_shapes(sub, theirs.spaces[key])
+    elif isinstance(ours, Box) and ours.shape != theirs.shape:
+        raise error.InvalidObservation(
+            f"VecNormalize.set_venv: the env's observation space {theirs} has shape "
+            f"{theirs.shape}, but the statistics were gathered on {ours} (shape {ours.shape})"
+        )
 
 
 def _with_keys(obs: Any, rms: dict[str, RunningMeanStd]) -> dict[str, Any]:

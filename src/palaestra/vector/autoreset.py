@@ -7,6 +7,7 @@ SB3 face turns it into ``(obs, rewards, dones, infos)`` with ``terminal_observat
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -33,6 +34,11 @@ class Transition(NamedTuple):
 
 def parse_reset_mask(options: dict[str, Any] | None, num_envs: int) -> np.ndarray | None:
     """Check ``options["reset_mask"]`` (Gymnasium's rules); None when absent."""
+    if options is not None and not isinstance(options, Mapping):
+        raise error.InvalidOptions(  # Gymnasium: "argument of type 'int' is not iterable"
+            f"Reset options must be None or a dict (of the sub-envs' options and "
+            f"'reset_mask'), got {options!r:.200}"
+        )
     if options is None or "reset_mask" not in options:
         return None
     mask = options["reset_mask"]

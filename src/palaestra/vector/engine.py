@@ -203,14 +203,26 @@ def is_wrapped(env: Any, wrapper_class: type) -> bool:
     return False
 
 
+def check_env_fns(env_fns: Sequence[Callable[[], Env[Any, Any]]], who: str) -> None:
+    """At least one env function, each callable (``InvalidEnvFunction`` names the first that
+    is not: usually an env passed where a function making one belongs)."""
+    if len(env_fns) == 0:
+        raise ValueError(f"{who} needs at least one environment function")
+    for i, fn in enumerate(env_fns):
+        if not callable(fn):
+            raise error.InvalidEnvFunction(
+                f"{who}: env_fns[{i}] is {fn!r:.200}, not a function that makes an env: pass "
+                "e.g. `lambda: palaestra.make(...)`, which makes a new env at each call"
+            )
+
+
 class LoopEngine:
     """Sub-env objects in this process, stepped one after the other."""
 
     def __init__(
         self, env_fns: Sequence[Callable[[], Env[Any, Any]]], observation_mode: Any, who: str
     ) -> None:
-        if len(env_fns) == 0:
-            raise ValueError(f"{who} needs at least one environment function")
+        check_env_fns(env_fns, who)
         self.envs = [fn() for fn in env_fns]
         for i, env in enumerate(self.envs):
             if not isinstance(env, Env):

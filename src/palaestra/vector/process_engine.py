@@ -38,6 +38,7 @@ from palaestra.vector.engine import (
     batch_spaces,
     check_action_spaces,
     check_actions_batch,
+    check_env_fns,
 )
 from palaestra.vector.shared_memory import (
     create_shared_memory,
@@ -127,8 +128,7 @@ class ProcessEngine:
             # silently, with a code that the parent turns into one line. Nothing has been
             # started or opened here yet.
             os._exit(NO_MAIN_GUARD_EXIT)
-        if len(env_fns) == 0:
-            raise ValueError(f"{who} needs at least one environment function")
+        check_env_fns(env_fns, who)
         self.who = who
         self.num_envs = n = len(env_fns)
         self.closed = False

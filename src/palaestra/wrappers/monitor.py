@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, SupportsFloat
 import numpy as np
 
 from palaestra.core import ActType, Env, ObsType, Wrapper
-from palaestra.error import DependencyNotInstalled
+from palaestra.error import dependency_not_installed
 from palaestra.utils.atomic_write import atomic_write, complete_text, open_append
 from palaestra.utils.record_constructor import RecordConstructorArgs
 
@@ -246,13 +246,12 @@ def read_monitor_file(filename: str) -> tuple[dict[str, Any], dict[str, np.ndarr
 
 def load_results(path: str) -> pandas.DataFrame:
     """All ``*monitor.csv`` logs in ``path`` as one pandas DataFrame sorted by time, with ``t``
-    counted from the earliest ``t_start`` (SB3's function; needs pandas)."""
+    counted from the earliest ``t_start`` (SB3's function; needs pandas: ``palaestra[monitor]``)."""
     try:
         import pandas
     except ImportError as e:
-        raise DependencyNotInstalled(
-            "pandas is not installed, run `pip install pandas` (needed for load_results; "
-            "read_monitor_file works without it)"
+        raise dependency_not_installed(
+            "pandas", "monitor", "load_results; read_monitor_file works without it"
         ) from e
     files = get_monitor_files(path)
     if not files:

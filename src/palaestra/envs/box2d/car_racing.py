@@ -28,7 +28,7 @@ from palaestra.envs.box2d._common import (
     import_box2d,
 )
 from palaestra.envs.box2d.car_dynamics import Car, Wheel
-from palaestra.envs.classic_control._common import ClassicControlEnv
+from palaestra.envs.classic_control._common import ClassicControlEnv, checked_options
 from palaestra.spaces import Box, Discrete
 
 STATE_W, STATE_H = 96, 96
@@ -362,8 +362,9 @@ class CarRacing(ClassicControlEnv):
         self.road_poly = []
         if self.domain_randomize:
             randomize = True
-            if isinstance(options, dict) and "randomize" in options:
-                randomize = options["randomize"]
+            given = checked_options(options, ("randomize",))
+            if "randomize" in given:
+                randomize = given["randomize"]
             if randomize:
                 self._random_colors()
         while not self._create_track():

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -43,14 +43,30 @@ def parse_number(name: str, value: Any) -> float:
     return number
 
 
+def checked_options(options: Any, keys: Sequence[str]) -> Mapping[str, Any]:
+    """``options`` as a mapping (``{}`` for None), or ``InvalidOptions`` naming it and ``keys``.
+
+    Gymnasium looks keys up with ``in``, so a string passes silently ("low" in "x"), a list
+    passes and an int raises ``TypeError``: anything but a mapping is refused here, as a
+    ``TypeError`` (``InvalidOptions`` is one).
+    """
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        wanted = ", ".join(repr(k) for k in keys)
+        raise error.InvalidOptions(
+            f"Reset options must be None or a dict (keys {wanted}), got {options!r:.200}"
+        )
+    return options
+
+
 def parse_reset_bounds(
     options: dict[str, Any] | None, default_low: float, default_high: float
 ) -> tuple[float, float]:
     """``options["low"]``/``["high"]`` or the defaults, checked (Gymnasium's reset options)."""
-    if options is None:
-        return default_low, default_high
-    low = parse_number("low", options["low"]) if "low" in options else default_low
-    high = parse_number("high", options["high"]) if "high" in options else default_high
+    given = checked_options(options, ("low", "high"))
+    low = parse_number("low", given["low"]) if "low" in given else default_low
+    high = parse_number("high", given["high"]) if "high" in given else default_high
     if low > high:
         raise ValueError(f"Lower bound ({low}) must be lower than higher bound ({high}).")
     if not math.isfinite(high - low):

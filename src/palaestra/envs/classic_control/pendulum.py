@@ -20,6 +20,7 @@ from palaestra.envs.classic_control._common import (
     RENDER_MODES,
     ClassicControlEnv,
     check_box_action,
+    checked_options,
     expose_params,
     parse_number,
     state_array,
@@ -63,14 +64,13 @@ def step_state(ops: Any, p: PendulumParams, th: Any, thdot: Any, u: Any) -> Any:
 
 def parse_options(options: dict[str, Any] | None) -> tuple[float, float]:
     """``x_init``/``y_init`` reset options (half-widths of the symmetric reset box)."""
-    if options is None:
-        return DEFAULT_X, DEFAULT_Y
-    x = parse_number("x_init", options["x_init"]) if "x_init" in options else DEFAULT_X
-    y = parse_number("y_init", options["y_init"]) if "y_init" in options else DEFAULT_Y
+    given = checked_options(options, ("x_init", "y_init"))
+    x = parse_number("x_init", given["x_init"]) if "x_init" in given else DEFAULT_X
+    y = parse_number("y_init", given["y_init"]) if "y_init" in given else DEFAULT_Y
     for name, value in (("x_init", x), ("y_init", y)):
         # Gymnasium draws U(-v, v) with numpy, which refuses v < 0 (high - low < 0) and a
         # 2 * v that overflows; we would draw from a flipped or infinite box instead.
-        shown = f"Reset option {name}={options.get(name)!r}"
+        shown = f"Reset option {name}={given.get(name)!r}"
         if value < 0:
             raise ValueError(f"{shown} must be >= 0: the state is drawn from [-{name}, {name}].")
         if not math.isfinite(2 * value):
