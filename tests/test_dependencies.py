@@ -213,11 +213,7 @@ def _optional_modules() -> list[str]:
 
 
 # Known gaps in code this change could not touch, each failing until fixed (strict xfail).
-KNOWN_GAPS = {
-    "yaml": "runs/settings.py raises RunError('... needs PyYAML', 'pip install pyyaml ...') "
-    "for a YAML --config: it should name palaestra[sweep] (dependency_not_installed("
-    "'PyYAML', 'sweep', ...)); runs/ is another change's",
-}
+KNOWN_GAPS: dict[str, str] = {}
 
 
 @pytest.mark.parametrize(

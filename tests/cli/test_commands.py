@@ -221,8 +221,8 @@ def test_yaml_config_without_pyyaml(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     result = run_cli("train", "ppo", "CartPole-v1", "--config", tmp_path / "c.yaml")
     assert result.code == 1
     assert result.err == (
-        f"palaestra: error: reading the YAML config '{tmp_path / 'c.yaml'}' needs PyYAML "
-        "(pip install pyyaml, or write the config as JSON)\n"
+        'palaestra: error: PyYAML is not installed, run `pip install "palaestra[sweep]"` '
+        f"(needed for reading the YAML config '{tmp_path / 'c.yaml'}'; or write it as JSON)\n"
     )
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from palaestra import presets
+from palaestra.error import dependency_not_installed
 from palaestra.runs import known_names
 from palaestra.runs.errors import RunError
 from palaestra.runs.files import REPLAY_ALGOS, note
@@ -119,10 +120,8 @@ def load_config_file(path: str) -> dict[str, Any]:
         try:
             import yaml
         except ImportError:
-            raise RunError(
-                f"reading the YAML config {path!r} needs PyYAML",
-                "pip install pyyaml, or write the config as JSON",
-                code=1,
+            raise dependency_not_installed(
+                "PyYAML", "sweep", f"reading the YAML config {path!r}; or write it as JSON"
             ) from None
         try:
             data = yaml.safe_load(text)

@@ -148,6 +148,7 @@ class Run:
         """The step count training will end at: ``spec.n_timesteps`` rounded up to whole
         rollouts (PPO, A2C) or ``train_freq`` collections (off-policy), as SB3's loops do."""
         return int(self.model.final_timesteps(self.spec.n_timesteps))
+
     lock: FolderLock | None = dataclasses.field(default=None, repr=False)
 
     def close(self) -> None:
