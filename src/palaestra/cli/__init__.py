@@ -3,8 +3,9 @@
 
 Every failure the user can fix prints one line, ``palaestra: error: <what> (<fix>)``, and
 exits with 2 (bad input) or 1 (a runtime failure, e.g. a missing optional package); Ctrl-C
-exits with 130 (``train``: 143 after SIGTERM). ``sys.exit`` called while a command runs (a
-callback, an env wrapper) prints its message and exits non-zero: the command did not finish.
+exits with 130 (``train`` and ``sweep``: 143 after SIGTERM). ``sys.exit`` called while a
+command runs (a callback, an env wrapper) prints its message and exits non-zero: the command
+did not finish.
 ``PALAESTRA_DEBUG=1`` shows the traceback of unexpected errors instead.
 """
 

@@ -8,7 +8,7 @@ from typing import Any
 
 from palaestra.runs.errors import RunError
 
-__all__ = ["CLIError", "add_allow_import", "add_timesteps", "eprint"]
+__all__ = ["CLIError", "add_address", "add_allow_import", "add_timesteps", "eprint"]
 
 
 class CLIError(RunError):
@@ -54,3 +54,15 @@ def add_timesteps(parser: Any, metavar: str, help: str) -> None:
     )
     for alias in ("--total-timesteps", "--n-timesteps"):
         parser.add_argument(alias, dest="timesteps", type=int, help=argparse.SUPPRESS)
+
+
+def add_address(parser: Any) -> None:
+    """The ``--address`` option of the commands that can run on Ray (``compare``, ``sweep``)."""
+    parser.add_argument(
+        "--address",
+        metavar="ADDR",
+        help="Ray cluster to run on with --backend ray: auto (the cluster this machine joined "
+        "with `ray start`) or HEAD:6379; with token authentication, export RAY_AUTH_MODE=token "
+        'first; ray://HOST:10001 (Ray Client) needs pip install "ray[client]" (default: a '
+        "local Ray, started without the dashboard and shut down on any exit)",
+    )

@@ -16,7 +16,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from palaestra.cli.common import CLIError, add_allow_import, add_timesteps
+from palaestra.cli.common import CLIError, add_address, add_allow_import, add_timesteps
 from palaestra.runs.stats import CONFIDENCE_LEVEL, method_note
 
 __all__ = ["add_parser", "run"]
@@ -92,12 +92,7 @@ def add_parser(sub: Any) -> None:
         "default), or as Ray tasks (ray: a local Ray on this machine's cores, or the cluster "
         "at --address)",
     )
-    p.add_argument(
-        "--address",
-        metavar="ADDR",
-        help="Ray cluster to run on with --backend ray: auto (the cluster this machine "
-        "joined with `ray start`) or ray://HOST:10001 (default: a local Ray)",
-    )
+    add_address(p)
     add_allow_import(p, "compare (a settings file's env_wrapper)")
     p.set_defaults(func=run)
 

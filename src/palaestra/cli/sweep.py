@@ -9,7 +9,7 @@ import signal
 from pathlib import Path
 from typing import Any
 
-from palaestra.cli.common import CLIError, add_timesteps, eprint
+from palaestra.cli.common import CLIError, add_address, add_timesteps, eprint
 
 __all__ = ["add_parser", "run"]
 
@@ -46,13 +46,7 @@ def add_parser(sub: Any) -> None:
         default="local",
         help="trials one after another in this process, or as Ray tasks (default local)",
     )
-    p.add_argument(
-        "--address",
-        metavar="ADDR",
-        help="Ray cluster with --backend ray: auto (the cluster this machine joined with `ray "
-        "start`) or HEAD:6379; with token authentication export RAY_AUTH_MODE=token first "
-        "(default: a local Ray)",
-    )
+    add_address(p)
     p.add_argument(
         "--storage",
         metavar="URL",
