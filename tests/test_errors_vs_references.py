@@ -9,26 +9,15 @@ that palaestra's exception is an instance of the reference's exception type.
 from __future__ import annotations
 
 import importlib.util
-import warnings
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pytest
+from tests.raised import raised
 
 import palaestra as pal
 from palaestra import error
 from palaestra.vec_env import VecNormalize, make_vec_env
-
-
-def _raised(fn: Callable[[], Any]) -> BaseException | None:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            fn()
-        except Exception as e:
-            return e
-    return None
 
 
 def _has(module: str) -> bool:
@@ -45,12 +34,12 @@ def assert_compatible(ours: BaseException | None, theirs: BaseException | None) 
 # -- make(id) -------------------------------------------------------------------------------
 @pytest.mark.parametrize("env_id", ["::", ":", ":b", "::x", "x::", "a:b:c", ":CartPole-v1"])
 def test_malformed_module_ids(env_id: str) -> None:
-    ours = _raised(lambda: pal.make(env_id))
+    ours = raised(lambda: pal.make(env_id))
     theirs = None
     if _has("gymnasium"):
         import gymnasium
 
-        theirs = _raised(lambda: gymnasium.make(env_id))
+        theirs = raised(lambda: gymnasium.make(env_id))
         assert type(theirs) is ValueError  # "too many values to unpack", "Empty module name"
     assert_compatible(ours, theirs)
     assert type(ours) is error.InvalidEnvId
@@ -58,12 +47,12 @@ def test_malformed_module_ids(env_id: str) -> None:
         f"{env_id!r} is not an environment id: expected 'Name-vN' or 'module:Name-vN' (one ':' "
         "after the name of a module to import, which registers the id)"
     )
-    assert type(_raised(lambda: pal.make_vec(env_id, 2))) is error.InvalidEnvId
+    assert type(raised(lambda: pal.make_vec(env_id, 2))) is error.InvalidEnvId
 
 
 def test_module_ids_still_import_the_module() -> None:
     assert pal.make("palaestra.envs:CartPole-v1").spec.id == "CartPole-v1"
-    missing = _raised(lambda: pal.make("no_such_module_24:X-v0"))
+    missing = raised(lambda: pal.make("no_such_module_24:X-v0"))
     assert type(missing) is ModuleNotFoundError and "'no_such_module_24'" in str(missing)
 
 
@@ -91,7 +80,7 @@ def test_set_options_refuses_what_is_not_options(
     face: str, options: Any, kind: type, detail: str
 ) -> None:
     venv = _vec_envs()[face]()
-    ours = _raised(lambda: venv.set_options(options))
+    ours = raised(lambda: venv.set_options(options))
     venv.close()
     theirs = None
     if _has("stable_baselines3") and options != [{}, {}, {}]:  # SB3 ignores the third dict
@@ -102,7 +91,7 @@ def test_set_options_refuses_what_is_not_options(
             sb3_venv.set_options(options)  # SB3 fails only at the next reset
             sb3_venv.reset()
 
-        theirs = _raised(sb3)
+        theirs = raised(sb3)
         assert theirs is not None
     if options != "x":  # SB3: IndexError ('x'[1]), by accident of indexing a string
         assert_compatible(ours, theirs)
@@ -151,9 +140,9 @@ def _make_pair(env_id: str) -> tuple[Any, Any]:
 @pytest.mark.parametrize("options", ["x", -1, [1], 2.5])
 def test_reset_options_that_are_not_a_dict(env_id: str, options: Any) -> None:
     ours_env, theirs_env = _make_pair(env_id)
-    ours = _raised(lambda: ours_env.reset(seed=0, options=options))
+    ours = raised(lambda: ours_env.reset(seed=0, options=options))
     # Gymnasium: TypeError for -1 and 2.5 ("in" on a number), silence for 'x' and [1]
-    theirs = None if theirs_env is None else _raised(lambda: theirs_env.reset(options=options))
+    theirs = None if theirs_env is None else raised(lambda: theirs_env.reset(options=options))
     assert theirs is None or type(theirs) is TypeError
     assert_compatible(ours, theirs)
     keys = ", ".join(repr(k) for k in _READERS.get(env_id, ("randomize",)))
@@ -170,14 +159,14 @@ VECTOR_OPTIONS = "Reset options must be None or a dict (of the sub-envs' options
 def test_vector_reset_options_that_are_not_a_dict(mode: str | None) -> None:
     kwargs = {} if mode is None else {"vectorization_mode": mode}
     with pal.make_vec("Pendulum-v1", 2, **kwargs) as envs:
-        ours = _raised(lambda: envs.reset(seed=0, options=-1))
+        ours = raised(lambda: envs.reset(seed=0, options=-1))
         assert envs.reset(seed=0, options={"x_init": 0.0, "y_init": 0.0})[0].shape == (2, 3)
     theirs = None
     if _has("gymnasium"):
         import gymnasium
 
         their_envs = gymnasium.make_vec("Pendulum-v1", 2, **kwargs)
-        theirs = _raised(lambda: their_envs.reset(seed=0, options=-1))
+        theirs = raised(lambda: their_envs.reset(seed=0, options=-1))
         their_envs.close()
         assert type(theirs) is TypeError
     assert_compatible(ours, theirs)
@@ -188,12 +177,12 @@ def test_vector_reset_options_that_are_not_a_dict(mode: str | None) -> None:
 # -- vector env construction ----------------------------------------------------------------
 @pytest.mark.parametrize("n_envs", [0, -1, "2", 2.0, None, True])
 def test_make_vec_env_n_envs(n_envs: Any) -> None:
-    ours = _raised(lambda: make_vec_env("CartPole-v1", n_envs=n_envs))
+    ours = raised(lambda: make_vec_env("CartPole-v1", n_envs=n_envs))
     theirs = None
     if _has("stable_baselines3") and n_envs is not True:  # SB3 takes True as 1
         from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
 
-        theirs = _raised(lambda: sb3_make_vec_env("CartPole-v1", n_envs=n_envs))
+        theirs = raised(lambda: sb3_make_vec_env("CartPole-v1", n_envs=n_envs))
         assert type(theirs) in (TypeError, IndexError)
     assert_compatible(ours, theirs)
     assert type(ours) is error.InvalidNumEnvs and isinstance(ours, ValueError)
@@ -217,18 +206,18 @@ def _faces() -> dict[str, Any]:
 )
 def test_an_env_where_a_function_making_one_belongs(face: str) -> None:
     env = pal.make("CartPole-v1")
-    ours = _raised(lambda: _faces()[face]([env]))
+    ours = raised(lambda: _faces()[face]([env]))
     theirs = None
     if _has("gymnasium") and face in ("DummyVecEnv", "SyncVectorEnv"):
         import gymnasium
 
         their_env = gymnasium.make("CartPole-v1")
         if face == "SyncVectorEnv":
-            theirs = _raised(lambda: gymnasium.vector.SyncVectorEnv([their_env]))
+            theirs = raised(lambda: gymnasium.vector.SyncVectorEnv([their_env]))
         elif _has("stable_baselines3"):
             from stable_baselines3.common.vec_env import DummyVecEnv as SB3Dummy
 
-            theirs = _raised(lambda: SB3Dummy([their_env]))
+            theirs = raised(lambda: SB3Dummy([their_env]))
         assert theirs is None or type(theirs) is TypeError  # "'TimeLimit' object is not callable"
     assert_compatible(ours, theirs)
     assert type(ours) is error.InvalidEnvFunction
@@ -239,12 +228,12 @@ def test_an_env_where_a_function_making_one_belongs(face: str) -> None:
 
 
 def test_a_vec_env_wrapper_around_something_else() -> None:
-    ours = _raised(lambda: VecNormalize(1))  # type: ignore[arg-type]
+    ours = raised(lambda: VecNormalize(1))  # type: ignore[arg-type]
     theirs = None
     if _has("stable_baselines3"):
         from stable_baselines3.common.vec_env import VecNormalize as SB3VecNormalize
 
-        theirs = _raised(lambda: SB3VecNormalize(1))
+        theirs = raised(lambda: SB3VecNormalize(1))
         assert type(theirs) is AttributeError  # 'int' object has no attribute 'num_envs'
     assert_compatible(ours, theirs)
     assert type(ours) is error.NotAVecEnv and isinstance(ours, TypeError)

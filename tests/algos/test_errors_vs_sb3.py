@@ -4,28 +4,17 @@ there, naming the value and what was expected (see tests/test_errors_vs_referenc
 from __future__ import annotations
 
 import importlib.util
-import warnings
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pytest
+from tests.raised import raised
 
 from palaestra import error
 from palaestra.algos import DQN, PPO
 from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 
 HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
-
-
-def _raised(fn: Callable[[], Any]) -> BaseException | None:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            fn()
-        except Exception as e:
-            return e
-    return None
 
 
 def _compatible(ours: BaseException | None, theirs: BaseException | None) -> None:
@@ -44,7 +33,7 @@ EXPECTED = "a BaseCallback instance, a function f(locals, globals) or a list of 
 def test_a_callback_class_instead_of_an_instance(name: str, wrap: bool) -> None:
     cls = {"BaseCallback": BaseCallback, "CheckpointCallback": CheckpointCallback}[name]
     model = PPO("MlpPolicy", "CartPole-v1", n_steps=32, batch_size=32, n_epochs=1)
-    ours = _raised(lambda: model.learn(32, callback=[cls] if wrap else cls))
+    ours = raised(lambda: model.learn(32, callback=[cls] if wrap else cls))
     theirs = None
     if HAS_SB3:
         from stable_baselines3 import PPO as SB3PPO
@@ -52,7 +41,7 @@ def test_a_callback_class_instead_of_an_instance(name: str, wrap: bool) -> None:
 
         sb3_cls = getattr(callbacks, name)
         sb3_model = SB3PPO("MlpPolicy", "CartPole-v1", n_steps=32, batch_size=32, n_epochs=1)
-        theirs = _raised(lambda: sb3_model.learn(32, callback=[sb3_cls] if wrap else sb3_cls))
+        theirs = raised(lambda: sb3_model.learn(32, callback=[sb3_cls] if wrap else sb3_cls))
         # BaseCallback: an abstract class or an argument count; CheckpointCallback: SB3 builds
         # one per step from (locals, globals) and never saves anything, silently
         assert type(theirs) is (None.__class__ if name == "CheckpointCallback" else TypeError)
@@ -68,13 +57,13 @@ def test_a_callback_class_instead_of_an_instance(name: str, wrap: bool) -> None:
 @pytest.mark.parametrize("callback", [1, "x"])
 def test_a_callback_that_is_not_callable(callback: Any) -> None:
     model = PPO("MlpPolicy", "CartPole-v1", n_steps=32, batch_size=32, n_epochs=1)
-    ours = _raised(lambda: model.learn(32, callback=callback))
+    ours = raised(lambda: model.learn(32, callback=callback))
     theirs = None
     if HAS_SB3:
         from stable_baselines3 import PPO as SB3PPO
 
         sb3_model = SB3PPO("MlpPolicy", "CartPole-v1", n_steps=32, batch_size=32, n_epochs=1)
-        theirs = _raised(lambda: sb3_model.learn(32, callback=callback))
+        theirs = raised(lambda: sb3_model.learn(32, callback=callback))
     _compatible(ours, theirs)
     assert str(ours) == f"callback must be {EXPECTED}, got {callback!r}"
 
@@ -95,14 +84,14 @@ def test_function_and_instance_callbacks_still_run() -> None:
 def test_predict_a_dict_on_a_discrete_observation_space() -> None:
     model = DQN("MlpPolicy", "FrozenLake-v1", learning_starts=0)
     obs = {"a": 1}
-    ours = _raised(lambda: model.predict(obs))
+    ours = raised(lambda: model.predict(obs))
     theirs = None
     if HAS_SB3:
         import gymnasium
         from stable_baselines3 import DQN as SB3DQN
 
         sb3_model = SB3DQN("MlpPolicy", gymnasium.make("FrozenLake-v1"), learning_starts=0)
-        theirs = _raised(lambda: sb3_model.predict(obs))
+        theirs = raised(lambda: sb3_model.predict(obs))
         assert type(theirs) is AssertionError
     _compatible(ours, theirs)
     assert type(ours) is error.InvalidObservation and isinstance(ours, ValueError)
@@ -116,13 +105,13 @@ def test_predict_a_dict_on_a_discrete_observation_space() -> None:
 
 def test_predict_a_dict_on_a_box_space_and_a_box_on_a_dict_space() -> None:
     model = PPO("MlpPolicy", "CartPole-v1", n_steps=32, batch_size=32)
-    ours = _raised(lambda: model.predict({"x": np.zeros(4)}))
+    ours = raised(lambda: model.predict({"x": np.zeros(4)}))
     assert type(ours) is error.InvalidObservation and "{'x': array([0., 0., 0., 0.])}" in str(ours)
     assert "observation space is Box(" in str(ours)
     from palaestra import spaces
     from palaestra.algos.spaces_util import is_vectorized_observation
 
     space = spaces.Dict({"x": spaces.Box(-1, 1, (2,))})
-    ours = _raised(lambda: is_vectorized_observation(np.zeros(2), space))
+    ours = raised(lambda: is_vectorized_observation(np.zeros(2), space))
     assert type(ours) is error.InvalidObservation
     assert str(ours) == f"Expected a dict observation for {space}, got array([0., 0.]) (ndarray)"

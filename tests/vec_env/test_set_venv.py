@@ -7,27 +7,16 @@ from __future__ import annotations
 
 import importlib.util
 import pickle
-import warnings
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pytest
+from tests.raised import raised
 
 from palaestra import error, spaces
 from palaestra.vec_env import DummyVecEnv, VecNormalize, make_vec_env
 
 HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
-
-
-def _raised(fn: Callable[[], Any]) -> BaseException | None:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            fn()
-        except Exception as e:
-            return e
-    return None
 
 
 def _trained(n_envs: int = 2) -> VecNormalize:
@@ -71,13 +60,13 @@ def test_pickle_leaves_out_the_env_and_set_venv_attaches_one() -> None:
 def test_set_venv_on_a_wrapper_that_has_an_env() -> None:
     norm = _trained()
     other = make_vec_env("CartPole-v1", n_envs=2)
-    ours = _raised(lambda: norm.set_venv(other))
+    ours = raised(lambda: norm.set_venv(other))
     if HAS_SB3:
         from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
         from stable_baselines3.common.vec_env import VecNormalize as SB3VecNormalize
 
         sb3 = SB3VecNormalize(sb3_make_vec_env("CartPole-v1", n_envs=2))
-        theirs = _raised(lambda: sb3.set_venv(sb3_make_vec_env("CartPole-v1", n_envs=2)))
+        theirs = raised(lambda: sb3.set_venv(sb3_make_vec_env("CartPole-v1", n_envs=2)))
         assert type(theirs) is ValueError and isinstance(ours, ValueError)
     assert type(ours) is error.VecEnvAlreadySet
     assert str(ours) == (
@@ -92,10 +81,10 @@ def test_set_venv_on_a_wrapper_that_has_an_env() -> None:
 def test_set_venv_with_other_observation_shapes(env_id: str) -> None:
     restored = pickle.loads(pickle.dumps(_trained()))
     venv = make_vec_env(env_id, n_envs=2)
-    ours = _raised(lambda: restored.set_venv(venv))
+    ours = raised(lambda: restored.set_venv(venv))
     if HAS_SB3:
         sb3, sb3_venv = _sb3_pair(env_id, 2)
-        theirs = _raised(lambda: sb3.set_venv(sb3_venv))
+        theirs = raised(lambda: sb3.set_venv(sb3_venv))
         assert type(theirs) is AssertionError and isinstance(ours, AssertionError)
     assert type(ours) is error.InvalidObservation and isinstance(ours, ValueError)
     shape = venv.observation_space.shape
@@ -109,10 +98,10 @@ def test_set_venv_with_other_observation_shapes(env_id: str) -> None:
 
 def test_set_venv_with_something_that_is_not_a_vec_env() -> None:
     restored = pickle.loads(pickle.dumps(_trained()))
-    ours = _raised(lambda: restored.set_venv(123))  # type: ignore[arg-type]
+    ours = raised(lambda: restored.set_venv(123))  # type: ignore[arg-type]
     if HAS_SB3:
         sb3, _ = _sb3_pair("CartPole-v1", 2)
-        theirs = _raised(lambda: sb3.set_venv(123))
+        theirs = raised(lambda: sb3.set_venv(123))
         assert type(theirs) is AttributeError and isinstance(ours, AttributeError)
     assert type(ours) is error.NotAVecEnv and isinstance(ours, TypeError)
     assert str(ours) == "VecNormalize.set_venv expects a palaestra.vec_env.VecEnv, got 123"
@@ -139,7 +128,7 @@ def _dict_env(keys: tuple[str, ...]) -> Any:
 def test_set_venv_with_other_dict_keys() -> None:
     norm = VecNormalize(DummyVecEnv([_dict_env(("a", "b"))]))
     restored = pickle.loads(pickle.dumps(norm))
-    ours = _raised(lambda: restored.set_venv(DummyVecEnv([_dict_env(("a", "c"))])))
+    ours = raised(lambda: restored.set_venv(DummyVecEnv([_dict_env(("a", "c"))])))
     assert type(ours) is error.InvalidObservation and isinstance(ours, AssertionError)
     assert "does not have the keys of the one the statistics were gathered on" in str(ours)
     restored.set_venv(DummyVecEnv([_dict_env(("b", "a"))]))  # order does not matter (SB3)
