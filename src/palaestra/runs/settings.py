@@ -88,7 +88,7 @@ def check_algo(algo: str) -> str:
 
 def algo_class(algo: str) -> Any:
     """The algorithm's class, e.g. ``DQN`` (imports torch)."""
-    from palaestra import algos
+    from palaestra import algos  # lazy: import-time — torch
 
     return getattr(algos, ALGO_CLASSES[check_algo(algo)])
 
@@ -222,7 +222,7 @@ def _load_file(
     """A settings file's settings, held to a run folder's rules: no module it names is
     imported unless ``allow_import`` holds it (its ``env_id`` must be the command line's, which
     is the user's own), and its values within a run folder's limits."""
-    from palaestra.runs import folder  # folder imports this module for ALGOS
+    from palaestra.runs import folder  # lazy: cycle — runs.folder imports this module
 
     source = f"config file {path!r}"
     data = load_config_file(path)
