@@ -269,7 +269,8 @@ def test_compare_groups_seeds_into_variants_and_summarizes(tmp_path: Path) -> No
     rows = summarize(variants, labels, last=1)
     assert [r.finals for r in rows] == [[3.0, 4.0, 6.0, 9.0], [5.0]]
     assert rows[0].value == pytest.approx(5.0)  # IQM: the mean of the middle two
-    assert rows[0].low is not None and rows[0].low <= 5.0 <= rows[0].high
+    low, high = rows[0].low, rows[0].high
+    assert low is not None and high is not None and low <= 5.0 <= high
     assert (rows[1].value, rows[1].low, rows[1].high) == (5.0, None, None)  # one seed
     assert rows[0].wall_time_s == 3.0 and rows[0].seeds == 4 and rows[0].success is None
     assert summarize(variants, labels, last=2)[0].finals == [2.0, 3.0, 3.0, 9.0]
