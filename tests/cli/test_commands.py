@@ -57,7 +57,7 @@ def test_envs_without_ale_py_loads_no_rom() -> None:
 
 
 def test_bench_quick_table() -> None:
-    result = run_cli("bench", "--quick", "--steps", 300, "--num-envs", 16,
+    result = run_cli("bench", "--quick", "--seconds", 0.02, "--num-envs", 16,
                      "--envs", "CartPole-v1", "Pendulum-v1")  # fmt: skip
     assert result.code == 0, result.err
     header, *rows, note = result.out.strip().splitlines()
@@ -67,8 +67,8 @@ def test_bench_quick_table() -> None:
         cells = row.split()
         assert float(cells[1].replace(",", "")) > 0 and cells[3].endswith("x")
     assert "(native)" in rows[0] and "(sync)" in rows[1]  # Gymnasium's Pendulum has no batch
-    assert note.startswith("env steps per second, median of 1 repeat(s)")
-    plain = run_cli("bench", "--quick", "--steps", 100, "--num-envs", 4,
+    assert note.startswith("env steps per second, median of 1 repeat(s) of 0.02 s;")
+    plain = run_cli("bench", "--quick", "--seconds", 0.01, "--num-envs", 4,
                     "--envs", "MountainCar-v0", "--no-gymnasium")  # fmt: skip
     assert plain.out.splitlines()[0].split() == ["env", "palaestra", "1", "env", "palaestra",
                                                  "4", "envs"]  # fmt: skip
@@ -176,6 +176,12 @@ def _bad(tmp_path: Path) -> dict[str, tuple[list[object], int, str | re.Pattern[
         "bench unknown env": (["bench", "--envs", "Nope-v0"], 2,
                               e + "Environment `Nope` doesn't exist. "
                               "(run `palaestra envs` to list the ids)"),
+        "bench zero seconds": (["bench", "--seconds", "0"], 2,
+                               e + "--seconds must be a positive number, got 0.0 (e.g. 0.5)"),
+        "bench endless": (["bench", "--seconds", "inf"], 2,
+                          e + "--seconds must be a positive number, got inf (e.g. 0.5)"),
+        "bench no envs": (["bench", "--num-envs", "0"], 2,
+                          e + "--num-envs must be at least 1, got 0 (e.g. 1024)"),
     }  # fmt: skip
 
 

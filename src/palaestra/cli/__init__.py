@@ -17,7 +17,10 @@ import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
+from palaestra import __version__, error
+from palaestra.cli import bench, compare, envs, evaluate, record, sweep, train
 from palaestra.cli.common import CLIError
+from palaestra.runs.errors import RunError
 
 __all__ = ["build_parser", "main"]
 
@@ -33,8 +36,6 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every command."""
-    from palaestra.cli import bench, compare, envs, evaluate, record, sweep, train
-
     parser = _Parser(
         prog="palaestra",
         description="palaestra: train, evaluate, record and compare RL agents on palaestra envs.",
@@ -42,8 +43,6 @@ def build_parser() -> argparse.ArgumentParser:
         "palaestra eval runs/<run> | palaestra record runs/<run> --out agent.gif | "
         "palaestra compare runs/a runs/b",
     )
-    from palaestra import __version__
-
     parser.add_argument("--version", action="version", version=f"palaestra {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
     for module in (envs, train, evaluate, record, compare, sweep, bench):
@@ -53,9 +52,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _report(exc: BaseException) -> int:
     """One stderr line for an exception; the exit code."""
-    from palaestra import error
-    from palaestra.runs.errors import RunError
-
     if isinstance(exc, RunError):  # CLIError, and the run API's errors
         line = exc.line()
         print(line if isinstance(exc, CLIError) else f"palaestra: error: {line}", file=sys.stderr)

@@ -1,9 +1,10 @@
 """``palaestra bench``: env steps per second for each classic-control env, one env and the
 native batch; Gymnasium's figures beside them when gymnasium is installed.
 
-Actions are drawn before the clock starts, so the figures are the env's own cost; each figure
-is the median of a few repeats. This is a quick look at this machine, not the benchmark suite
-(``benchmarks/`` in the repository interleaves repeats and records its results).
+Each figure is :mod:`palaestra.utils.performance`'s (Gymnasium's benchmarks: random actions
+sampled as the env steps, for about ``--seconds`` seconds), the median of a few repeats; both
+libraries are measured the same way. This is a quick look at this machine, not the benchmark
+suite (``benchmarks/`` in the repository interleaves repeats and records its results).
 """
 
 from __future__ import annotations
@@ -11,14 +12,16 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import math
 import statistics
-import time
 from collections.abc import Callable
 from typing import Any
 
+import palaestra
 from palaestra.cli.common import CLIError
+from palaestra.utils.performance import benchmark_step, benchmark_vector_step
 
-__all__ = ["CLASSIC_ENVS", "add_parser", "run", "single_env_speed", "vector_env_speed"]
+__all__ = ["CLASSIC_ENVS", "add_parser", "run"]
 
 CLASSIC_ENVS = (
     "CartPole-v1",
@@ -29,48 +32,20 @@ CLASSIC_ENVS = (
 )
 
 
-def single_env_speed(env: Any, steps: int, seed: int = 0) -> float:
-    """Steps per second of ``env.step`` with random actions, resetting finished episodes."""
-    env.action_space.seed(seed)
-    actions = [env.action_space.sample() for _ in range(min(steps, 1000))]
-    env.reset(seed=seed)
-    n = len(actions)
-    start = time.perf_counter()
-    for i in range(steps):
-        _, _, terminated, truncated, _ = env.step(actions[i % n])
-        if terminated or truncated:
-            env.reset()
-    return steps / (time.perf_counter() - start)
-
-
-def vector_env_speed(envs: Any, steps: int, seed: int = 0) -> float:
-    """Env steps per second (``steps * num_envs``) of a Gymnasium-API vector env; it resets
-    finished envs itself."""
-    envs.action_space.seed(seed)
-    actions = [envs.action_space.sample() for _ in range(min(steps, 16))]
-    envs.reset(seed=seed)
-    start = time.perf_counter()
-    for i in range(steps):
-        envs.step(actions[i % len(actions)])
-    return steps * envs.num_envs / (time.perf_counter() - start)
-
-
 def _median(measure: Callable[[], float], repeats: int) -> float:
     return statistics.median(measure() for _ in range(repeats))
 
 
 def _measure(
-    lib: Any, env_id: str, num_envs: int, steps: int, batch_steps: int, repeats: int
+    lib: Any, env_id: str, num_envs: int, seconds: float, repeats: int
 ) -> tuple[float, float, str]:
     """``(one env steps/s, batch steps/s, how the batch was made)`` for ``lib``'s ``make``."""
     env = lib.make(env_id)
-    single = _median(lambda: single_env_speed(env, steps), repeats)
+    single = _median(lambda: benchmark_step(env, seconds, seed=0), repeats)
     env.close()
     mode = "vector_entry_point" if lib.spec(env_id).vector_entry_point else "sync"
     envs = lib.make_vec(env_id, num_envs=num_envs, vectorization_mode=mode)
-    # A sync vector env loops over its envs in Python: fewer steps keep the run short.
-    n = batch_steps if mode != "sync" else max(batch_steps // 10, 2)
-    batch = _median(lambda: vector_env_speed(envs, n), repeats)
+    batch = _median(lambda: benchmark_vector_step(envs, seconds, seed=0), repeats)
     envs.close()
     return single, batch, "native" if mode != "sync" else "sync"
 
@@ -88,16 +63,17 @@ def add_parser(sub: Any) -> None:
         "and the native batch of --num-envs envs; with gymnasium installed, Gymnasium's "
         "figures and the ratios too.",
     )
-    p.add_argument("--quick", action="store_true", help="fewer steps and one repeat (seconds)")
+    p.add_argument(
+        "--quick", action="store_true", help="shorter measurements and one repeat (seconds)"
+    )
     p.add_argument(
         "--num-envs", type=int, default=1024, metavar="N", help="batch size (default: 1024)"
     )
     p.add_argument(
-        "--steps",
-        type=int,
-        metavar="N",
-        help="single-env steps per measurement (default: 20000, --quick: 2000); the batch "
-        "makes N/100 steps of all its envs",
+        "--seconds",
+        type=float,
+        metavar="S",
+        help="length of each measurement in seconds (default: 0.5, --quick: 0.1)",
     )
     p.add_argument(
         "--envs",
@@ -114,15 +90,14 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """The ``bench`` command."""
-    import palaestra
-
-    steps = args.steps if args.steps is not None else (2000 if args.quick else 20000)
-    if steps < 1 or args.num_envs < 1:
-        raise CLIError("--steps and --num-envs must be positive", "e.g. --steps 2000")
+    seconds = args.seconds if args.seconds is not None else (0.1 if args.quick else 0.5)
+    if not 0 < seconds < math.inf:
+        raise CLIError(f"--seconds must be a positive number, got {seconds!r}", "e.g. 0.5")
+    if args.num_envs < 1:
+        raise CLIError(f"--num-envs must be at least 1, got {args.num_envs!r}", "e.g. 1024")
     for env_id in args.envs:
         palaestra.spec(env_id)  # an unknown id fails before anything is measured
     repeats = 1 if args.quick else 3
-    batch_steps = max(steps // 100, 2)
     gym = None
     if not args.no_gymnasium and importlib.util.find_spec("gymnasium") is not None:
         gym = importlib.import_module("gymnasium")  # the reference, measured the same way
@@ -133,10 +108,10 @@ def run(args: argparse.Namespace) -> int:
         header += [f"gymnasium {n} envs", "ratio"]
     rows = []
     for env_id in args.envs:
-        ours = _measure(palaestra, env_id, n, steps, batch_steps, repeats)
+        ours = _measure(palaestra, env_id, n, seconds, repeats)
         row = [env_id, f"{ours[0]:,.0f}", f"{ours[1]:,.0f}"]
         if gym is not None:
-            theirs = _measure(gym, env_id, n, steps, batch_steps, repeats)
+            theirs = _measure(gym, env_id, n, seconds, repeats)
             row[2:2] = [f"{theirs[0]:,.0f}", _ratio(ours[0] / theirs[0])]
             row += [f"{theirs[1]:,.0f} ({theirs[2]})", _ratio(ours[1] / theirs[1])]
         rows.append(row)
@@ -147,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
     for r in rows:
         print("  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths))))
     print(
-        f"env steps per second, median of {repeats} repeat(s); random actions; "
+        f"env steps per second, median of {repeats} repeat(s) of {seconds:g} s; random actions; "
         f"batch: {n} envs stepped together{' (Gymnasium: sync = a Python loop)' if gym else ''}"
     )
     return 0

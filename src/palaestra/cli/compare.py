@@ -17,6 +17,20 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.cli.common import CLIError, add_address, add_allow_import, add_timesteps
+from palaestra.cli.evaluate import GAMES_NOTE
+from palaestra.cli.variants import train_variants
+from palaestra.runs.compare import (
+    CURVES_FILE,
+    SUMMARY_FILE,
+    default_labels,
+    group_runs,
+    profiles,
+    summarize,
+    write_curves,
+    write_summary,
+)
+from palaestra.runs.curves import plot_compare, plot_profile, variant_band
+from palaestra.runs.recipe import atari_kwargs
 from palaestra.runs.stats import CONFIDENCE_LEVEL, method_note
 
 __all__ = ["add_parser", "run"]
@@ -99,20 +113,6 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """The ``compare`` command."""
-    from palaestra.cli.variants import train_variants
-    from palaestra.runs.compare import (
-        CURVES_FILE,
-        SUMMARY_FILE,
-        default_labels,
-        group_runs,
-        profiles,
-        summarize,
-        write_curves,
-        write_summary,
-    )
-    from palaestra.runs.curves import plot_compare, plot_profile, variant_band
-    from palaestra.runs.recipe import atari_kwargs
-
     if args.last < 1:
         raise CLIError(f"--last must be at least 1, got {args.last}", "e.g. --last 100")
     plot = Path(args.out)
@@ -141,8 +141,6 @@ def run(args: argparse.Namespace) -> int:
     for outcome in failed:
         print(f"  failed: {outcome.run.label} seed {outcome.run.spec.seed}: {outcome.error}")
     if any(atari_kwargs(v.config) is not None for v in variants):
-        from palaestra.cli.evaluate import GAMES_NOTE
-
         print(f"(Atari runs: training {GAMES_NOTE})")
     last = args.last
     bands, time_bands = [], []

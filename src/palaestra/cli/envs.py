@@ -12,6 +12,9 @@ import importlib.util
 import re
 from typing import Any
 
+import palaestra
+from palaestra.envs.registration import load_env_creator
+
 __all__ = ["add_parser", "env_rows", "run"]
 
 _ATARI_ENTRY = "palaestra.envs.atari."
@@ -33,7 +36,6 @@ def _spaces(spec: Any) -> tuple[str, str, bool]:
         obs = _ATARI_OBS.get(spec.kwargs.get("obs_type", "rgb"), "?")
         full = spec.kwargs.get("full_action_space", False)
         return obs, "Discrete(18)" if full else "Discrete(<=18)", True
-    from palaestra.envs.registration import load_env_creator
 
     try:
         creator = load_env_creator(entry) if isinstance(entry, str) else entry
@@ -50,8 +52,6 @@ def _spaces(spec: Any) -> tuple[str, str, bool]:
 def env_rows(text: str | None = None) -> list[tuple[str, str, str, str, str, bool]]:
     """``(id, observation, action, reward threshold, max steps, is_atari)`` for each
     registered id whose id contains ``text`` (case-insensitive)."""
-    import palaestra
-
     rows = []
     for env_id, spec in palaestra.registry.items():
         if text and text.lower() not in env_id.lower():

@@ -9,7 +9,9 @@ from typing import Any
 import numpy as np
 
 from palaestra.cli.common import CLIError, add_allow_import
+from palaestra.runs import evaluate_run
 from palaestra.runs.files import is_goal_env
+from palaestra.runs.recipe import env_id_module, import_user_module
 
 __all__ = ["GAMES_NOTE", "add_parser", "ascii_histogram", "run", "summary_lines"]
 
@@ -101,9 +103,6 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """The ``eval`` command."""
-    from palaestra.runs import evaluate_run
-    from palaestra.runs.recipe import env_id_module, import_user_module
-
     if args.episodes < 1:
         raise CLIError(f"--episodes must be at least 1, got {args.episodes}", "e.g. --episodes 10")
     module = env_id_module(args.env) if args.env else None

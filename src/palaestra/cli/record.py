@@ -7,6 +7,10 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.cli.common import CLIError, add_allow_import
+from palaestra.error import dependency_not_installed
+from palaestra.runs import evaluate_run
+from palaestra.runs.recipe import env_id_module, import_user_module
+from palaestra.utils import video
 
 __all__ = ["add_parser", "run"]
 
@@ -62,13 +66,8 @@ def run(args: argparse.Namespace) -> int:
     if args.fps is not None and not args.fps > 0:
         raise CLIError(f"--fps must be positive, got {args.fps}", "e.g. --fps 30")
     if out.suffix.lower() == ".mp4":
-        from palaestra.error import dependency_not_installed
-        from palaestra.utils.video import mp4_available
-
-        if not mp4_available():  # before playing, not after
+        if not video.mp4_available():  # before playing, not after
             raise dependency_not_installed("imageio-ffmpeg", "video", "writing MP4 files")
-    from palaestra.runs import evaluate_run
-    from palaestra.runs.recipe import env_id_module, import_user_module
 
     module = env_id_module(args.env) if args.env else None
     if module and not args.env.startswith("gymnasium:"):  # --env mygrid:Grid-v0: the user's own
@@ -86,9 +85,7 @@ def run(args: argparse.Namespace) -> int:
     )
     env_fps, games = played.fps, played.games
     fps = args.fps or env_fps
-    from palaestra.utils.video import save_video
-
-    save_video(played.frames, out, fps=fps)
+    video.save_video(played.frames, out, fps=fps)
     returns = ", ".join(f"{r:.1f}" for r in played.returns)
     print(
         f"wrote {out}: {len(played.frames)} frames at {fps:g} fps, "

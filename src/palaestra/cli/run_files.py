@@ -7,6 +7,15 @@ from typing import Any
 import numpy as np
 
 from palaestra.cli.common import eprint
+from palaestra.cli.evaluate import GAMES_NOTE, summary_lines
+from palaestra.error import DependencyNotInstalled
+from palaestra.runs import evaluate_run
+from palaestra.runs.curves import (
+    LEARNING_CURVE_FILE,
+    draw_learning_curve,
+    read_episodes,
+    read_evaluations,
+)
 from palaestra.runs.files import (
     BEST_MODEL_FILE,
     BEST_NORMALIZE_FILE,
@@ -26,10 +35,7 @@ __all__ = ["print_summary"]
 def print_summary(eval_episodes: int, result: Any) -> None:
     """Steps, wall time, fps, the recent training return, a deterministic evaluation, the
     learning curve, and the list of files written (``result``: a ``TrainResult``)."""
-    from palaestra.cli.evaluate import GAMES_NOTE, summary_lines
-    from palaestra.cli.progress import format_duration
-    from palaestra.runs import evaluate_run
-    from palaestra.runs.curves import read_episodes, read_evaluations
+    from palaestra.cli.progress import format_duration  # lazy: import-time — torch
 
     model, run_dir, algo = result.model, result.run_dir, result.spec.algo
     steps, seconds, env_id = result.session_steps, result.session_seconds, result.spec.env_id
@@ -49,9 +55,6 @@ def print_summary(eval_episodes: int, result: Any) -> None:
         print("no training episode finished yet")
     # The learning curve is drawn off the training path (see ``curves``), started before the
     # evaluation so that a drawing in the background overlaps it.
-    from palaestra.error import DependencyNotInstalled
-    from palaestra.runs.curves import LEARNING_CURVE_FILE, draw_learning_curve
-
     try:
         drawing = draw_learning_curve(run_dir, f"{algo.upper()} on {env_id}")
         curve = LEARNING_CURVE_FILE + " (drawing)" * (drawing is not None)

@@ -10,6 +10,9 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.cli.common import CLIError, add_address, add_timesteps, eprint
+from palaestra.runs.settings import check_algo
+from palaestra.runs.space import load_space
+from palaestra.runs.sweep import run_sweep
 
 __all__ = ["add_parser", "run"]
 
@@ -70,10 +73,7 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """The ``sweep`` command."""
-    from palaestra.cli.progress import GracefulStop
-    from palaestra.runs.settings import check_algo
-    from palaestra.runs.space import load_space
-    from palaestra.runs.sweep import run_sweep
+    from palaestra.cli.progress import GracefulStop  # lazy: import-time — torch
 
     algo = check_algo(args.algo)
     if args.eval_episodes < 1:

@@ -16,13 +16,18 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import json
 import time
 from pathlib import Path
 from typing import Any
 
 from palaestra import presets
 from palaestra.cli.common import CLIError, add_allow_import, add_timesteps, eprint
+from palaestra.cli.run_files import print_summary
+from palaestra.runs import open_resume, open_run, resolve_spec
 from palaestra.runs import settings as settings_mod
+from palaestra.runs.files import STATUS_FILE, read_json
+from palaestra.runs.settings import parse_value
 
 __all__ = ["EXTRA_CALLBACKS", "add_parser", "run"]
 
@@ -183,10 +188,6 @@ def _refuse_resume_flags(args: argparse.Namespace) -> None:
 def _env_kwargs(items: list[str]) -> dict[str, Any]:
     """``["size:5", "slippery:False"]`` -> ``{"size": 5, "slippery": False}`` (RL Zoo's
     ``--env-kwargs``; values that JSON cannot hold are refused, config.json records them)."""
-    import json
-
-    from palaestra.runs.settings import parse_value
-
     out: dict[str, Any] = {}
     for item in items:
         key, sep, text = item.partition(":")
@@ -228,8 +229,6 @@ def _check_flags(args: argparse.Namespace) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """The ``train`` command."""
-    from palaestra.runs import open_resume, open_run, resolve_spec
-
     if args.resume is not None:
         _refuse_resume_flags(args)
         progress_mode = _check_flags(args)
@@ -269,9 +268,7 @@ def run(args: argparse.Namespace) -> int:
 def _train(args: argparse.Namespace, run_: Any, progress_mode: str) -> int:
     """Train with the live progress and the graceful stop on Ctrl-C/SIGTERM, then print the
     summary."""
-    from palaestra.cli.progress import GracefulStop, LiveProgress
-    from palaestra.cli.run_files import print_summary
-    from palaestra.runs.files import STATUS_FILE, read_json
+    from palaestra.cli.progress import GracefulStop, LiveProgress  # lazy: import-time — torch
 
     spec, run_dir, model = run_.spec, run_.run_dir, run_.model
     total = run_.final_timesteps  # past spec.n_timesteps after a whole last rollout

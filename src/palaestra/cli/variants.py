@@ -16,45 +16,28 @@ them)::
 
 Algorithm ``a`` on seed ``s`` trains as ``palaestra train a ENV --seed s --out
 RUNS/a/seed<s>``. A run that already finished is reused, so a second call only trains what is
-missing. The runs train through :func:`palaestra.runs.grid.run_grid`, one after another or as
-Ray tasks (``--backend ray``).
+missing. :mod:`palaestra.runs.variants` makes the grid; the runs train through
+:func:`palaestra.runs.grid.run_grid`, one after another or as Ray tasks (``--backend ray``).
 """
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
 
 from palaestra.cli.common import CLIError
+from palaestra.runs.grid import GridRun, Outcome, run_grid
+from palaestra.runs.settings import ALGOS
+from palaestra.runs.variants import BASELINE, algo_runs, is_variant, variant_label, variant_runs
 
 __all__ = ["ALGOS_WORD", "BASELINE", "is_variant", "train_variants"]
 
-BASELINE = "preset"
 ALGOS_WORD = "algos"  # compare algorithms, each on its preset
-_SUFFIXES = (".yaml", ".yml", ".json")
 
 
-def is_variant(item: str) -> bool:
-    """Whether a ``compare`` argument names a variant to train rather than a run folder."""
-    return item == BASELINE or Path(item).suffix.lower() in _SUFFIXES
-
-
-def _label(item: str) -> str:
-    return BASELINE if item == BASELINE else Path(item).stem
-
-
-def _check_seeds(seeds: list[int]) -> None:
-    if len(set(seeds)) < len(seeds):
-        raise CLIError(f"--seeds repeats a seed: {seeds}", "list each seed once")
-
-
-def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str], list[Any]]:
+def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str], list[Outcome]]:
     """Run folders for ``args.runs`` (folders as given, variants trained on ``args.seeds``),
     the variant name of each trained one, and the runs that failed."""
-    from palaestra.runs.grid import GridRun
-    from palaestra.runs.spec import resolve_spec
-
     if ALGOS_WORD in args.runs:
         return _train(args, _algo_runs(args))
     if getattr(args, "algos", None):
@@ -76,35 +59,21 @@ def train_variants(args: argparse.Namespace) -> tuple[list[Path], dict[Path, str
             f"training the variants {variants} needs --algo, --env and --seeds",
             "e.g. --algo dqn --env MountainCar-v0 --seeds 0 1 2",
         )
-    labels = [_label(v) for v in variants]
-    if len(set(labels)) < len(labels):
-        raise CLIError(f"two variants share a name: {labels}", "give the files different names")
-    _check_seeds(args.seeds)
     root = Path(args.runs_dir or f"runs/compare-{args.algo.lower()}-{args.env.replace('/', '_')}")
-    items: list[Any] = []  # run folders as given, and runs to train, in the order given
+    grid = variant_runs(
+        variants, args.algo, args.env, args.seeds, root, args.timesteps, args.allow_import
+    )
+    items: list[Path | GridRun] = []  # run folders as given, and runs to train, in that order
     for item in args.runs:
-        if not is_variant(item):
+        if is_variant(item):
+            items += [run for run in grid if run.label == variant_label(item)]
+        else:
             items.append(Path(item))
-            continue
-        for seed in args.seeds:
-            spec, _ = resolve_spec(
-                args.algo,
-                args.env,
-                config=None if item == BASELINE else item,
-                allow_import=() if item == BASELINE else args.allow_import,
-                seed=seed,
-                n_timesteps=args.timesteps,
-            )
-            items.append(GridRun(_label(item), spec, root / _label(item) / f"seed{seed}"))
     return _train(args, items)
 
 
-def _algo_runs(args: argparse.Namespace) -> list[Any]:
+def _algo_runs(args: argparse.Namespace) -> list[Path | GridRun]:
     """``compare algos``: each of ``args.algos`` on its preset for ``args.env``, per seed."""
-    from palaestra.runs.grid import GridRun
-    from palaestra.runs.settings import ALGOS, check_algo
-    from palaestra.runs.spec import resolve_spec
-
     if args.runs != [ALGOS_WORD]:
         others = [r for r in args.runs if r != ALGOS_WORD]
         raise CLIError(
@@ -118,32 +87,22 @@ def _algo_runs(args: argparse.Namespace) -> list[Any]:
         )
     if args.algo is not None:
         raise CLIError("--algo does not apply to 'algos'", "list them with --algos")
-    algos = [check_algo(a) for a in args.algos]
-    if len(set(algos)) < len(algos):
-        raise CLIError(f"--algos repeats an algorithm: {args.algos}", "list each once")
-    _check_seeds(args.seeds)
     root = Path(args.runs_dir or f"runs/compare-algos-{args.env.replace('/', '_')}")
-    runs = []
-    for algo in algos:
-        for seed in args.seeds:
-            spec, _ = resolve_spec(algo, args.env, seed=seed, n_timesteps=args.timesteps)
-            runs.append(GridRun(algo, spec, root / algo / f"seed{seed}"))
-    return runs
+    return list(algo_runs(args.algos, args.env, args.seeds, root, args.timesteps))
 
 
 def _train(
-    args: argparse.Namespace, items: list[Any]
-) -> tuple[list[Path], dict[Path, str], list[Any]]:
+    args: argparse.Namespace, items: list[Path | GridRun]
+) -> tuple[list[Path], dict[Path, str], list[Outcome]]:
     """Train the ``GridRun`` items on the chosen backend; folders in the order given."""
-    from palaestra.runs.grid import GridRun, run_grid
 
-    def report(kind: str, run: Any, outcome: Any) -> None:
+    def report(kind: str, run: GridRun, outcome: Outcome | None) -> None:
         where = f"{run.label} seed {run.spec.seed}"
         if kind == "reused":
             print(f"{where}: reusing {run.run_dir}", flush=True)
         elif kind == "start":
             print(f"{where}: training -> {run.run_dir}", flush=True)
-        elif outcome.status == "failed":
+        elif outcome is not None and outcome.status == "failed":
             print(f"{where}: failed: {outcome.error}", flush=True)
 
     grid = [item for item in items if isinstance(item, GridRun)]

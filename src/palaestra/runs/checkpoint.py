@@ -19,6 +19,7 @@ run folder's ``model.zip``, ``replay_buffer.zip`` and ``vecnormalize.npz``.
 
 from __future__ import annotations
 
+import csv
 import os
 import re
 import shutil
@@ -26,7 +27,12 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.algos.callbacks import BaseCallback
+from palaestra.algos.model_io import ModelFileError, read_archive, write_archive
+from palaestra.algos.saving import bind_env_token, env_token
+from palaestra.error import RunStateError
 from palaestra.runs.files import MODEL_FILE, NORMALIZE_FILE, REPLAY_ALGOS, REPLAY_FILE
+from palaestra.utils.atomic_write import atomic_write, complete_text
+from palaestra.vec_env import VecNormalize
 
 __all__ = [
     "ENV_STATE_FILE",
@@ -96,11 +102,6 @@ def latest_checkpoint(run_dir: Path) -> Path | None:
 def write_checkpoint(model: Any, run_dir: Path, algo: str) -> tuple[Path, bool]:
     """Write the model's and its env's state as ``resume/step_<N>``; returns the folder and
     whether the env state is in it (False: the envs cannot save theirs)."""
-    from palaestra.algos.model_io import write_archive
-    from palaestra.algos.saving import env_token
-    from palaestra.error import RunStateError
-    from palaestra.vec_env import VecNormalize
-
     steps = int(model.num_timesteps)
     final = run_dir / RESUME_DIR / f"step_{steps}"
     tmp = run_dir / RESUME_DIR / f".step_{steps}.tmp"
@@ -142,10 +143,6 @@ def load_env_state(folder: Path, venv: Any) -> str | None:
     """Restore a checkpoint's env state into ``venv`` (built as the run builds it) and mark
     ``venv`` as the env its model was saved with. None when done, else why not (the resume
     then starts new episodes): no env state saved, or one that does not fit ``venv``."""
-    from palaestra.algos.model_io import ModelFileError, read_archive
-    from palaestra.algos.saving import bind_env_token
-    from palaestra.error import RunStateError
-
     path = folder / ENV_STATE_FILE
     if not path.is_file():
         return "the run's envs cannot save their state"
@@ -172,10 +169,6 @@ _LOGS = (
 def trim_logs(run_dir: Path, steps: int) -> None:
     """Drop the log rows written after step ``steps`` (by a run that went on past its last
     checkpoint and died): the resumed run writes them again, once."""
-    import csv
-
-    from palaestra.utils.atomic_write import atomic_write, complete_text
-
     for name, column in _LOGS:
         path = run_dir / name
         if not path.is_file():

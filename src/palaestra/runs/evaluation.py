@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from palaestra.core import Wrapper
+from palaestra.runs import folder, recipe
 from palaestra.runs.errors import RunError
 from palaestra.runs.files import (
     BEST_MODEL_FILE,
@@ -27,6 +29,7 @@ from palaestra.runs.files import (
     is_goal_env,
     model_file,
 )
+from palaestra.runs.settings import ALGO_CLASSES, algo_class
 
 __all__ = [
     "EvalResult",
@@ -67,8 +70,7 @@ class EvalResult:
 
 def load_model(path: Path, device: str = "auto") -> Any:
     """A model of any algorithm the run API trains; which one comes from the file's metadata."""
-    from palaestra.algos.model_io import read_manifest
-    from palaestra.runs.settings import ALGO_CLASSES, algo_class
+    from palaestra.algos.model_io import read_manifest  # lazy: import-time — torch
 
     meta = read_manifest(path, "model").meta
     by_class = {cls: name for name, cls in ALGO_CLASSES.items()}
@@ -102,7 +104,6 @@ class _FrameLog:
         self.frames: list[Any] = []
 
     def wrapper(self, inner: Any) -> Any:
-        from palaestra.core import Wrapper
 
         log = self
 
@@ -123,7 +124,7 @@ class _FrameLog:
         return wrap
 
     def vec_wrapper(self, venv: Any) -> Any:
-        from palaestra.vec_env import VecEnvWrapper
+        from palaestra.vec_env import VecEnvWrapper  # lazy: import-time — multiprocessing
 
         log = self
 
@@ -143,8 +144,7 @@ class _FrameLog:
 
 def _eval_env(config: dict[str, Any], seed: int | None, frames: _FrameLog | None) -> Any:
     """One env of the run's recipe, each episode under a Monitor."""
-    from palaestra.runs import recipe
-    from palaestra.vec_env import make_vec_env
+    from palaestra.vec_env import make_vec_env  # lazy: import-time — multiprocessing
 
     if recipe.uses_vec_pipeline(config):
         venv = recipe.make_vec(config, 1, seed, render=frames is not None)
@@ -164,7 +164,7 @@ def _eval_env(config: dict[str, Any], seed: int | None, frames: _FrameLog | None
 def normalized_like(training_env: Any, venv: Any) -> Any:
     """``venv`` under a ``VecNormalize`` that normalizes observations as ``training_env`` (a
     ``VecNormalize``) does now, its statistics frozen and rewards left raw: SB3's eval env."""
-    from palaestra.vec_env import VecNormalize
+    from palaestra.vec_env import VecNormalize  # lazy: import-time — multiprocessing
 
     out = VecNormalize(
         venv,
@@ -183,7 +183,7 @@ def make_eval_env(config: dict[str, Any], training_env: Any, seed: int | None) -
     """One env of the run's recipe for evaluations during training, each episode under a
     Monitor, wrapped as ``training_env`` is in ``VecNormalize`` (so that
     ``sync_envs_normalization`` can copy the training statistics into it)."""
-    from palaestra.vec_env import VecNormalize
+    from palaestra.vec_env import VecNormalize  # lazy: import-time — multiprocessing
 
     venv = _eval_env(config, seed, None)
     return normalized_like(training_env, venv) if isinstance(training_env, VecNormalize) else venv
@@ -196,7 +196,7 @@ def play_episodes(
     one-env ``venv`` (seed it first: ``venv.seed(seed)``), played by ``evaluate_policy``.
     Lengths count agent steps (under SB3's Atari recipe the Monitor counts frames) and an
     episode ends when the Monitor reports one, so an Atari game is all of its lives."""
-    from palaestra.algos.evaluation import evaluate_policy
+    from palaestra.algos.evaluation import evaluate_policy  # lazy: import-time — torch
 
     terminated: list[bool] = []
     lengths: list[int] = []
@@ -241,8 +241,6 @@ def evaluate_run(
     ``model``: an already loaded model (default: load it); ``spec``: the run's
     :class:`~palaestra.runs.spec.RunSpec` when the caller built it (its own description: not
     read back from ``config.json``)."""
-    from palaestra.runs import folder, recipe
-
     if episodes < 1:
         raise RunError(f"episodes must be at least 1, got {episodes}", "e.g. --episodes 10")
     given = Path(run) / MODEL_FILE
@@ -276,7 +274,7 @@ def evaluate_run(
     venv = _eval_env(config, seed, frames)
     try:
         _check_spaces(model, venv, env_id)
-        from palaestra.vec_env import VecNormalize
+        from palaestra.vec_env import VecNormalize  # lazy: import-time — multiprocessing
 
         training_env = model.get_env()
         stats = path.parent / NORMALIZE_FILE

@@ -15,6 +15,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import palaestra
+from palaestra import error
+from palaestra.envs.lookup import load_env_creator
 from palaestra.runs.errors import RunError
 from palaestra.utils.atomic_write import atomic_write
 
@@ -55,9 +58,6 @@ def is_goal_env(env_id: str) -> bool:
     """Whether a terminated episode of ``env_id`` counts as a success: the env class says so
     with a class attribute ``success_on_termination`` (MountainCar, Acrobot; CartPole terminates
     when the pole falls, so not CartPole). Unknown ids and bridged Gymnasium envs: False."""
-    import palaestra
-    from palaestra import error
-
     try:
         spec = palaestra.spec(env_id)
     except error.Error:
@@ -65,8 +65,6 @@ def is_goal_env(env_id: str) -> bool:
     entry = spec.entry_point
     if not isinstance(entry, str) or not entry.startswith("palaestra."):
         return False  # loading another package's entry point would import it
-    from palaestra.envs.lookup import load_env_creator
-
     creator = load_env_creator(entry)
     return bool(getattr(creator, "success_on_termination", False))
 

@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from palaestra import presets
-from palaestra.runs import known_names, recipe, settings
+from palaestra.runs import algorithms, known_names, recipe
 from palaestra.runs.errors import RunError
 from palaestra.runs.files import CONFIG_FILE, note, read_json
 from palaestra.runs.recipe import wrapper_module
@@ -238,8 +238,8 @@ def _check_names(config: dict[str, Any], source: str) -> None:
         value = config[key]
         if not isinstance(value, str) or not 0 < len(value) <= 200:
             raise _fail(source, key, value, "a name")
-    if "algo" in config and config["algo"].lower() not in settings.ALGOS:
-        raise _fail(source, "algo", config["algo"], f"one of {', '.join(settings.ALGOS)}")
+    if "algo" in config and config["algo"].lower() not in algorithms.ALGOS:
+        raise _fail(source, "algo", config["algo"], f"one of {', '.join(algorithms.ALGOS)}")
     if "device" in config and not _DEVICE.fullmatch(config["device"]):
         raise _fail(source, "device", config["device"], "auto, cpu, mps or cuda[:N]")
     if config.get("seed") is not None:
@@ -307,10 +307,10 @@ def check_run_config(
     _check_names(config, source)
     _check_pipeline(config, source)
     if "hyperparams" in config:
-        from palaestra.algos.hyperparams import check_run_hyperparams
+        from palaestra.algos.hyperparams import check_run_hyperparams  # lazy: import-time — torch
 
-        algo = settings.check_algo(str(config.get("algo")))
-        names = set(settings.hyperparameter_names(algo))
+        algo = algorithms.check_algo(str(config.get("algo")))
+        names = set(algorithms.hyperparameter_names(algo))
         try:
             check_run_hyperparams(algo, config["hyperparams"], names, source)
         except ValueError as exc:

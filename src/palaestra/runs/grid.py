@@ -33,11 +33,14 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+import palaestra
+from palaestra.error import dependency_not_installed
 from palaestra.runs import reaper
 from palaestra.runs.errors import RunError, first_line, one_line
 from palaestra.runs.files import CONFIG_FILE, STATUS_FILE, read_json
 from palaestra.runs.lock import FolderLock
 from palaestra.runs.spec import RunSpec
+from palaestra.runs.training import train_run
 
 __all__ = ["GridRun", "Outcome", "check_backend", "connect_ray", "is_finished", "run_grid"]
 
@@ -73,8 +76,6 @@ def is_finished(run_dir: Path) -> bool:
 def _train_into(spec_json: str, run_dir: str) -> float:
     """Train a spec into a fresh folder beside ``run_dir`` and move it there when finished;
     the training seconds. A Ray task's body (a retried attempt starts over)."""
-    from palaestra.runs.training import train_run
-
     target = Path(run_dir)
     target.parent.mkdir(parents=True, exist_ok=True)
     scratch = target.parent / f".{target.name}.partial"
@@ -97,8 +98,6 @@ def connect_ray(address: str | None, num_cpus: int | None = None) -> Any:
     ``"host:port"``). ``RunError`` with one line, Ray's own cause and its fix when it cannot
     be reached; ``DependencyNotInstalled`` without Ray. :func:`ray_session` also shuts a local
     Ray down when the work is done, however it ends."""
-    from palaestra.error import dependency_not_installed
-
     try:
         import ray
     except ImportError:
@@ -246,7 +245,6 @@ def _probe(address: str, timeout: float = 5.0) -> None:
 
 
 def _import_paths() -> list[str]:
-    import palaestra
 
     src = str(Path(palaestra.__file__).resolve().parents[1])
     existing = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]

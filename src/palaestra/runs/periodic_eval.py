@@ -35,7 +35,9 @@ from typing import Any
 import numpy as np
 
 from palaestra.algos.callbacks import BaseCallback, EvalCallback
+from palaestra.runs.curves import read_evaluations
 from palaestra.runs.errors import RunError
+from palaestra.runs.evaluation import make_eval_env
 from palaestra.runs.files import (
     BEST_MODEL_FILE,
     BEST_NORMALIZE_FILE,
@@ -118,8 +120,6 @@ class EvalSchedule:
 
 def best_return(run_dir: Path) -> float:
     """The best mean return in ``evaluations.csv`` (``-inf`` without a row)."""
-    from palaestra.runs.curves import read_evaluations
-
     evaluations = read_evaluations(run_dir)
     if evaluations is None or not len(evaluations.mean):
         return -math.inf
@@ -142,8 +142,6 @@ class PeriodicEvaluation(BaseCallback):
     def open(self, config: dict[str, Any], model: Any) -> None:
         """Build the eval env for ``model`` (trained on the run ``config`` describes) and open
         ``evaluations.csv`` for appending."""
-        from palaestra.runs.evaluation import make_eval_env
-
         if self._evaluator is not None:
             return
         eval_env = make_eval_env(config, model.get_env(), EVAL_SEED)

@@ -41,6 +41,10 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
+import palaestra
+from palaestra import spaces
+from palaestra.core import Wrapper
+from palaestra.envs.atari.checks import import_ale_py
 from palaestra.runs import known_names
 from palaestra.runs.errors import RunError
 
@@ -151,8 +155,6 @@ def module_sha256(module_name: str) -> str | None:
 
 def is_atari_id(env_id: str) -> bool:
     """Whether ``env_id`` is registered as an ALE game (no ale-py import)."""
-    import palaestra
-
     return palaestra.spec(registered_id(env_id)).entry_point == ATARI_ENTRY_POINT
 
 
@@ -232,8 +234,6 @@ def wrapper_items(value: Any) -> list[tuple[str, dict[str, Any]]]:
 def _import_wrapper(path: Any) -> type[Any]:
     """The wrapper class named by ``"module:Class"``: a ``palaestra.Wrapper`` subclass, never
     just any callable (``"os:system"`` would run a shell command on the env's repr)."""
-    from palaestra.core import Wrapper
-
     wrapper_module(path)  # a malformed name fails as itself, before the table is asked
     module_name, name = wrapper_module(known_names.palaestra_name("env_wrapper", path) or path)
     module = import_user_module(module_name, f"env_wrapper {path!r}")
@@ -280,9 +280,7 @@ def choose_policy(settings: dict[str, Any], env_id: str) -> tuple[str, str]:
     """``(policy, why)`` for a run with no preset, from the observation space of one env of
     its recipe (env kwargs and wrapper applied): ``MultiInputPolicy`` for a ``Dict`` space,
     ``CnnPolicy`` for an image ``Box`` (SB3's ``is_image_space``), else ``MlpPolicy``."""
-    import palaestra
-    from palaestra import spaces
-    from palaestra.algos.spaces_util import is_image_space
+    from palaestra.algos.spaces_util import is_image_space  # lazy: import-time — torch
 
     try:
         env = palaestra.make(env_id, **(settings.get("env_kwargs") or {}))
@@ -308,7 +306,7 @@ def check_pipeline(settings: dict[str, Any], env_id: str) -> None:
     atari = settings.get("atari")
     stack = settings.get("frame_stack")
     if stack is not None:
-        from palaestra.vec_env.image import check_n_stack  # VecFrameStack's own check
+        from palaestra.vec_env.image import check_n_stack  # lazy: import-time — multiprocessing
 
         try:
             check_n_stack(stack, name="frame_stack")
@@ -332,21 +330,21 @@ def check_pipeline(settings: dict[str, Any], env_id: str) -> None:
         raise RunError(f"atari is set but {env_id} is not an Atari game", "drop atari")
     if settings.get("normalize"):
         raise RunError("normalize does not apply to the Atari recipe", "drop normalize or atari")
-    from palaestra.envs.atari.checks import import_ale_py
-
     import_ale_py()  # before torch is imported: a missing ale-py fails at once, in one line
 
 
 def make_vec(config: dict[str, Any], n_envs: int, seed: int | None, render: bool = False) -> Any:
     """``n_envs`` envs of the run's pipeline (without ``VecNormalize``)."""
-    from palaestra.vec_env import VecFrameStack, make_atari_env, make_vec_env
+    from palaestra.vec_env import (  # lazy: import-time — multiprocessing
+        VecFrameStack,
+        make_atari_env,
+        make_vec_env,
+    )
 
     env_id = config["env_id"]
     env_kwargs = dict(config.get("env_kwargs") or {})
     wrapper_kwargs = atari_kwargs(config)
     if wrapper_kwargs is not None:
-        from palaestra.envs.atari.checks import import_ale_py
-
         import_ale_py()  # eval and record reach here without check_pipeline
         try:  # string Atari ids render rgb_array frames already
             venv = make_atari_env(

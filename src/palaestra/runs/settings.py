@@ -14,7 +14,6 @@ line allows them (:mod:`palaestra.runs.folder`); YAML is read with ``safe_load``
 from __future__ import annotations
 
 import ast
-import inspect
 import json
 import re
 from collections.abc import Mapping, Sequence
@@ -23,7 +22,14 @@ from typing import Any
 
 from palaestra import presets
 from palaestra.error import dependency_not_installed
-from palaestra.runs import known_names
+from palaestra.runs import folder, known_names
+from palaestra.runs.algorithms import (
+    ALGO_CLASSES,
+    ALGOS,
+    algo_class,
+    check_algo,
+    hyperparameter_names,
+)
 from palaestra.runs.errors import RunError
 from palaestra.runs.files import REPLAY_ALGOS, note
 from palaestra.runs.recipe import atari_defaults, check_pipeline, choose_policy, is_atari_id
@@ -33,6 +39,7 @@ __all__ = [
     "ALGO_CLASSES",
     "REPLAY_ALGOS",
     "algo_class",
+    "check_algo",
     "check_settings",
     "hyperparameter_names",
     "load_config_file",
@@ -56,47 +63,12 @@ def parse_value(text: str) -> Any:
         return text
 
 
-# The algorithms the CLI trains, compares and evaluates: name -> class name in palaestra.algos.
-# Adding one (sac, td3, ddpg) is one line here, plus its presets.
-ALGO_CLASSES = {
-    "dqn": "DQN",
-    "ppo": "PPO",
-    "a2c": "A2C",
-    "sac": "SAC",
-    "td3": "TD3",
-    "ddpg": "DDPG",
-}
-ALGOS = tuple(ALGO_CLASSES)
-# Constructor arguments the CLI sets itself (or that make no sense from a command line).
-_NOT_HYPERPARAMS = {"self", "policy", "env", "_init_setup_model", "verbose", "seed", "device"}
-_NOT_HYPERPARAMS |= {"tensorboard_log"}
 # Keys a --config file may carry that describe the run rather than configure it.
 _RUN_KEYS = {"algo", "env_id", "preset", "device", "palaestra_version", "measured", "evaluation"}
 _RUN_KEYS |= {"module_sha256"}
 # What PyYAML's safe_load reports for a !!python/... tag it refuses to construct.
 _PYTHON_TAG = re.compile(r"tag:yaml\.org,2002:python/([^'\s]*)")
 _TOP_KEYS = (*presets.SETTINGS_KEYS, "seed")
-
-
-def check_algo(algo: str) -> str:
-    """``"PPO"`` -> ``"ppo"``; ``RunError`` for anything not in ``ALGOS``."""
-    key = algo.lower()
-    if key not in ALGOS:
-        raise RunError(f"unknown algorithm {algo!r}", f"choose one of: {', '.join(ALGOS)}")
-    return key
-
-
-def algo_class(algo: str) -> Any:
-    """The algorithm's class, e.g. ``DQN`` (imports torch)."""
-    from palaestra import algos
-
-    return getattr(algos, ALGO_CLASSES[check_algo(algo)])
-
-
-def hyperparameter_names(algo: str) -> list[str]:
-    """Constructor keywords that ``hyperparams`` (and ``--set``) may name."""
-    params = inspect.signature(algo_class(algo).__init__).parameters
-    return sorted(name for name in params if name not in _NOT_HYPERPARAMS)
 
 
 def load_config_file(path: str) -> dict[str, Any]:
@@ -222,8 +194,6 @@ def _load_file(
     """A settings file's settings, held to a run folder's rules: no module it names is
     imported unless ``allow_import`` holds it (its ``env_id`` must be the command line's, which
     is the user's own), and its values within a run folder's limits."""
-    from palaestra.runs import folder  # folder imports this module for ALGOS
-
     source = f"config file {path!r}"
     data = load_config_file(path)
     _check_run_keys(algo, env_id, data, source)

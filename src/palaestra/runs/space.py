@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from palaestra.runs.errors import RunError
+from palaestra.runs.settings import hyperparameter_names, load_config_file
 
 __all__ = [
     "Choice",
@@ -101,8 +102,6 @@ def space_from_mapping(
 ) -> dict[str, Param]:
     """A checked search space for ``algo``: ``RunError`` naming an unknown hyperparameter or
     an impossible range."""
-    from palaestra.runs.settings import hyperparameter_names
-
     if not isinstance(data, Mapping) or not data:
         raise RunError(f"{source} must map hyperparameter names to choices or ranges")
     valid = {*hyperparameter_names(algo), "n_envs"}
@@ -120,8 +119,6 @@ def space_from_mapping(
 
 def load_space(path: str | Path, algo: str) -> dict[str, Param]:
     """The search space in a ``.yaml``/``.json`` file (see the module's docstring)."""
-    from palaestra.runs.settings import load_config_file
-
     return space_from_mapping(load_config_file(str(path)), algo, f"search space {str(path)!r}")
 
 

@@ -21,6 +21,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import palaestra
+from palaestra import __version__, error
+from palaestra.runs import folder, recipe, settings
 from palaestra.runs.errors import RunError
 
 __all__ = ["RunSpec", "resolve_spec"]
@@ -90,8 +93,6 @@ class RunSpec:
         run folder is: known keys, types, sizes within limits, hyperparameters the algorithm
         takes. ``allow_import``: the modules its ``env_wrapper``/``env_id`` may import; None
         skips that check (the caller's own description)."""
-        from palaestra.runs import folder
-
         data = dict(config)
         folder.check_run_config(data, source, required=("algo", "env_id"))
         if allow_import is not None:
@@ -119,8 +120,6 @@ class RunSpec:
     def to_config(self) -> dict[str, Any]:
         """The run folder's ``config.json``: every setting, the unset optional ones left out,
         and the palaestra version that wrote it."""
-        from palaestra import __version__
-
         out: dict[str, Any] = {"algo": self.algo, "env_id": self.env_id, "preset": self.preset}
         for key in ("policy", "n_envs", "n_timesteps", "hyperparams", "env_kwargs", "normalize"):
             out[key] = getattr(self, key)
@@ -146,8 +145,6 @@ class RunSpec:
         usable types, an Atari recipe only on an Atari id, wrappers that are wrapper classes
         (the constructor then checks the hyperparameters; :meth:`from_config` also holds a
         description read from elsewhere to the limits of a run folder)."""
-        from palaestra.runs import settings
-
         settings.check_algo(self.algo)
         _check_env_id(self.env_id)
         settings.check_settings(self.to_config(), self.env_id)
@@ -169,8 +166,6 @@ def resolve_spec(
     to a run folder's limits. ``allow_import``: the modules a ``config`` file may import (a
     settings file runs no code otherwise; :mod:`palaestra.runs.folder`). An env id
     ``module:Name-v0`` imports ``module`` (the caller's own request, as ``palaestra.make``)."""
-    from palaestra.runs import folder, settings
-
     algo = settings.check_algo(algo)
     _check_env_id(env_id)
     resolved, used, notes = settings.resolve_settings(
@@ -197,10 +192,6 @@ def resolve_spec(
 def _check_env_id(env_id: str) -> None:
     """``RunError`` for an id no registry holds, with Gymnasium's "did you mean"; an id
     ``module:Name-v0`` imports ``module`` first (the current folder first on the path)."""
-    import palaestra
-    from palaestra import error
-    from palaestra.runs import recipe
-
     module = recipe.env_id_module(env_id)
     if module and not env_id.startswith("gymnasium:"):
         recipe.import_user_module(module, f"env id {env_id!r}")

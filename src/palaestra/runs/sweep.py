@@ -27,16 +27,23 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import shutil
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from palaestra.error import dependency_not_installed
 from palaestra.runs.errors import RunError, first_line, one_line
+from palaestra.runs.evaluation import evaluate_run
+from palaestra.runs.files import note
 from palaestra.runs.folder import check_inside
+from palaestra.runs.grid import check_backend, ray_session
 from palaestra.runs.lock import FolderLock
 from palaestra.runs.space import Param, distributions, settings_of
 from palaestra.runs.spec import RunSpec, resolve_spec
+from palaestra.runs.sweep_report import write_outputs
+from palaestra.runs.training import open_run
 
 __all__ = ["SweepResult", "run_sweep", "run_trial"]
 
@@ -46,7 +53,6 @@ EVAL_SEED = 10_000  # evaluation episodes of seed s start from EVAL_SEED + s
 
 # -- one trial ---------------------------------------------------------------------------------
 def _evaluate(run: Any, episodes: int) -> float:
-    from palaestra.runs.evaluation import evaluate_run
 
     seed = EVAL_SEED + (run.spec.seed or 0)
     result = evaluate_run(run.run_dir, episodes, seed=seed, model=run.model, spec=run.spec)
@@ -67,10 +73,6 @@ def run_trial(
     trial; ``callbacks`` go to every run's ``learn`` (one that stops it, as a Ctrl-C or
     SIGTERM handler does, ends the trial ``"interrupted"``). ``reason`` says why a trial
     ended early: where it was pruned or stopped."""
-    import shutil
-
-    from palaestra.runs.training import open_run
-
     start = time.perf_counter()
     values: list[float] = []
     for i, text in enumerate(specs_json):
@@ -258,15 +260,11 @@ def run_sweep(
     the search should stop (``"interrupted by SIGTERM"``) or None: a trial that a callback
     stopped, and then the search, end there, the trial recorded as interrupted (run again
     by the next call) and the outputs written; ``SweepResult.stopped`` holds the reason."""
-    from palaestra.error import dependency_not_installed
-
     try:
         import optuna
     except ImportError:
         raise dependency_not_installed("optuna", "sweep", "hyperparameter sweeps") from None
     from optuna.trial import TrialState
-
-    from palaestra.runs.grid import check_backend, ray_session
 
     check_backend(backend, address)
     for name, value, low in (
@@ -370,8 +368,6 @@ def run_sweep(
                 ran += 1
         else:
             if url.startswith("sqlite") and address is not None:
-                from palaestra.runs.files import note
-
                 note(
                     "a SQLite study file is reachable only where this folder is: on a cluster, "
                     "pass --storage with a database URL (e.g. postgresql://...)"
@@ -412,8 +408,6 @@ def run_sweep(
                     outcome = {"state": "failed", "value": None, "reason": one_line(cause)}
                 tell(trial, outcome)
                 ran += 1
-        from palaestra.runs.sweep_report import write_outputs
-
         rows, best, best_file = write_outputs(study, space, folder, base, preset)
         return SweepResult(folder, rows, best, best_file, ran, stopped)
 

@@ -10,8 +10,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from palaestra.runs import curves
 from palaestra.runs.space import Param, settings_of
 from palaestra.runs.spec import RunSpec, resolve_spec
+from palaestra.utils.atomic_write import atomic_write
 
 __all__ = ["BEST_FILE", "TRIALS_FILE", "write_outputs"]
 
@@ -70,7 +72,6 @@ def _state(trial: Any) -> str:
 
 
 def _write_table(rows: list[dict[str, Any]], path: Path) -> None:
-    from palaestra.utils.atomic_write import atomic_write
 
     with atomic_write(path, "w", encoding="utf-8", newline="") as file:
         writer = csv.writer(file)
@@ -91,8 +92,6 @@ def _write_table(rows: list[dict[str, Any]], path: Path) -> None:
 
 def _write_best(spec: RunSpec, best: dict[str, Any], path: Path) -> None:
     """The best settings as a ``train --config`` file (YAML, or JSON without PyYAML)."""
-    from palaestra.utils.atomic_write import atomic_write
-
     config = spec.to_config()
     for key in ("seed", "device", "palaestra_version", "preset"):
         config.pop(key, None)
@@ -124,8 +123,6 @@ def _plots(study: Any, folder: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
-
-    from palaestra.runs.curves import save_figure
 
     trials = study.get_trials(deepcopy=False)
     complete = [t for t in trials if t.state == TrialState.COMPLETE]
@@ -159,7 +156,7 @@ def _plots(study: Any, folder: Path) -> None:
     ax.set_ylabel("return")
     ax.set_title(f"{study.study_name}: {summary}", fontsize=10)
     ax.legend()
-    save_figure(fig, folder / "history.png")
+    curves.save_figure(fig, folder / "history.png")
     if len(complete) < 2 or not complete[0].params:
         return
     import optuna
@@ -174,4 +171,4 @@ def _plots(study: Any, folder: Path) -> None:
     ax.set_xlabel("importance (fANOVA)")
     ax.set_title(f"{study.study_name}: hyperparameter importance")
     fig.tight_layout()
-    save_figure(fig, folder / "importance.png")
+    curves.save_figure(fig, folder / "importance.png")

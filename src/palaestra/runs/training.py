@@ -26,6 +26,10 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from palaestra import presets
+from palaestra.error import UnsupportedSpace
+from palaestra.runs import folder as run_folder
+from palaestra.runs import settings
 from palaestra.runs.errors import RunError, one_line
 from palaestra.runs.files import (
     CONFIG_FILE,
@@ -39,6 +43,8 @@ from palaestra.runs.files import (
     write_status,
 )
 from palaestra.runs.lock import FolderLock
+from palaestra.runs.recipe import make_vec
+from palaestra.runs.settings import algo_class
 from palaestra.runs.spec import RunSpec
 
 if TYPE_CHECKING:
@@ -75,8 +81,7 @@ class TrainResult:
 def make_env(spec: RunSpec, seed: int | None, saved: Path | None = None) -> Any:
     """The run's training vector env (under ``VecNormalize`` when the spec says
     ``normalize``); ``saved``: the folder whose ``vecnormalize.npz`` to continue."""
-    from palaestra.runs.recipe import make_vec
-    from palaestra.vec_env import VecNormalize
+    from palaestra.vec_env import VecNormalize  # lazy: import-time — multiprocessing
 
     config = spec.to_config()
     venv = make_vec(config, spec.n_envs, seed)
@@ -92,10 +97,6 @@ def make_env(spec: RunSpec, seed: int | None, saved: Path | None = None) -> Any:
 def make_model(spec: RunSpec, venv: Any) -> Any:
     """The spec's algorithm on ``venv`` (``RunError`` naming the setting a constructor
     refused)."""
-    from palaestra import presets
-    from palaestra.error import UnsupportedSpace
-    from palaestra.runs.settings import algo_class
-
     cls = algo_class(spec.algo)
     try:
         hyper = presets.resolve(spec.hyperparams)
@@ -117,8 +118,12 @@ def make_model(spec: RunSpec, venv: Any) -> Any:
 
 
 def _logger(run_dir: Path, verbose: bool) -> Any:
-    from palaestra.algos.logger import HumanOutputFormat, Logger, TensorBoardOutputFormat
-    from palaestra.runs.logs import AppendingCSV
+    from palaestra.algos.logger import (  # lazy: import-time — torch
+        HumanOutputFormat,
+        Logger,
+        TensorBoardOutputFormat,
+    )
+    from palaestra.runs.logs import AppendingCSV  # lazy: import-time — torch
 
     formats: list[Any] = [AppendingCSV(str(run_dir / "progress.csv"))]
     if importlib.util.find_spec("tensorboard") is not None:
@@ -180,15 +185,15 @@ class Run:
         ``"interrupted"``. A ``KeyboardInterrupt`` inside ``learn`` (the model may be
         mid-update) saves nothing new: ``status.json`` points at the last checkpoint, and the
         exception propagates."""
-        from palaestra.algos.callbacks import CallbackList
-        from palaestra.runs.checkpoint import (
+        from palaestra.algos.callbacks import CallbackList  # lazy: import-time — torch
+        from palaestra.runs.checkpoint import (  # lazy: import-time — torch
             CheckpointDue,
             checkpoint_steps,
             latest_checkpoint,
             publish,
             write_checkpoint,
         )
-        from palaestra.runs.logs import EpisodeLog
+        from palaestra.runs.logs import EpisodeLog  # lazy: import-time — torch
 
         if checkpoint_every is not None and checkpoint_every < 0:
             self.close()
@@ -297,7 +302,10 @@ def open_run(
     when ``run_dir`` already holds a run). ``eval_freq`` > 0: evaluate ``eval_episodes``
     deterministic episodes every ``eval_freq`` env steps counted over all envs
     (:mod:`palaestra.runs.periodic_eval`)."""
-    from palaestra.runs.periodic_eval import EvalSchedule, PeriodicEvaluation
+    from palaestra.runs.periodic_eval import (  # lazy: import-time — torch
+        EvalSchedule,
+        PeriodicEvaluation,
+    )
 
     run_dir = Path(run_dir)
     spec.validate()
@@ -332,8 +340,8 @@ def open_run(
 
 def _rounding_note(run: Run) -> list[str]:
     """The note saying that training ends past ``n_timesteps``, and where (or nothing)."""
-    from palaestra.algos.off_policy import OffPolicyAlgorithm
-    from palaestra.algos.on_policy import OnPolicyAlgorithm
+    from palaestra.algos.off_policy import OffPolicyAlgorithm  # lazy: import-time — torch
+    from palaestra.algos.on_policy import OnPolicyAlgorithm  # lazy: import-time — torch
 
     model, total, end = run.model, run.spec.n_timesteps, run.final_timesteps
     name, n_envs = run.spec.algo.upper(), model.n_envs
@@ -386,11 +394,17 @@ def _open_resume(
     allow_import: Sequence[str],
     expect: dict[str, str] | None,
 ) -> Run:
-    from palaestra.algos.model_io import ModelFileError
-    from palaestra.runs import folder as run_folder
-    from palaestra.runs import settings
-    from palaestra.runs.checkpoint import latest_checkpoint, load_env_state, trim_logs
-    from palaestra.runs.periodic_eval import EvalSchedule, PeriodicEvaluation, best_return
+    from palaestra.algos.model_io import ModelFileError  # lazy: import-time — torch
+    from palaestra.runs.checkpoint import (  # lazy: import-time — torch
+        latest_checkpoint,
+        load_env_state,
+        trim_logs,
+    )
+    from palaestra.runs.periodic_eval import (  # lazy: import-time — torch
+        EvalSchedule,
+        PeriodicEvaluation,
+        best_return,
+    )
 
     config = run_folder.read_run_config(run_dir / CONFIG_FILE, allow_import, run_folder.RESUME_KEYS)
     for key, value in (expect or {}).items():
