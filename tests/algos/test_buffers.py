@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from palaestra import spaces
-from palaestra.algos.replay_buffer import ReplayBuffer
-from palaestra.algos.rollout_buffer import RolloutBuffer
+from palaestra.algos.common.replay_buffer import ReplayBuffer
+from palaestra.algos.common.rollout_buffer import RolloutBuffer
 
 OBS = spaces.Box(-10, 10, (2,))
 
@@ -96,7 +96,7 @@ def test_replay_buffer_file_larger_than_the_buffer_is_refused_before_reading(tmp
     import tracemalloc
 
     from palaestra.algos import ModelFileError
-    from palaestra.algos.model_io import read_archive, write_archive
+    from palaestra.algos.common.model_io import read_archive, write_archive
 
     model = _dqn_with_buffer(tmp_path)
     meta, arrays = read_archive(tmp_path / "rb.zip", "replay_buffer")
@@ -121,7 +121,7 @@ def test_replay_buffer_file_larger_than_the_buffer_is_refused_before_reading(tmp
 )
 def test_replay_buffer_contents_are_checked(tmp_path, change, message) -> None:  # type: ignore[no-untyped-def]
     from palaestra.algos import ModelFileError
-    from palaestra.algos.model_io import read_archive, write_archive
+    from palaestra.algos.common.model_io import read_archive, write_archive
 
     model = _dqn_with_buffer(tmp_path)
     meta, arrays = read_archive(tmp_path / "rb.zip", "replay_buffer")

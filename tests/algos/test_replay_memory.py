@@ -11,9 +11,9 @@ import torch
 
 from palaestra import spaces
 from palaestra.algos import DQN
-from palaestra.algos.frame_replay_buffer import FrameReplayBuffer, frame_layout
-from palaestra.algos.model_io import ModelFileError
-from palaestra.algos.replay_buffer import ReplayBuffer
+from palaestra.algos.common.frame_replay_buffer import FrameReplayBuffer, frame_layout
+from palaestra.algos.common.model_io import ModelFileError
+from palaestra.algos.common.replay_buffer import ReplayBuffer
 from palaestra.core import Env
 from palaestra.vec_env import DummyVecEnv, VecFrameStack
 from palaestra.wrappers import FrameStackObservation, TimeLimit

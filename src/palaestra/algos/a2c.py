@@ -9,10 +9,10 @@ from typing import Any
 import numpy as np
 import torch
 
+from palaestra.algos.common.on_policy import OnPolicyAlgorithm, default_adam
+from palaestra.algos.common.schedules import Schedule, as_schedule
 from palaestra.algos.learners.losses import explained_variance
 from palaestra.algos.learners.objectives import A2CObjective
-from palaestra.algos.on_policy import OnPolicyAlgorithm, default_adam
-from palaestra.algos.schedules import Schedule, as_schedule
 
 __all__ = ["A2C"]
 

@@ -9,13 +9,13 @@ import numpy as np
 import torch
 
 from palaestra import spaces
+from palaestra.algos.common.networks import CombinedExtractor, NatureCNN
+from palaestra.algos.common.off_policy import OffPolicyAlgorithm
+from palaestra.algos.common.off_policy_policies import DQNPolicy
+from palaestra.algos.common.policies import QNetwork
+from palaestra.algos.common.schedules import LinearSchedule, Schedule
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.objectives import DQNObjective
-from palaestra.algos.networks import CombinedExtractor, NatureCNN
-from palaestra.algos.off_policy import OffPolicyAlgorithm
-from palaestra.algos.off_policy_policies import DQNPolicy
-from palaestra.algos.policies import QNetwork
-from palaestra.algos.schedules import LinearSchedule, Schedule
 
 __all__ = ["DQN", "CnnPolicy", "DQNPolicy", "MlpPolicy", "MultiInputPolicy"]
 

@@ -8,7 +8,12 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from palaestra.algos.continuous_policies import ContinuousCritic, SquashedGaussianActor
+from palaestra.algos.common.continuous_policies import ContinuousCritic, SquashedGaussianActor
+from palaestra.algos.common.networks import CombinedExtractor, NatureCNN
+from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
+from palaestra.algos.common.off_policy_policies import SACPolicy
+from palaestra.algos.common.policies import _numpy_input_problem
+from palaestra.algos.common.schedules import Schedule
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.heads import squashed_gaussian_rsample
 from palaestra.algos.learners.objectives import (
@@ -17,11 +22,6 @@ from palaestra.algos.learners.objectives import (
     SACCriticObjective,
 )
 from palaestra.algos.learners.xp import numpy_ops
-from palaestra.algos.networks import CombinedExtractor, NatureCNN
-from palaestra.algos.off_policy_actor_critic import ActorCriticOffPolicy
-from palaestra.algos.off_policy_policies import SACPolicy
-from palaestra.algos.policies import _numpy_input_problem
-from palaestra.algos.schedules import Schedule
 
 __all__ = ["SAC", "CnnPolicy", "MlpPolicy", "MultiInputPolicy", "SACPolicy"]
 

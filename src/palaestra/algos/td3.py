@@ -8,14 +8,14 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
-from palaestra.algos.continuous_policies import ContinuousCritic, DeterministicActor
+from palaestra.algos.common.continuous_policies import ContinuousCritic, DeterministicActor
+from palaestra.algos.common.networks import CombinedExtractor, NatureCNN
+from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
+from palaestra.algos.common.off_policy_policies import TD3Policy
+from palaestra.algos.common.policies import _numpy_input_problem
+from palaestra.algos.common.schedules import Schedule
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.objectives import TD3ActorObjective, TD3CriticObjective
-from palaestra.algos.networks import CombinedExtractor, NatureCNN
-from palaestra.algos.off_policy_actor_critic import ActorCriticOffPolicy
-from palaestra.algos.off_policy_policies import TD3Policy
-from palaestra.algos.policies import _numpy_input_problem
-from palaestra.algos.schedules import Schedule
 
 __all__ = ["DDPG", "TD3", "CnnPolicy", "MlpPolicy", "MultiInputPolicy", "TD3Policy"]
 

@@ -25,7 +25,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from palaestra.algos.callbacks import BaseCallback
+from palaestra.algos.common.callbacks import BaseCallback
 from palaestra.runs.files import MODEL_FILE, NORMALIZE_FILE, REPLAY_ALGOS, REPLAY_FILE
 
 __all__ = [
@@ -96,8 +96,8 @@ def latest_checkpoint(run_dir: Path) -> Path | None:
 def write_checkpoint(model: Any, run_dir: Path, algo: str) -> tuple[Path, bool]:
     """Write the model's and its env's state as ``resume/step_<N>``; returns the folder and
     whether the env state is in it (False: the envs cannot save theirs)."""
-    from palaestra.algos.model_io import write_archive
-    from palaestra.algos.saving import env_token
+    from palaestra.algos.common.model_io import write_archive
+    from palaestra.algos.common.saving import env_token
     from palaestra.error import RunStateError
     from palaestra.vec_env import VecNormalize
 
@@ -142,8 +142,8 @@ def load_env_state(folder: Path, venv: Any) -> str | None:
     """Restore a checkpoint's env state into ``venv`` (built as the run builds it) and mark
     ``venv`` as the env its model was saved with. None when done, else why not (the resume
     then starts new episodes): no env state saved, or one that does not fit ``venv``."""
-    from palaestra.algos.model_io import ModelFileError, read_archive
-    from palaestra.algos.saving import bind_env_token
+    from palaestra.algos.common.model_io import ModelFileError, read_archive
+    from palaestra.algos.common.saving import bind_env_token
     from palaestra.error import RunStateError
 
     path = folder / ENV_STATE_FILE

@@ -67,7 +67,7 @@ class EvalResult:
 
 def load_model(path: Path, device: str = "auto") -> Any:
     """A model of any algorithm the run API trains; which one comes from the file's metadata."""
-    from palaestra.algos.model_io import read_manifest
+    from palaestra.algos.common.model_io import read_manifest
     from palaestra.runs.settings import ALGO_CLASSES, algo_class
 
     meta = read_manifest(path, "model").meta
@@ -196,7 +196,7 @@ def play_episodes(
     one-env ``venv`` (seed it first: ``venv.seed(seed)``), played by ``evaluate_policy``.
     Lengths count agent steps (under SB3's Atari recipe the Monitor counts frames) and an
     episode ends when the Monitor reports one, so an Atari game is all of its lives."""
-    from palaestra.algos.evaluation import evaluate_policy
+    from palaestra.algos.common.evaluation import evaluate_policy
 
     terminated: list[bool] = []
     lengths: list[int] = []

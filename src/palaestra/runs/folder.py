@@ -307,7 +307,7 @@ def check_run_config(
     _check_names(config, source)
     _check_pipeline(config, source)
     if "hyperparams" in config:
-        from palaestra.algos.hyperparams import check_run_hyperparams
+        from palaestra.algos.common.hyperparams import check_run_hyperparams
 
         algo = settings.check_algo(str(config.get("algo")))
         names = set(settings.hyperparameter_names(algo))

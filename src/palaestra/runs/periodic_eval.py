@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.algos.callbacks import BaseCallback, EvalCallback
+from palaestra.algos.common.callbacks import BaseCallback, EvalCallback
 from palaestra.runs.errors import RunError
 from palaestra.runs.files import (
     BEST_MODEL_FILE,

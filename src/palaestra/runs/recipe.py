@@ -282,7 +282,7 @@ def choose_policy(settings: dict[str, Any], env_id: str) -> tuple[str, str]:
     ``CnnPolicy`` for an image ``Box`` (SB3's ``is_image_space``), else ``MlpPolicy``."""
     import palaestra
     from palaestra import spaces
-    from palaestra.algos.spaces_util import is_image_space
+    from palaestra.algos.common.spaces_util import is_image_space
 
     try:
         env = palaestra.make(env_id, **(settings.get("env_kwargs") or {}))

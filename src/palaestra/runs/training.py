@@ -117,7 +117,7 @@ def make_model(spec: RunSpec, venv: Any) -> Any:
 
 
 def _logger(run_dir: Path, verbose: bool) -> Any:
-    from palaestra.algos.logger import HumanOutputFormat, Logger, TensorBoardOutputFormat
+    from palaestra.algos.common.logger import HumanOutputFormat, Logger, TensorBoardOutputFormat
     from palaestra.runs.logs import AppendingCSV
 
     formats: list[Any] = [AppendingCSV(str(run_dir / "progress.csv"))]
@@ -180,7 +180,7 @@ class Run:
         ``"interrupted"``. A ``KeyboardInterrupt`` inside ``learn`` (the model may be
         mid-update) saves nothing new: ``status.json`` points at the last checkpoint, and the
         exception propagates."""
-        from palaestra.algos.callbacks import CallbackList
+        from palaestra.algos.common.callbacks import CallbackList
         from palaestra.runs.checkpoint import (
             CheckpointDue,
             checkpoint_steps,
@@ -332,8 +332,8 @@ def open_run(
 
 def _rounding_note(run: Run) -> list[str]:
     """The note saying that training ends past ``n_timesteps``, and where (or nothing)."""
-    from palaestra.algos.off_policy import OffPolicyAlgorithm
-    from palaestra.algos.on_policy import OnPolicyAlgorithm
+    from palaestra.algos.common.off_policy import OffPolicyAlgorithm
+    from palaestra.algos.common.on_policy import OnPolicyAlgorithm
 
     model, total, end = run.model, run.spec.n_timesteps, run.final_timesteps
     name, n_envs = run.spec.algo.upper(), model.n_envs
@@ -386,7 +386,7 @@ def _open_resume(
     allow_import: Sequence[str],
     expect: dict[str, str] | None,
 ) -> Run:
-    from palaestra.algos.model_io import ModelFileError
+    from palaestra.algos.common.model_io import ModelFileError
     from palaestra.runs import folder as run_folder
     from palaestra.runs import settings
     from palaestra.runs.checkpoint import latest_checkpoint, load_env_state, trim_logs

@@ -12,16 +12,16 @@ import numpy as np
 import torch
 
 from palaestra import spaces
-from palaestra.algos.action_noise import (
+from palaestra.algos.common.action_noise import (
     ActionNoise,
     VectorizedActionNoise,
     noise_from_json,
     noise_to_json,
 )
-from palaestra.algos.continuous_policies import ContinuousCritic
+from palaestra.algos.common.continuous_policies import ContinuousCritic
+from palaestra.algos.common.off_policy import OffPolicyAlgorithm
+from palaestra.algos.common.policies import _numpy_input_problem
 from palaestra.algos.learners import Net
-from palaestra.algos.off_policy import OffPolicyAlgorithm
-from palaestra.algos.policies import _numpy_input_problem
 
 __all__ = ["ActorCriticOffPolicy"]
 

@@ -401,7 +401,7 @@ class EvalCallback(BaseCallback):
     def _on_step(self) -> bool:
         if self.eval_freq <= 0 or self.n_calls % self.eval_freq != 0:
             return True
-        from palaestra.algos.evaluation import evaluate_policy
+        from palaestra.algos.common.evaluation import evaluate_policy
 
         if _vec_normalize(self.model) is not None:
             # SB3 evaluates with the training env's normalisation statistics: without this the

@@ -15,10 +15,10 @@ import numpy as np
 import torch
 
 from palaestra import spaces
-from palaestra.algos.base import BaseAlgorithm, round_up_steps
+from palaestra.algos.common.base import BaseAlgorithm, round_up_steps
+from palaestra.algos.common.policies import ActorCritic, ActorCriticPolicy, extractor_class
+from palaestra.algos.common.rollout_buffer import RolloutBuffer
 from palaestra.algos.learners import Group, Net
-from palaestra.algos.policies import ActorCritic, ActorCriticPolicy, extractor_class
-from palaestra.algos.rollout_buffer import RolloutBuffer
 
 __all__ = ["OnPolicyAlgorithm"]
 

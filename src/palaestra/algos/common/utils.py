@@ -16,14 +16,14 @@ from typing import Any
 import numpy as np
 import torch
 
-from palaestra.algos.learners.losses import explained_variance, polyak
-from palaestra.algos.schedules import (
+from palaestra.algos.common.schedules import (
     ConstantSchedule,
     FloatSchedule,
     LinearSchedule,
     Schedule,
     as_schedule,
 )
+from palaestra.algos.learners.losses import explained_variance, polyak
 
 __all__ = [
     "ConstantSchedule",

@@ -13,7 +13,12 @@ import torch
 from torch import nn
 
 from palaestra import spaces
-from palaestra.algos.networks import BaseFeaturesExtractor, FlattenExtractor, mlp, preprocess_obs
+from palaestra.algos.common.networks import (
+    BaseFeaturesExtractor,
+    FlattenExtractor,
+    mlp,
+    preprocess_obs,
+)
 
 __all__ = ["ContinuousCritic", "DeterministicActor", "SquashedGaussianActor", "split_net_arch"]
 

@@ -14,7 +14,7 @@ import numpy as np
 import torch
 
 from palaestra import spaces
-from palaestra.algos.spaces_util import allocate
+from palaestra.algos.common.spaces_util import allocate
 
 __all__ = ["ReplayBuffer"]
 

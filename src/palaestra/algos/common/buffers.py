@@ -20,9 +20,9 @@ import numpy as np
 import torch
 
 from palaestra import spaces
+from palaestra.algos.common.preprocessing import get_action_dim, get_obs_shape
+from palaestra.algos.common.utils import get_device
 from palaestra.algos.learners.losses import gae
-from palaestra.algos.preprocessing import get_action_dim, get_obs_shape
-from palaestra.algos.utils import get_device
 
 __all__ = [
     "BaseBuffer",

@@ -20,14 +20,14 @@ import torch
 from torch import nn
 
 from palaestra import spaces
-from palaestra.algos.continuous_policies import (
+from palaestra.algos.common.continuous_policies import (
     ContinuousCritic,
     DeterministicActor,
     SquashedGaussianActor,
     split_net_arch,
 )
-from palaestra.algos.networks import BaseFeaturesExtractor, FlattenExtractor, make_extractor
-from palaestra.algos.policies import QNetwork
+from palaestra.algos.common.networks import BaseFeaturesExtractor, FlattenExtractor, make_extractor
+from palaestra.algos.common.policies import QNetwork
 
 __all__ = ["DQNPolicy", "SACPolicy", "TD3Policy"]
 

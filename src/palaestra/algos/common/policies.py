@@ -10,8 +10,8 @@ import torch
 from torch import nn
 
 from palaestra import spaces
-from palaestra.algos.distributions import ActionHead
-from palaestra.algos.networks import (
+from palaestra.algos.common.distributions import ActionHead
+from palaestra.algos.common.networks import (
     BaseFeaturesExtractor,
     CombinedExtractor,
     FlattenExtractor,
@@ -21,7 +21,7 @@ from palaestra.algos.networks import (
     mlp,
     preprocess_obs,
 )
-from palaestra.algos.spaces_util import is_image_space
+from palaestra.algos.common.spaces_util import is_image_space
 
 __all__ = [
     "POLICY_EXTRACTORS",

@@ -36,6 +36,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from palaestra.algos.public_paths import public_ref, resolve_moved
 from palaestra.utils.atomic_write import atomic_write
 from palaestra.utils.bounded_zip import (
     MAX_BYTES,
@@ -314,9 +315,10 @@ _ALLOWED = {
 
 
 def encode_classes(value: Any) -> Any:
-    """Replace classes in (nested) kwargs by ``{"__class__": "module:qualname"}``."""
+    """Replace classes in (nested) kwargs by ``{"__class__": "module:qualname"}``, naming
+    palaestra's classes by the path users import them from (``public_paths.public_ref``)."""
     if isinstance(value, type):
-        return {"__class__": f"{value.__module__}:{value.__qualname__}"}
+        return {"__class__": public_ref(value)}
     if isinstance(value, dict):
         return {str(k): encode_classes(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -339,6 +341,8 @@ def decode_classes(value: Any, custom: dict[str, Any]) -> Any:
         base = next(
             (b for p, b in _ALLOWED.items() if module == p or module.startswith(p + ".")), None
         )
+        # a file from before a class moved names its old module (resolve_moved's table)
+        module, _, qualname = resolve_moved(ref).partition(":")
         if base is None:
             raise ModelFileError(
                 f"model file names class {ref!r}, which palaestra will not import; "

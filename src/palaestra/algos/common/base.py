@@ -32,20 +32,20 @@ import numpy as np
 import torch
 
 from palaestra import error, spaces
-from palaestra.algos import saving
-from palaestra.algos.callbacks import (
+from palaestra.algos.common import saving
+from palaestra.algos.common.callbacks import (
     BaseCallback,
     CallbackList,
     ProgressBarCallback,
     convert_callback,
 )
-from palaestra.algos.eager_optimizer import build_optimizer
+from palaestra.algos.common.eager_optimizer import build_optimizer
+from palaestra.algos.common.logger import HumanOutputFormat, Logger, configure
+from palaestra.algos.common.policies import extractor_class
+from palaestra.algos.common.preprocessing import check_for_nested_spaces
+from palaestra.algos.common.schedules import Schedule
+from palaestra.algos.common.spaces_util import is_image_space, is_vectorized_observation
 from palaestra.algos.learners import Group, Learner, Net, build_learner
-from palaestra.algos.logger import HumanOutputFormat, Logger, configure
-from palaestra.algos.policies import extractor_class
-from palaestra.algos.preprocessing import check_for_nested_spaces
-from palaestra.algos.schedules import Schedule
-from palaestra.algos.spaces_util import is_image_space, is_vectorized_observation
 from palaestra.core import Env, Wrapper
 
 __all__ = ["BaseAlgorithm", "resolve_device", "round_up_steps"]

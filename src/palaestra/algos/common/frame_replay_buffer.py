@@ -28,7 +28,11 @@ import numpy as np
 import torch
 
 from palaestra import spaces
-from palaestra.algos.spaces_util import allocate, is_image_space, is_image_space_channels_first
+from palaestra.algos.common.spaces_util import (
+    allocate,
+    is_image_space,
+    is_image_space_channels_first,
+)
 
 __all__ = ["FrameReplayBuffer", "frame_layout"]
 

@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 
 from palaestra import spaces
+from palaestra.algos.common.spaces_util import allocate
 from palaestra.algos.learners.losses import gae
-from palaestra.algos.spaces_util import allocate
 
 __all__ = ["RolloutBuffer"]
 

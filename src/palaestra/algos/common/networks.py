@@ -14,7 +14,7 @@ import torch
 from torch import nn
 
 from palaestra import spaces
-from palaestra.algos.spaces_util import is_image_space, is_image_space_channels_first
+from palaestra.algos.common.spaces_util import is_image_space, is_image_space_channels_first
 
 __all__ = [
     "BaseFeaturesExtractor",

@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 import torch
 
-from palaestra.algos.hyperparams import check_model_file
-from palaestra.algos.model_io import (
+from palaestra.algos.common.hyperparams import check_model_file
+from palaestra.algos.common.model_io import (
     ArraySpec,
     Expect,
     ModelFileError,
@@ -33,8 +33,8 @@ from palaestra.algos.model_io import (
     read_manifest,
     write_archive,
 )
-from palaestra.algos.schedules import schedule_from_json, schedule_to_json
-from palaestra.algos.spaces_util import space_from_json, space_to_json
+from palaestra.algos.common.schedules import schedule_from_json, schedule_to_json
+from palaestra.algos.common.spaces_util import space_from_json, space_to_json
 
 __all__ = [
     "bind_env_token",

@@ -17,11 +17,11 @@ from typing import Any
 import numpy as np
 import torch
 
-from palaestra.algos import model_io
-from palaestra.algos.base import BaseAlgorithm, round_up_steps
-from palaestra.algos.frame_replay_buffer import FrameReplayBuffer, frame_layout
-from palaestra.algos.replay_buffer import ReplayBuffer
-from palaestra.algos.schedules import Schedule, as_schedule
+from palaestra.algos.common import model_io
+from palaestra.algos.common.base import BaseAlgorithm, round_up_steps
+from palaestra.algos.common.frame_replay_buffer import FrameReplayBuffer, frame_layout
+from palaestra.algos.common.replay_buffer import ReplayBuffer
+from palaestra.algos.common.schedules import Schedule, as_schedule
 
 __all__ = ["OffPolicyAlgorithm", "train_freq_pair"]
 
