@@ -57,7 +57,8 @@ from palaestra.algos.common import callbacks, schedules
 from palaestra.algos.a2c import A2C
 from palaestra.algos.dqn import DQN
 from palaestra.algos.sac import SAC
-from palaestra.algos.td3 import DDPG, TD3
+from palaestra.algos.td3 import TD3
+from palaestra.algos.ddpg import DDPG
 from palaestra.algos.common.action_noise import (
     NormalActionNoise,
     OrnsteinUhlenbeckActionNoise,

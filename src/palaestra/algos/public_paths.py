@@ -54,9 +54,13 @@ MODULE_ALIASES: dict[str, str] = {
 # moved whole map every class through MOVED_MODULES; classes that left a module are listed.
 MOVED_MODULES: dict[str, str] = {
     "palaestra.algos.continuous_policies": "palaestra.algos.common.continuous_policies",
-    "palaestra.algos.off_policy_policies": "palaestra.algos.common.off_policy_policies",
 }
-MOVED_CLASSES: dict[str, str] = {}
+MOVED_CLASSES: dict[str, str] = {
+    "palaestra.algos.off_policy_policies:DQNPolicy": "palaestra.algos.dqn:DQNPolicy",
+    "palaestra.algos.off_policy_policies:SACPolicy": "palaestra.algos.sac:SACPolicy",
+    "palaestra.algos.off_policy_policies:TD3Policy": "palaestra.algos.td3:TD3Policy",
+    "palaestra.algos.policies:QNetwork": "palaestra.algos.dqn:QNetwork",
+}
 
 
 def resolve_moved(ref: str) -> str:

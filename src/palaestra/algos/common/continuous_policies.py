@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import torch
 from torch import nn
 
@@ -16,6 +17,7 @@ from palaestra import spaces
 from palaestra.algos.common.networks import (
     BaseFeaturesExtractor,
     FlattenExtractor,
+    make_extractor,
     mlp,
     preprocess_obs,
 )
@@ -134,3 +136,66 @@ class ContinuousCritic(_Extracting):
     def flat_input(self) -> bool:
         """Whether ``[flattened obs, action]`` is this critic's MLP input (numpy learner)."""
         return isinstance(self.features_extractor, FlattenExtractor)
+
+
+class _ContinuousPolicy(nn.Module):
+    """What ``SACPolicy`` and ``TD3Policy`` share: SB3's policy keywords, kept as attributes
+    (the algorithm builds its optimizers from ``optimizer_class``/``optimizer_kwargs``), and
+    the critic factory."""
+
+    # The extractor when ``features_extractor_class`` is not given (CnnPolicy: NatureCNN).
+    default_features_extractor_class: type[BaseFeaturesExtractor] = FlattenExtractor
+    default_net_arch: tuple[int, ...] = (256, 256)
+
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Box,
+        lr_schedule: Any,
+        net_arch: Any,
+        activation_fn: type[nn.Module],
+        features_extractor_class: type[BaseFeaturesExtractor] | None,
+        features_extractor_kwargs: dict[str, Any] | None,
+        normalize_images: bool,
+        optimizer_class: type[torch.optim.Optimizer],
+        optimizer_kwargs: dict[str, Any] | None,
+        n_critics: int,
+        share_features_extractor: bool,
+    ) -> None:
+        super().__init__()
+        if not isinstance(action_space, spaces.Box):
+            raise TypeError(f"{type(self).__name__} needs a Box action space, got {action_space}")
+        self.observation_space, self.action_space = observation_space, action_space
+        self.action_dim = int(np.prod(action_space.shape))
+        self.lr_schedule, self.net_arch, self.activation_fn = lr_schedule, net_arch, activation_fn
+        self.actor_arch, self.critic_arch = split_net_arch(net_arch, list(self.default_net_arch))
+        self.features_extractor_class = (
+            features_extractor_class or self.default_features_extractor_class
+        )
+        self.features_extractor_kwargs = dict(features_extractor_kwargs or {})
+        self.normalize_images = normalize_images
+        self.optimizer_class, self.optimizer_kwargs = optimizer_class, dict(optimizer_kwargs or {})
+        self.n_critics, self.share_features_extractor = n_critics, bool(share_features_extractor)
+
+    def make_features_extractor(self) -> BaseFeaturesExtractor:
+        """A new features extractor of the policy's class and keywords."""
+        return make_extractor(
+            self.features_extractor_class, self.observation_space, self.features_extractor_kwargs
+        )
+
+    def make_critic(
+        self, features_extractor: BaseFeaturesExtractor | None = None
+    ) -> ContinuousCritic:
+        """``n_critics`` Q-networks on ``features_extractor`` (None: a new one)."""
+        if features_extractor is None:
+            features_extractor = self.make_features_extractor()
+        return ContinuousCritic(
+            self.observation_space,
+            self.action_dim,
+            features_extractor,
+            self.critic_arch,
+            self.activation_fn,
+            n_critics=self.n_critics,
+            share_features_extractor=self.share_features_extractor,
+            normalize_images=self.normalize_images,
+        )

@@ -27,7 +27,6 @@ __all__ = [
     "POLICY_EXTRACTORS",
     "ActorCritic",
     "ActorCriticPolicy",
-    "QNetwork",
     "extractor_class",
 ]
 
@@ -48,44 +47,6 @@ def extractor_class(policy: Any) -> type[BaseFeaturesExtractor]:
             f"Policy {policy!r} unknown: use one of {', '.join(map(repr, POLICY_EXTRACTORS))}"
         )
     return POLICY_EXTRACTORS[policy]
-
-
-class QNetwork(nn.Module):
-    """``obs -> Q(obs, .)``: features extractor, MLP (SB3 default ``[64, 64]`` ReLU; none after
-    NatureCNN), linear head. ``forward`` takes raw observation tensors."""
-
-    def __init__(
-        self,
-        observation_space: spaces.Space[Any],
-        action_space: spaces.Discrete,
-        features_extractor_class: type[BaseFeaturesExtractor] = FlattenExtractor,
-        features_extractor_kwargs: dict[str, Any] | None = None,
-        net_arch: list[int] | None = None,
-        activation_fn: type[nn.Module] = nn.ReLU,
-        normalize_images: bool = True,
-    ) -> None:
-        super().__init__()
-        self.observation_space, self.normalize_images = observation_space, normalize_images
-        self.features_extractor = make_extractor(
-            features_extractor_class, observation_space, features_extractor_kwargs
-        )
-        if net_arch is None:
-            net_arch = [] if features_extractor_class is NatureCNN else [64, 64]
-        self.mlp = mlp(self.features_extractor.features_dim, list(net_arch), activation_fn)
-        last = net_arch[-1] if net_arch else self.features_extractor.features_dim
-        self.head = nn.Linear(last, int(action_space.n))
-
-    def forward(self, obs: Any) -> torch.Tensor:
-        x = preprocess_obs(obs, self.observation_space, self.normalize_images)
-        return self.head(self.mlp(self.features_extractor(x)))
-
-    def mlp_modules(self) -> tuple[list[nn.Module] | None, str]:
-        """The modules the numpy learner reads as an MLP (None, and why, where the input is not
-        the raw observation as a float vector)."""
-        why = _numpy_input_problem(
-            self.observation_space, self.features_extractor, self.normalize_images
-        )
-        return (None, why) if why else ([self.features_extractor, self.mlp, self.head], "")
 
 
 def _numpy_input_problem(

@@ -9,10 +9,10 @@ from typing import Any
 import numpy as np
 import torch
 
+from palaestra.algos.a2c.objective import A2CObjective
 from palaestra.algos.common.on_policy import OnPolicyAlgorithm, default_adam
 from palaestra.algos.common.schedules import Schedule, as_schedule
 from palaestra.algos.learners.losses import explained_variance
-from palaestra.algos.learners.objectives import A2CObjective
 
 __all__ = ["A2C"]
 

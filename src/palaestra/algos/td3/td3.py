@@ -9,33 +9,18 @@ import numpy as np
 import torch
 
 from palaestra.algos.common.continuous_policies import ContinuousCritic, DeterministicActor
-from palaestra.algos.common.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
-from palaestra.algos.common.off_policy_policies import TD3Policy
 from palaestra.algos.common.policies import _numpy_input_problem
 from palaestra.algos.common.schedules import Schedule
 from palaestra.algos.learners import Group, Net
-from palaestra.algos.learners.objectives import TD3ActorObjective, TD3CriticObjective
+from palaestra.algos.td3.objective import TD3ActorObjective, TD3CriticObjective
+from palaestra.algos.td3.policies import CnnPolicy, MlpPolicy, MultiInputPolicy, TD3Policy
 
-__all__ = ["DDPG", "TD3", "CnnPolicy", "MlpPolicy", "MultiInputPolicy", "TD3Policy"]
-
-MlpPolicy = TD3Policy  # SB3's alias (DDPG's policies are TD3's, as in SB3)
-
-
-class CnnPolicy(TD3Policy):
-    """``TD3Policy`` with ``NatureCNN`` as its default features extractor (SB3's)."""
-
-    default_features_extractor_class = NatureCNN
-
-
-class MultiInputPolicy(TD3Policy):
-    """``TD3Policy`` with ``CombinedExtractor`` as its default features extractor (SB3's)."""
-
-    default_features_extractor_class = CombinedExtractor
+__all__ = ["TD3"]
 
 
 class TD3(ActorCriticOffPolicy):
-    """Twin Delayed DDPG: ``TD3("MlpPolicy", env, ...)``; arguments as SB3's ``TD3``.
+    """Twin Delayed DDPG: ``TD3(env, ...)``; arguments as SB3's ``TD3``.
 
     Kept from SB3: a deterministic tanh actor, twin critics regressed on the minimum of the
     target critics at the target actor's action plus clipped Gaussian noise
@@ -212,71 +197,3 @@ class TD3(ActorCriticOffPolicy):
             "target_policy_noise": self.target_policy_noise,
             "target_noise_clip": self.target_noise_clip,
         }
-
-
-class DDPG(TD3):
-    """DDPG as SB3 defines it: TD3 with one critic (``n_critics=1`` unless ``policy_kwargs``
-    says otherwise), no target policy smoothing (``target_noise_clip=0``) and
-    ``policy_delay=1``; SB3's constructor arguments and defaults."""
-
-    _policy_defaults = {"n_critics": 1}  # SB3's DDPG, unless policy_kwargs says otherwise
-
-    def __init__(
-        self,
-        policy: str | type[TD3Policy],
-        env: Any,
-        learning_rate: float | Schedule = 1e-3,
-        buffer_size: int = 1_000_000,
-        learning_starts: int = 100,
-        batch_size: int = 256,
-        tau: float = 0.005,
-        gamma: float = 0.99,
-        train_freq: int | tuple[int, str] = 1,
-        gradient_steps: int = 1,
-        action_noise: Any = None,
-        replay_buffer_class: None = None,
-        replay_buffer_kwargs: dict[str, Any] | None = None,
-        optimize_memory_usage: bool = False,
-        n_steps: int = 1,
-        stats_window_size: int = 100,
-        tensorboard_log: str | None = None,
-        policy_kwargs: dict[str, Any] | None = None,
-        verbose: int = 0,
-        seed: int | None = None,
-        device: torch.device | str = "auto",
-        num_threads: int | None = None,
-        _init_setup_model: bool = True,
-    ) -> None:
-        super().__init__(
-            policy,
-            env,
-            learning_rate,
-            buffer_size,
-            learning_starts,
-            batch_size,
-            tau,
-            gamma,
-            train_freq,
-            gradient_steps,
-            action_noise,
-            replay_buffer_class,
-            replay_buffer_kwargs,
-            optimize_memory_usage,
-            n_steps,
-            policy_delay=1,
-            target_policy_noise=0.1,
-            target_noise_clip=0.0,
-            stats_window_size=stats_window_size,
-            tensorboard_log=tensorboard_log,
-            policy_kwargs=policy_kwargs,
-            verbose=verbose,
-            seed=seed,
-            device=device,
-            num_threads=num_threads,
-            _init_setup_model=_init_setup_model,
-        )
-
-    def _hyperparameters(self) -> dict[str, Any]:
-        """TD3's keys without the three DDPG fixes (a file cannot change them)."""
-        fixed = ("policy_delay", "target_policy_noise", "target_noise_clip")
-        return {k: v for k, v in super()._hyperparameters().items() if k not in fixed}

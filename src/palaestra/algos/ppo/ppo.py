@@ -11,7 +11,7 @@ import torch
 from palaestra.algos.common.on_policy import OnPolicyAlgorithm, default_adam
 from palaestra.algos.common.schedules import Schedule, as_schedule
 from palaestra.algos.learners.losses import explained_variance
-from palaestra.algos.learners.objectives import PPOObjective
+from palaestra.algos.ppo.objective import PPOObjective
 
 __all__ = ["PPO"]
 

@@ -9,33 +9,17 @@ import numpy as np
 import torch
 
 from palaestra import spaces
-from palaestra.algos.common.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.common.off_policy import OffPolicyAlgorithm
-from palaestra.algos.common.off_policy_policies import DQNPolicy
-from palaestra.algos.common.policies import QNetwork
 from palaestra.algos.common.schedules import LinearSchedule, Schedule
+from palaestra.algos.dqn.objective import DQNObjective
+from palaestra.algos.dqn.policies import CnnPolicy, DQNPolicy, MlpPolicy, MultiInputPolicy, QNetwork
 from palaestra.algos.learners import Group, Net
-from palaestra.algos.learners.objectives import DQNObjective
 
-__all__ = ["DQN", "CnnPolicy", "DQNPolicy", "MlpPolicy", "MultiInputPolicy"]
-
-MlpPolicy = DQNPolicy  # SB3's alias
-
-
-class CnnPolicy(DQNPolicy):
-    """``DQNPolicy`` with ``NatureCNN`` as its default features extractor (SB3's)."""
-
-    default_features_extractor_class = NatureCNN
-
-
-class MultiInputPolicy(DQNPolicy):
-    """``DQNPolicy`` with ``CombinedExtractor`` as its default features extractor (SB3's)."""
-
-    default_features_extractor_class = CombinedExtractor
+__all__ = ["DQN"]
 
 
 class DQN(OffPolicyAlgorithm):
-    """Deep Q-Network: ``DQN("MlpPolicy", env, ...)``; arguments as SB3's ``DQN``.
+    """Deep Q-Network: ``DQN(env, ...)``; arguments as SB3's ``DQN``.
 
     Kept from SB3: uniform random actions before ``learning_starts``; epsilon decays linearly
     from ``exploration_initial_eps`` to ``exploration_final_eps`` over ``exploration_fraction``

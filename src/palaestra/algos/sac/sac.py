@@ -9,35 +9,20 @@ import numpy as np
 import torch
 
 from palaestra.algos.common.continuous_policies import ContinuousCritic, SquashedGaussianActor
-from palaestra.algos.common.networks import CombinedExtractor, NatureCNN
 from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
-from palaestra.algos.common.off_policy_policies import SACPolicy
 from palaestra.algos.common.policies import _numpy_input_problem
 from palaestra.algos.common.schedules import Schedule
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.heads import squashed_gaussian_rsample
-from palaestra.algos.learners.objectives import (
+from palaestra.algos.learners.xp import numpy_ops
+from palaestra.algos.sac.objective import (
     EntCoefObjective,
     SACActorObjective,
     SACCriticObjective,
 )
-from palaestra.algos.learners.xp import numpy_ops
+from palaestra.algos.sac.policies import CnnPolicy, MlpPolicy, MultiInputPolicy, SACPolicy
 
-__all__ = ["SAC", "CnnPolicy", "MlpPolicy", "MultiInputPolicy", "SACPolicy"]
-
-MlpPolicy = SACPolicy  # SB3's alias
-
-
-class CnnPolicy(SACPolicy):
-    """``SACPolicy`` with ``NatureCNN`` as its default features extractor (SB3's)."""
-
-    default_features_extractor_class = NatureCNN
-
-
-class MultiInputPolicy(SACPolicy):
-    """``SACPolicy`` with ``CombinedExtractor`` as its default features extractor (SB3's)."""
-
-    default_features_extractor_class = CombinedExtractor
+__all__ = ["SAC"]
 
 
 def _ent_coef_init(ent_coef: Any) -> tuple[bool, float]:
@@ -62,7 +47,7 @@ def _ent_coef_init(ent_coef: Any) -> tuple[bool, float]:
 
 
 class SAC(ActorCriticOffPolicy):
-    """Soft Actor-Critic: ``SAC("MlpPolicy", env, ...)``; arguments as SB3's ``SAC``.
+    """Soft Actor-Critic: ``SAC(env, ...)``; arguments as SB3's ``SAC``.
 
     Kept from SB3: a tanh-squashed Gaussian actor (log-std in [-20, 2]), twin critics and
     their polyak-averaged targets (``tau``, every ``target_update_interval`` gradient steps),
