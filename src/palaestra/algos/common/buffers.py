@@ -6,7 +6,7 @@ training loops): ``ReplayBuffer``, ``DictReplayBuffer``, ``RolloutBuffer``,
 Sampling draws from numpy's global generator (``np.random.randint``/``permutation``) in SB3's
 order, so a loop seeded with ``np.random.seed`` draws the same samples as with SB3's buffers:
 that is what these classes are for. palaestra's own algorithms use their seeded buffers
-(``replay_buffer.py``, ``rollout_buffer.py``) instead. GAE is ``learners.losses.gae``, the
+(``TransitionRing``, ``RolloutStore``) instead. GAE is ``learners.losses.gae``, the
 function PPO and A2C train with. Gymnasium spaces are accepted (converted with
 ``palaestra.compat.from_gymnasium_space``), so the same loop runs over either library's envs.
 """

@@ -75,7 +75,7 @@ def _words(a: np.ndarray, lead: int) -> np.ndarray:
 
 
 class FrameReplayBuffer:
-    """``ReplayBuffer``'s interface over a pool of deduplicated frames (see module doc)."""
+    """``TransitionRing``'s interface over a pool of deduplicated frames (see module doc)."""
 
     def __init__(
         self,
@@ -96,7 +96,7 @@ class FrameReplayBuffer:
                 f"cannot split observations of shape {shape} into frames of {channels} "
                 f"channel(s) along axis {axis}"
             )
-        self.buffer_size = max(int(buffer_size) // n_envs, 1)  # rows, as ReplayBuffer
+        self.buffer_size = max(int(buffer_size) // n_envs, 1)  # rows, as TransitionRing
         self.n_envs, self.device = n_envs, torch.device(device)
         self.handle_timeout_termination = handle_timeout_termination
         self.observation_space, self.action_space = observation_space, action_space

@@ -20,8 +20,8 @@ import torch
 from palaestra.algos.common import model_io
 from palaestra.algos.common.base import BaseAlgorithm, round_up_steps
 from palaestra.algos.common.frame_replay_buffer import FrameReplayBuffer, frame_layout
-from palaestra.algos.common.replay_buffer import ReplayBuffer
 from palaestra.algos.common.schedules import Schedule, as_schedule
+from palaestra.algos.common.transition_ring import TransitionRing
 
 __all__ = ["OffPolicyAlgorithm", "train_freq_pair"]
 
@@ -49,7 +49,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
     # The collection counters make a run stopped mid-collection train at the same steps
     # after a resume as without the stop.
     _extra_counters: tuple[str, ...] = ("_n_calls", "_collected_steps", "_collected_episodes")
-    replay_buffer: ReplayBuffer | FrameReplayBuffer | None
+    replay_buffer: TransitionRing | FrameReplayBuffer | None
 
     def _build_policy(self, policy_kwargs: dict[str, Any]) -> Any:
         """The policy module: the class given (or the one its name stands for) built as SB3
@@ -120,7 +120,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
                 | self.replay_buffer_kwargs,
             )
             return
-        self.replay_buffer = ReplayBuffer(
+        self.replay_buffer = TransitionRing(
             self.buffer_size,
             self.observation_space,
             self.action_space,

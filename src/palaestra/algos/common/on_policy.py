@@ -17,14 +17,14 @@ import torch
 from palaestra import spaces
 from palaestra.algos.common.base import BaseAlgorithm, round_up_steps
 from palaestra.algos.common.policies import ActorCritic, ActorCriticPolicy, extractor_class
-from palaestra.algos.common.rollout_buffer import RolloutBuffer
+from palaestra.algos.common.rollout_store import RolloutStore
 from palaestra.algos.learners import Group, Net
 
 __all__ = ["OnPolicyAlgorithm"]
 
 
 class OnPolicyAlgorithm(BaseAlgorithm):
-    """Rollouts of ``n_steps`` per env into a ``RolloutBuffer``, then ``train()``.
+    """Rollouts of ``n_steps`` per env into a ``RolloutStore``, then ``train()``.
 
     Subclasses set ``n_steps``, ``gamma``, ``gae_lambda`` and ``lr_schedule`` before
     ``_init_common`` and implement ``_optimizer_choice``, ``train`` and
@@ -93,7 +93,7 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         self._make_rollout_buffer()
 
     def _make_rollout_buffer(self) -> None:
-        self.rollout_buffer = RolloutBuffer(
+        self.rollout_buffer = RolloutStore(
             self.n_steps,
             self.observation_space,
             self.action_space,

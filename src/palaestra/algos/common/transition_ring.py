@@ -1,4 +1,6 @@
-"""DQN's replay buffer: preallocated numpy rings, one column per env, sampled uniformly.
+"""The off-policy algorithms' replay memory: preallocated numpy rings of transitions, one
+column per env, sampled uniformly (the SB3-compatible class users build is
+``palaestra.algos.buffers.ReplayBuffer``; this one feeds the learners and the model files).
 
 Layout follows SB3 (``[buffer_size // n_envs, n_envs, ...]``, next observations stored apart).
 Time-limit bootstrapping: a transition that ended by truncation (``TimeLimit.truncated``) is
@@ -16,7 +18,7 @@ import torch
 from palaestra import spaces
 from palaestra.algos.common.spaces_util import allocate
 
-__all__ = ["ReplayBuffer"]
+__all__ = ["TransitionRing"]
 
 Obs = np.ndarray | dict[str, np.ndarray]
 
@@ -41,7 +43,7 @@ def _flat(prefix: str, store: Any, n: int) -> dict[str, np.ndarray]:
     return {prefix: store[:n]}
 
 
-class ReplayBuffer:
+class TransitionRing:
     """Fixed-capacity FIFO of transitions from ``n_envs`` envs stepped together."""
 
     def __init__(

@@ -1,5 +1,6 @@
-"""The on-policy rollout buffer: ``n_steps`` steps of ``n_envs`` envs, then GAE, then
-minibatches (PPO) or the whole rollout as one batch (A2C)."""
+"""The on-policy algorithms' rollout storage: ``n_steps`` steps of ``n_envs`` envs as numpy
+arrays, then GAE, then minibatches (PPO) or the whole rollout as one batch (A2C). The
+SB3-compatible class users build is ``palaestra.algos.buffers.RolloutBuffer``."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from palaestra import spaces
 from palaestra.algos.common.spaces_util import allocate
 from palaestra.algos.learners.losses import gae
 
-__all__ = ["RolloutBuffer"]
+__all__ = ["RolloutStore"]
 
 
 def _flat(store: Any) -> Any:
@@ -23,7 +24,7 @@ def _flat(store: Any) -> Any:
     return store.reshape(-1, *store.shape[2:])
 
 
-class RolloutBuffer:
+class RolloutStore:
     """Preallocated arrays for one rollout; ``add`` copies a step, ``compute_returns`` runs GAE."""
 
     def __init__(
