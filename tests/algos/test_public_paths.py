@@ -98,3 +98,37 @@ def test_public_ref_of_classes_outside_palaestra_is_where_they_are_defined() -> 
 
     assert public_paths.public_ref(torch.nn.ReLU) == "torch.nn.modules.activation:ReLU"
     assert public_paths.public_ref(TD3) == "palaestra.algos.td3:TD3"
+
+
+def test_an_aliased_package_brings_its_submodules_as_the_same_objects() -> None:
+    import palaestra.vec_env.normalize
+
+    module = importlib.import_module("palaestra.algos.vec_env.normalize")
+    assert module is palaestra.vec_env.normalize
+    assert importlib.import_module("palaestra.algos.vec_env") is importlib.import_module(
+        "palaestra.vec_env"
+    )
+
+
+def test_sb3_module_names_port_by_substitution() -> None:
+    from palaestra.algos.base_class import BaseAlgorithm
+    from palaestra.algos.env_util import make_vec_env
+    from palaestra.algos.monitor import Monitor
+    from palaestra.algos.noise import NormalActionNoise
+    from palaestra.algos.off_policy_algorithm import OffPolicyAlgorithm
+    from palaestra.algos.on_policy_algorithm import OnPolicyAlgorithm
+    from palaestra.algos.running_mean_std import RunningMeanStd
+    from palaestra.algos.torch_layers import NatureCNN
+    from palaestra.algos.vec_env import DummyVecEnv
+
+    from palaestra.vec_env import DummyVecEnv as Dummy
+    from palaestra.vec_env import make_vec_env as make
+    from palaestra.wrappers import Monitor as Mon
+
+    assert issubclass(OffPolicyAlgorithm, BaseAlgorithm)
+    assert issubclass(OnPolicyAlgorithm, BaseAlgorithm)
+    assert (DummyVecEnv, make_vec_env, Monitor) == (Dummy, make, Mon)
+    assert NormalActionNoise is palaestra.algos.NormalActionNoise
+    assert RunningMeanStd.__module__ == "palaestra.wrappers.running_mean_std"
+    # a class reachable by two aliases is recorded by the documented one
+    assert public_paths.public_ref(NatureCNN) == "palaestra.algos.networks:NatureCNN"

@@ -45,6 +45,18 @@ MODULE_ALIASES: dict[str, str] = {
     "palaestra.algos.results_plotter": "palaestra.algos.common.results_plotter",
     "palaestra.algos.schedules": "palaestra.algos.common.schedules",
     "palaestra.algos.utils": "palaestra.algos.common.utils",
+    # SB3's module names where palaestra's differ, so the substitution has no exceptions
+    "palaestra.algos.base_class": "palaestra.algos.common.base",
+    "palaestra.algos.noise": "palaestra.algos.common.action_noise",
+    "palaestra.algos.off_policy_algorithm": "palaestra.algos.common.off_policy",
+    "palaestra.algos.on_policy_algorithm": "palaestra.algos.common.on_policy",
+    "palaestra.algos.torch_layers": "palaestra.algos.common.networks",
+    # SB3's env-side common modules, which live with the envs here (a package's submodules
+    # come with it: palaestra.algos.vec_env.normalize is palaestra.vec_env.normalize)
+    "palaestra.algos.env_util": "palaestra.vec_env.env_util",
+    "palaestra.algos.monitor": "palaestra.wrappers.monitor",
+    "palaestra.algos.running_mean_std": "palaestra.wrappers.running_mean_std",
+    "palaestra.algos.vec_env": "palaestra.vec_env",
     # never documented; palaestra.compat.sb3 imports it by this path (move it to
     # palaestra.algos.common.model_io there, then this line may go)
     "palaestra.algos.model_io": "palaestra.algos.common.model_io",
@@ -63,12 +75,25 @@ MOVED_CLASSES: dict[str, str] = {
 }
 
 
+def aliased(name: str) -> str | None:
+    """The module the public path ``name`` stands for, or None where it is no alias."""
+    if name in MODULE_ALIASES:
+        return MODULE_ALIASES[name]
+    package = name.rpartition(".")[0]
+    while package:
+        target = MODULE_ALIASES.get(package)
+        if target is not None:
+            return f"{target}.{name[len(package) + 1 :]}"
+        package = package.rpartition(".")[0]
+    return None
+
+
 def resolve_moved(ref: str) -> str:
     """The ``module:qualname`` where the class a model file names as ``ref`` lives now."""
     if ref in MOVED_CLASSES:
         return MOVED_CLASSES[ref]
     module, sep, qualname = ref.partition(":")
-    module = MOVED_MODULES.get(module, MODULE_ALIASES.get(module, module))
+    module = MOVED_MODULES.get(module) or aliased(module) or module
     return f"{module}{sep}{qualname}"
 
 
@@ -77,7 +102,10 @@ def public_ref(cls: type) -> str:
     module, else the nearest package above its module that exports it (``palaestra.algos.dqn``
     for ``palaestra.algos.dqn.policies.DQNPolicy``), else where it is defined."""
     module, qualname = cls.__module__, cls.__qualname__
-    public = {real: alias for alias, real in MODULE_ALIASES.items()}
+    public: dict[str, str] = {}
+    for alias, real in MODULE_ALIASES.items():  # the first alias is the documented one
+        if real.startswith("palaestra.algos."):
+            public.setdefault(real, alias)
     if module in public:
         return f"{public[module]}:{qualname}"
     if module.startswith("palaestra.algos.") and "." not in qualname:
@@ -111,7 +139,7 @@ class _AliasFinder(importlib.abc.MetaPathFinder):
         path: Sequence[str] | None,
         target: types.ModuleType | None = None,
     ) -> importlib.machinery.ModuleSpec | None:
-        real = MODULE_ALIASES.get(fullname)
+        real = aliased(fullname)
         if real is None:
             return None
         module = importlib.import_module(real)
