@@ -75,15 +75,15 @@ class A2C(OnPolicyAlgorithm):
         self.rms_prop_eps, self.use_rms_prop = rms_prop_eps, use_rms_prop
         self.normalize_advantage = normalize_advantage
         self._init_common(
-            policy,
-            env,
-            policy_kwargs,
-            verbose,
-            seed,
-            device,
-            tensorboard_log,
-            num_threads,
-            stats_window_size,
+            policy=policy,
+            env=env,
+            policy_kwargs=policy_kwargs,
+            verbose=verbose,
+            seed=seed,
+            device=device,
+            tensorboard_log=tensorboard_log,
+            num_threads=num_threads,
+            stats_window_size=stats_window_size,
         )
         if self.env is not None:
             self._check_rollout_size()

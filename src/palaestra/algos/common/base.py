@@ -112,6 +112,7 @@ class BaseAlgorithm:
 
     def _init_common(
         self,
+        *,
         policy: str | type,
         env: Any,
         policy_kwargs: dict[str, Any] | None,

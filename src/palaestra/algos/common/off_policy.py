@@ -80,6 +80,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
 
     def _init_off_policy(
         self,
+        *,
         learning_rate: float | Schedule,
         buffer_size: int,
         learning_starts: int,

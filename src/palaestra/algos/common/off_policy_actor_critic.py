@@ -47,57 +47,35 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
 
     def _init_model(
         self,
+        *,
+        action_noise: Any,
+        init_setup_model: bool,
         policy: str | type,
         env: Any,
-        learning_rate: Any,
-        buffer_size: int,
-        learning_starts: int,
-        batch_size: int,
-        tau: float,
-        gamma: float,
-        train_freq: int | tuple[int, str],
-        gradient_steps: int,
-        action_noise: Any,
-        replay_buffer_class: None,
-        replay_buffer_kwargs: dict[str, Any] | None,
-        optimize_memory_usage: bool,
-        n_steps: int,
-        stats_window_size: int,
-        tensorboard_log: str | None,
         policy_kwargs: dict[str, Any] | None,
         verbose: int,
         seed: int | None,
         device: torch.device | str,
+        tensorboard_log: str | None,
         num_threads: int | None,
-        init_setup_model: bool,
+        stats_window_size: int,
+        **off_policy: Any,
     ) -> None:
         """The constructor plumbing SAC, TD3 and DDPG share, once their own arguments are
-        checked and set: the replay loop's settings, the common ones, then the networks."""
-        self._init_actor_critic(tau, action_noise)
-        self._init_off_policy(
-            learning_rate,
-            buffer_size,
-            learning_starts,
-            batch_size,
-            tau,
-            gamma,
-            train_freq,
-            gradient_steps,
-            replay_buffer_class,
-            replay_buffer_kwargs,
-            optimize_memory_usage,
-            n_steps,
-        )
+        checked and set: the replay loop's settings (``off_policy``: ``_init_off_policy``'s
+        keywords, passed on by name), the common ones, then the networks."""
+        self._init_actor_critic(off_policy["tau"], action_noise)
+        self._init_off_policy(**off_policy)
         self._init_common(
-            policy,
-            env,
-            policy_kwargs,
-            verbose,
-            seed,
-            device,
-            tensorboard_log,
-            num_threads,
-            stats_window_size,
+            policy=policy,
+            env=env,
+            policy_kwargs=policy_kwargs,
+            verbose=verbose,
+            seed=seed,
+            device=device,
+            tensorboard_log=tensorboard_log,
+            num_threads=num_threads,
+            stats_window_size=stats_window_size,
         )
         self._setup_model_if(init_setup_model)
 

@@ -75,18 +75,18 @@ class DQN(OffPolicyAlgorithm):
         _init_setup_model: bool = True,
     ) -> None:
         self._init_off_policy(
-            learning_rate,
-            buffer_size,
-            learning_starts,
-            batch_size,
-            tau,
-            gamma,
-            train_freq,
-            gradient_steps,
-            replay_buffer_class,
-            replay_buffer_kwargs,
-            optimize_memory_usage,
-            n_steps,
+            learning_rate=learning_rate,
+            buffer_size=buffer_size,
+            learning_starts=learning_starts,
+            batch_size=batch_size,
+            tau=tau,
+            gamma=gamma,
+            train_freq=train_freq,
+            gradient_steps=gradient_steps,
+            replay_buffer_class=replay_buffer_class,
+            replay_buffer_kwargs=replay_buffer_kwargs,
+            optimize_memory_usage=optimize_memory_usage,
+            n_steps=n_steps,
         )
         self.target_update_interval = target_update_interval
         self.exploration_fraction = exploration_fraction
@@ -100,15 +100,15 @@ class DQN(OffPolicyAlgorithm):
         )
         self.exploration_rate = 0.0
         self._init_common(
-            policy,
-            env,
-            policy_kwargs,
-            verbose,
-            seed,
-            device,
-            tensorboard_log,
-            num_threads,
-            stats_window_size,
+            policy=policy,
+            env=env,
+            policy_kwargs=policy_kwargs,
+            verbose=verbose,
+            seed=seed,
+            device=device,
+            tensorboard_log=tensorboard_log,
+            num_threads=num_threads,
+            stats_window_size=stats_window_size,
         )
         if self.env is not None and self.n_envs > target_update_interval:
             warnings.warn(

@@ -82,15 +82,15 @@ class PPO(OnPolicyAlgorithm):
         )
         self.max_grad_norm, self.target_kl = max_grad_norm, target_kl
         self._init_common(
-            policy,
-            env,
-            policy_kwargs,
-            verbose,
-            seed,
-            device,
-            tensorboard_log,
-            num_threads,
-            stats_window_size,
+            policy=policy,
+            env=env,
+            policy_kwargs=policy_kwargs,
+            verbose=verbose,
+            seed=seed,
+            device=device,
+            tensorboard_log=tensorboard_log,
+            num_threads=num_threads,
+            stats_window_size=stats_window_size,
         )
         if self.env is not None:
             self._check_rollout_size()
