@@ -25,6 +25,7 @@ __all__ = [
     "MODULE_ALIASES",
     "MOVED_CLASSES",
     "MOVED_MODULES",
+    "aliased",
     "install",
     "public_ref",
     "resolve_moved",
