@@ -48,7 +48,7 @@ def sb3_nbytes(n: int, optimize: bool) -> int:
 
 def fill(n: int) -> tuple[Any, float, float]:
     """A frame buffer of ``n`` transitions filled from Breakout; (buffer, add us, sample us)."""
-    from palaestra.algos.frame_replay_buffer import FrameReplayBuffer, frame_layout
+    from palaestra.algos.common.frame_replay_buffer import FrameReplayBuffer, frame_layout
     from palaestra.vec_env import VecFrameStack, make_atari_env
 
     venv = VecFrameStack(make_atari_env(ENV_ID, n_envs=N_ENVS, seed=0), 4)

@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 
 from palaestra import spaces
-from palaestra.algos.replay_buffer import ReplayBuffer
-from palaestra.algos.rollout_buffer import RolloutBuffer
+from palaestra.algos.common.rollout_store import RolloutStore
+from palaestra.algos.common.transition_ring import TransitionRing
 
 OBS = spaces.Box(-10, 10, (2,))
 
 
-def _fill(buf: ReplayBuffer, steps: int) -> None:
+def _fill(buf: TransitionRing, steps: int) -> None:
     for t in range(steps):
         obs = np.full((buf.n_envs, 2), t, dtype=np.float32)
         buf.add(
@@ -24,17 +24,17 @@ def _fill(buf: ReplayBuffer, steps: int) -> None:
 
 
 def test_timeouts_are_not_terminal() -> None:
-    buf = ReplayBuffer(100, OBS, spaces.Discrete(3), n_envs=2)
+    buf = TransitionRing(100, OBS, spaces.Discrete(3), n_envs=2)
     _fill(buf, 6)
     # steps 2 and 5 are done; step 5 is a truncation, so only step 2 is terminal
     assert buf.terminated[:6, 0].tolist() == [0, 0, 1, 0, 0, 0]
-    no_handle = ReplayBuffer(100, OBS, spaces.Discrete(3), handle_timeout_termination=False)
+    no_handle = TransitionRing(100, OBS, spaces.Discrete(3), handle_timeout_termination=False)
     _fill(no_handle, 6)
     assert no_handle.terminated[:6, 0].tolist() == [0, 0, 1, 0, 0, 1]
 
 
 def test_ring_wraps_and_sample_shapes() -> None:
-    buf = ReplayBuffer(8, OBS, spaces.Discrete(3), n_envs=2)  # 4 rows of 2 envs, as SB3
+    buf = TransitionRing(8, OBS, spaces.Discrete(3), n_envs=2)  # 4 rows of 2 envs, as SB3
     assert buf.buffer_size == 4
     _fill(buf, 6)
     assert buf.full and buf.pos == 2 and buf.size() == 4
@@ -48,23 +48,23 @@ def test_ring_wraps_and_sample_shapes() -> None:
 
 def test_dict_observations_and_state_roundtrip() -> None:
     space = spaces.Dict({"img": spaces.Box(0, 255, (3, 4, 4), np.uint8), "v": spaces.Discrete(5)})
-    buf = ReplayBuffer(10, space, spaces.Discrete(2))
+    buf = TransitionRing(10, space, spaces.Discrete(2))
     for t in range(3):
         obs = {"img": np.full((1, 3, 4, 4), t, np.uint8), "v": np.array([t])}
         buf.add(obs, obs, np.array([1]), np.array([1.0]), np.array([False]), np.array([False]))
     obs = buf.sample_arrays(4, np.random.default_rng(1))[0]
     assert obs["img"].dtype == np.uint8 and obs["img"].shape == (4, 3, 4, 4)
     meta, arrays = buf.state()
-    other = ReplayBuffer(10, space, spaces.Discrete(2))
+    other = TransitionRing(10, space, spaces.Discrete(2))
     other.load_state(meta, arrays)
     assert other.pos == 3 and not other.full
     np.testing.assert_array_equal(other.observations["v"][:3, 0], [0, 1, 2])
     with pytest.raises(ValueError, match="n_envs"):
-        ReplayBuffer(10, space, spaces.Discrete(2), n_envs=2).load_state(meta, arrays)
+        TransitionRing(10, space, spaces.Discrete(2), n_envs=2).load_state(meta, arrays)
 
 
 def test_rollout_buffer_minibatches_cover_everything_once() -> None:
-    buf = RolloutBuffer(4, OBS, spaces.Box(-1, 1, (2,)), n_envs=3, gamma=0.9, gae_lambda=0.8)
+    buf = RolloutStore(4, OBS, spaces.Box(-1, 1, (2,)), n_envs=3, gamma=0.9, gae_lambda=0.8)
     for t in range(4):
         buf.add(
             np.full((3, 2), t),
@@ -96,7 +96,7 @@ def test_replay_buffer_file_larger_than_the_buffer_is_refused_before_reading(tmp
     import tracemalloc
 
     from palaestra.algos import ModelFileError
-    from palaestra.algos.model_io import read_archive, write_archive
+    from palaestra.algos.common.model_io import read_archive, write_archive
 
     model = _dqn_with_buffer(tmp_path)
     meta, arrays = read_archive(tmp_path / "rb.zip", "replay_buffer")
@@ -121,7 +121,7 @@ def test_replay_buffer_file_larger_than_the_buffer_is_refused_before_reading(tmp
 )
 def test_replay_buffer_contents_are_checked(tmp_path, change, message) -> None:  # type: ignore[no-untyped-def]
     from palaestra.algos import ModelFileError
-    from palaestra.algos.model_io import read_archive, write_archive
+    from palaestra.algos.common.model_io import read_archive, write_archive
 
     model = _dqn_with_buffer(tmp_path)
     meta, arrays = read_archive(tmp_path / "rb.zip", "replay_buffer")

@@ -13,20 +13,19 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
+from palaestra.algos.networks import BaseFeaturesExtractor, CombinedExtractor, NatureCNN
 from torch import nn
 
 from palaestra.algos import DDPG, DQN, SAC, TD3, ModelFileError
 from palaestra.algos import dqn as dqn_module
 from palaestra.algos import sac as sac_module
 from palaestra.algos import td3 as td3_module
-from palaestra.algos.continuous_policies import (
+from palaestra.algos.common.continuous_policies import (
     ContinuousCritic,
     DeterministicActor,
     SquashedGaussianActor,
 )
-from palaestra.algos.dqn import DQNPolicy
-from palaestra.algos.networks import BaseFeaturesExtractor, CombinedExtractor, NatureCNN
-from palaestra.algos.policies import QNetwork
+from palaestra.algos.dqn import DQNPolicy, QNetwork
 from palaestra.algos.sac import SACPolicy
 from palaestra.algos.td3 import TD3Policy
 
@@ -471,7 +470,7 @@ def test_parts_of_the_wrong_kind() -> None:
 
     with pytest.raises(
         TypeError,
-        match=r"NoActor.actor must be a palaestra.algos.continuous_policies."
+        match=r"NoActor.actor must be a palaestra.algos.common.continuous_policies."
         r"SquashedGaussianActor \(or a subclass; see make_actor/make_critic\), got Linear",
     ):
         SAC(NoActor, "Pendulum-v1", buffer_size=100)
@@ -488,7 +487,7 @@ def test_parts_of_the_wrong_kind() -> None:
 
     with pytest.raises(TypeError, match=r"actor must be a .*DeterministicActor .* got Squashed"):
         TD3(SacActorInTd3, "Pendulum-v1", buffer_size=100)
-    assert DeterministicActor.__module__ == "palaestra.algos.continuous_policies"
+    assert DeterministicActor.__module__ == "palaestra.algos.common.continuous_policies"
 
     class NoQNet(DQNPolicy):
         def make_q_net(self) -> Any:

@@ -11,7 +11,7 @@ from pathlib import Path
 import torch
 
 import palaestra
-from palaestra.algos.eager_optimizer import build_optimizer
+from palaestra.algos.common.eager_optimizer import build_optimizer
 
 
 def _python(code: str) -> str:

@@ -8,11 +8,11 @@ from typing import Any
 
 import numpy as np
 import pytest
+from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 from tests.raised import raised
 
 from palaestra import error
 from palaestra.algos import DQN, PPO
-from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 
 HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
 
@@ -109,7 +109,7 @@ def test_predict_a_dict_on_a_box_space_and_a_box_on_a_dict_space() -> None:
     assert type(ours) is error.InvalidObservation and "{'x': array([0., 0., 0., 0.])}" in str(ours)
     assert "observation space is Box(" in str(ours)
     from palaestra import spaces
-    from palaestra.algos.spaces_util import is_vectorized_observation
+    from palaestra.algos.common.spaces_util import is_vectorized_observation
 
     space = spaces.Dict({"x": spaces.Box(-1, 1, (2,))})
     ours = raised(lambda: is_vectorized_observation(np.zeros(2), space))

@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
+from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 
 from palaestra.algos import A2C, DQN, PPO, SAC, TD3, NormalActionNoise
-from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 from palaestra.vec_env import make_vec_env
 
 
@@ -146,7 +146,7 @@ def test_bad_counters_in_a_model_file(
     name: str, value: object, message: str, tmp_path: Path
 ) -> None:
     from palaestra.algos import ModelFileError
-    from palaestra.algos.model_io import read_archive, write_archive
+    from palaestra.algos.common.model_io import read_archive, write_archive
 
     PPO("MlpPolicy", "CartPole-v1", n_steps=16, batch_size=16).save(tmp_path / "m.zip")
     meta, arrays = read_archive(tmp_path / "m.zip", "model")
@@ -158,7 +158,7 @@ def test_bad_counters_in_a_model_file(
 
 def test_malformed_run_state_in_a_model_file(tmp_path: Path) -> None:
     from palaestra.algos import ModelFileError
-    from palaestra.algos.model_io import read_archive, write_archive
+    from palaestra.algos.common.model_io import read_archive, write_archive
 
     venv = make_vec_env("CartPole-v1", n_envs=2, seed=0)
     model = PPO("MlpPolicy", venv, n_steps=16, batch_size=32, seed=0)

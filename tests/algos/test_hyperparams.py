@@ -1,5 +1,5 @@
 """What a model file may hand ``DQN``/``PPO``: the saved hyperparameters only, within limits
-(``palaestra.algos.hyperparams``), checked before anything is allocated."""
+(``palaestra.algos.common.hyperparams``), checked before anything is allocated."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from palaestra.algos.policies import ActorCritic
 
 from palaestra.algos import A2C, DDPG, DQN, PPO, SAC, TD3, ModelFileError
-from palaestra.algos import hyperparams as hp
+from palaestra.algos.common import hyperparams as hp
+from palaestra.algos.common.model_io import read_archive, write_archive
 from palaestra.algos.dqn import DQNPolicy
-from palaestra.algos.model_io import read_archive, write_archive
-from palaestra.algos.policies import ActorCritic
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,7 @@ import pytest
 import torch
 from tests.compat.crafted import forge_size, npy_header, palaestra_zip, zip_of
 
-from palaestra.algos.model_io import (
+from palaestra.algos.common.model_io import (
     ArraySpec,
     ModelFileError,
     decode_classes,

@@ -11,9 +11,9 @@ import torch
 
 from palaestra import spaces
 from palaestra.algos import DQN
-from palaestra.algos.frame_replay_buffer import FrameReplayBuffer, frame_layout
-from palaestra.algos.model_io import ModelFileError
-from palaestra.algos.replay_buffer import ReplayBuffer
+from palaestra.algos.common.frame_replay_buffer import FrameReplayBuffer, frame_layout
+from palaestra.algos.common.model_io import ModelFileError
+from palaestra.algos.common.transition_ring import TransitionRing
 from palaestra.core import Env
 from palaestra.vec_env import DummyVecEnv, VecFrameStack
 from palaestra.wrappers import FrameStackObservation, TimeLimit
@@ -81,7 +81,7 @@ def _drive(venv: Any, buffers: list[Any], steps: int, seed: int = 0) -> int:
     return ends
 
 
-def _assert_same(frames: FrameReplayBuffer, plain: ReplayBuffer) -> None:
+def _assert_same(frames: FrameReplayBuffer, plain: TransitionRing) -> None:
     assert (frames.size(), frames.pos, frames.full) == (plain.size(), plain.pos, plain.full)
     rows, cols = np.divmod(np.arange(plain.size() * plain.n_envs), plain.n_envs)
     obs, actions, next_obs, rewards, terminated = frames.get(rows, cols)
@@ -92,10 +92,10 @@ def _assert_same(frames: FrameReplayBuffer, plain: ReplayBuffer) -> None:
     np.testing.assert_array_equal(terminated, plain.terminated[rows, cols])
 
 
-def _pair(venv: Any, size: int) -> tuple[FrameReplayBuffer, ReplayBuffer]:
+def _pair(venv: Any, size: int) -> tuple[FrameReplayBuffer, TransitionRing]:
     args = (size, venv.observation_space, venv.action_space, venv.num_envs)
     layout = frame_layout(venv.observation_space, venv)
-    return FrameReplayBuffer(*args, layout=layout), ReplayBuffer(*args)
+    return FrameReplayBuffer(*args, layout=layout), TransitionRing(*args)
 
 
 @pytest.mark.parametrize("stack", ["vec", "wrapper", "none"])
@@ -153,7 +153,7 @@ def test_memory_is_one_frame_per_transition() -> None:
     space = spaces.Box(0, 255, (4, 84, 84), np.uint8)
     frame = 84 * 84
     frames = FrameReplayBuffer(2000, space, spaces.Discrete(4))
-    plain_bytes = ReplayBuffer(2000, space, spaces.Discrete(4)).nbytes()
+    plain_bytes = TransitionRing(2000, space, spaces.Discrete(4)).nbytes()
     assert frames.nbytes() <= 1.2 * 2000 * frame
     assert plain_bytes >= 8 * 2000 * frame
     assert frames.n_frames == 4 and frames.frame_shape == (1, 84, 84)

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
+from palaestra.algos.callbacks import CheckpointCallback, EvalCallback
 
 import palaestra as gym
 from palaestra.algos import (
@@ -22,10 +23,10 @@ from palaestra.algos import (
     VectorizedActionNoise,
     evaluate_policy,
 )
-from palaestra.algos.callbacks import CheckpointCallback, EvalCallback
 from palaestra.algos.learners import NumpyLearner, TorchLearner
-from palaestra.algos.learners.objectives import SACCriticObjective, TD3CriticObjective
 from palaestra.algos.learners.xp import numpy_ops
+from palaestra.algos.sac.objective import SACCriticObjective
+from palaestra.algos.td3.objective import TD3CriticObjective
 from palaestra.vec_env import make_vec_env
 
 from .toys import Toy

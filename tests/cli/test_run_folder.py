@@ -203,7 +203,7 @@ def test_bad_config_values_are_one_line(
 
 
 def test_model_file_limits_reach_the_cli(ppo_run: tuple[Path, Result], workdir: Path) -> None:
-    from palaestra.algos.model_io import read_archive, write_archive
+    from palaestra.algos.common.model_io import read_archive, write_archive
 
     run = _tampered(ppo_run, workdir)
     for path in run.rglob("model*.zip"):  # eval reads model.zip, --resume its checkpoint's

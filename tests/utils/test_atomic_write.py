@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from palaestra.algos.model_io import read_archive, write_archive
+from palaestra.algos.common.model_io import read_archive, write_archive
 from palaestra.utils.atomic_write import (
     atomic_path,
     atomic_write,

@@ -49,7 +49,7 @@ def call(kind, path, kwargs):
         from palaestra.algos import PPO
         return PPO.load(path, **kwargs)
     if kind == "read_archive":
-        from palaestra.algos.model_io import read_archive
+        from palaestra.algos.common.model_io import read_archive
         return read_archive(path, **kwargs)
     if kind == "from_sb3":
         from palaestra.compat import from_sb3

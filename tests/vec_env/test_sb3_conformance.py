@@ -267,7 +267,7 @@ def test_vec_monitor_over_a_native_batch_does_not_warn(recwarn):
 
 
 def test_loading_an_sb3_vec_normalize_pickle_says_what_palaestra_reads(tmp_path):
-    from palaestra.algos.model_io import ModelFileError
+    from palaestra.algos.common.model_io import ModelFileError
 
     path = tmp_path / "vecnormalize.pkl"
     sb3.VecNormalize(sb3.DummyVecEnv([lambda: gymnasium.make("CartPole-v1")])).save(str(path))

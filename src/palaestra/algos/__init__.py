@@ -42,6 +42,8 @@ Not supported yet: ``use_sde`` (gSDE; PPO, A2C and SAC raise ``NotImplementedErr
 (observations are stored as the env returns them).
 """
 
+import importlib
+
 from palaestra.error import dependency_not_installed
 
 try:
@@ -50,20 +52,22 @@ except ImportError as exc:  # pragma: no cover - exercised in a subprocess test
     raise dependency_not_installed("torch", "train", "palaestra.algos") from exc
 
 # isort: skip_file
-from palaestra.algos import callbacks, schedules
+from palaestra.algos import public_paths  # first: puts the public-path hook in place
+from palaestra.algos.common import callbacks, schedules
 from palaestra.algos.a2c import A2C
 from palaestra.algos.dqn import DQN
 from palaestra.algos.sac import SAC
-from palaestra.algos.td3 import DDPG, TD3
-from palaestra.algos.action_noise import (
+from palaestra.algos.td3 import TD3
+from palaestra.algos.ddpg import DDPG
+from palaestra.algos.common.action_noise import (
     NormalActionNoise,
     OrnsteinUhlenbeckActionNoise,
     VectorizedActionNoise,
 )
 from palaestra.algos.ppo import PPO
-from palaestra.algos.evaluation import evaluate_policy
-from palaestra.algos.model_io import ModelFileError
-from palaestra.algos.schedules import ConstantSchedule, LinearSchedule
+from palaestra.algos.common.evaluation import evaluate_policy
+from palaestra.algos.common.model_io import ModelFileError
+from palaestra.algos.common.schedules import ConstantSchedule, LinearSchedule
 
 __all__ = [
     "A2C",
@@ -82,3 +86,11 @@ __all__ = [
     "evaluate_policy",
     "schedules",
 ]
+
+
+def __getattr__(name: str) -> object:
+    """``palaestra.algos.buffers`` and the other public module paths as attributes, imported
+    on first use as ``import palaestra.algos.buffers`` would."""
+    if f"{__name__}.{name}" in public_paths.MODULE_ALIASES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.algos.callbacks import BaseCallback
+from palaestra.algos.common.callbacks import BaseCallback
 
 __all__ = ["GracefulStop", "LiveProgress", "format_duration"]
 

@@ -28,8 +28,8 @@ except ImportError as exc:  # the one dependency from_sb3 has: say which extra s
 
 from palaestra import spaces
 from palaestra.algos import DQN, PPO
-from palaestra.algos.model_io import ModelFileError, PathLike, decode_classes
-from palaestra.algos.networks import preprocessed_dim
+from palaestra.algos.common.model_io import ModelFileError, PathLike, decode_classes
+from palaestra.algos.common.networks import preprocessed_dim
 from palaestra.compat.sb3_file import MISSING, SB3File, plain_value, read_sb3_file, sb3_type
 from palaestra.compat.sb3_file import space_from_sb3 as _space_from_sb3
 from palaestra.core import Env

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from palaestra import spaces
-from palaestra.algos.model_io import PathLike, resolve_path
+from palaestra.algos.common.model_io import PathLike, resolve_path
 from palaestra.compat.torch_file import MAX_STATE_DICT_BYTES, read_torch_state_dict
 from palaestra.utils.bounded_zip import (
     ModelFileError,

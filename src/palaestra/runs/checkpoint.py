@@ -26,9 +26,9 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from palaestra.algos.callbacks import BaseCallback
-from palaestra.algos.model_io import ModelFileError, read_archive, write_archive
-from palaestra.algos.saving import bind_env_token, env_token
+from palaestra.algos.common.callbacks import BaseCallback
+from palaestra.algos.common.model_io import ModelFileError, read_archive, write_archive
+from palaestra.algos.common.saving import bind_env_token, env_token
 from palaestra.error import RunStateError
 from palaestra.runs.files import MODEL_FILE, NORMALIZE_FILE, REPLAY_ALGOS, REPLAY_FILE
 from palaestra.utils.atomic_write import atomic_write, complete_text

@@ -70,7 +70,7 @@ class EvalResult:
 
 def load_model(path: Path, device: str = "auto") -> Any:
     """A model of any algorithm the run API trains; which one comes from the file's metadata."""
-    from palaestra.algos.model_io import read_manifest  # lazy: import-time — torch
+    from palaestra.algos.common.model_io import read_manifest  # lazy: import-time — torch
 
     meta = read_manifest(path, "model").meta
     by_class = {cls: name for name, cls in ALGO_CLASSES.items()}
@@ -196,7 +196,7 @@ def play_episodes(
     one-env ``venv`` (seed it first: ``venv.seed(seed)``), played by ``evaluate_policy``.
     Lengths count agent steps (under SB3's Atari recipe the Monitor counts frames) and an
     episode ends when the Monitor reports one, so an Atari game is all of its lives."""
-    from palaestra.algos.evaluation import evaluate_policy  # lazy: import-time — torch
+    from palaestra.algos.common.evaluation import evaluate_policy  # lazy: import-time — torch
 
     terminated: list[bool] = []
     lengths: list[int] = []

@@ -307,7 +307,9 @@ def check_run_config(
     _check_names(config, source)
     _check_pipeline(config, source)
     if "hyperparams" in config:
-        from palaestra.algos.hyperparams import check_run_hyperparams  # lazy: import-time — torch
+        from palaestra.algos.common.hyperparams import (
+            check_run_hyperparams,  # lazy: import-time — torch
+        )
 
         algo = algorithms.check_algo(str(config.get("algo")))
         names = set(algorithms.hyperparameter_names(algo))

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.algos.callbacks import BaseCallback
-from palaestra.algos.logger import CSVOutputFormat
+from palaestra.algos.common.callbacks import BaseCallback
+from palaestra.algos.common.logger import CSVOutputFormat
 from palaestra.utils.atomic_write import cut_torn_line, open_append
 
 __all__ = ["EPISODE_COLUMNS", "AppendingCSV", "EpisodeLog"]

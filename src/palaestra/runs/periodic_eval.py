@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.algos.callbacks import BaseCallback, EvalCallback
+from palaestra.algos.common.callbacks import BaseCallback, EvalCallback
 from palaestra.runs.curves import read_evaluations
 from palaestra.runs.errors import RunError
 from palaestra.runs.evaluation import make_eval_env

@@ -280,7 +280,7 @@ def choose_policy(settings: dict[str, Any], env_id: str) -> tuple[str, str]:
     """``(policy, why)`` for a run with no preset, from the observation space of one env of
     its recipe (env kwargs and wrapper applied): ``MultiInputPolicy`` for a ``Dict`` space,
     ``CnnPolicy`` for an image ``Box`` (SB3's ``is_image_space``), else ``MlpPolicy``."""
-    from palaestra.algos.spaces_util import is_image_space  # lazy: import-time — torch
+    from palaestra.algos.common.spaces_util import is_image_space  # lazy: import-time — torch
 
     try:
         env = palaestra.make(env_id, **(settings.get("env_kwargs") or {}))

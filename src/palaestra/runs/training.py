@@ -118,7 +118,7 @@ def make_model(spec: RunSpec, venv: Any) -> Any:
 
 
 def _logger(run_dir: Path, verbose: bool) -> Any:
-    from palaestra.algos.logger import (  # lazy: import-time — torch
+    from palaestra.algos.common.logger import (  # lazy: import-time — torch
         HumanOutputFormat,
         Logger,
         TensorBoardOutputFormat,
@@ -185,7 +185,7 @@ class Run:
         ``"interrupted"``. A ``KeyboardInterrupt`` inside ``learn`` (the model may be
         mid-update) saves nothing new: ``status.json`` points at the last checkpoint, and the
         exception propagates."""
-        from palaestra.algos.callbacks import CallbackList  # lazy: import-time — torch
+        from palaestra.algos.common.callbacks import CallbackList  # lazy: import-time — torch
         from palaestra.runs.checkpoint import (  # lazy: import-time — torch
             CheckpointDue,
             checkpoint_steps,
@@ -340,8 +340,8 @@ def open_run(
 
 def _rounding_note(run: Run) -> list[str]:
     """The note saying that training ends past ``n_timesteps``, and where (or nothing)."""
-    from palaestra.algos.off_policy import OffPolicyAlgorithm  # lazy: import-time — torch
-    from palaestra.algos.on_policy import OnPolicyAlgorithm  # lazy: import-time — torch
+    from palaestra.algos.common.off_policy import OffPolicyAlgorithm  # lazy: import-time — torch
+    from palaestra.algos.common.on_policy import OnPolicyAlgorithm  # lazy: import-time — torch
 
     model, total, end = run.model, run.spec.n_timesteps, run.final_timesteps
     name, n_envs = run.spec.algo.upper(), model.n_envs
@@ -394,7 +394,7 @@ def _open_resume(
     allow_import: Sequence[str],
     expect: dict[str, str] | None,
 ) -> Run:
-    from palaestra.algos.model_io import ModelFileError  # lazy: import-time — torch
+    from palaestra.algos.common.model_io import ModelFileError  # lazy: import-time — torch
     from palaestra.runs.checkpoint import (  # lazy: import-time — torch
         latest_checkpoint,
         load_env_state,

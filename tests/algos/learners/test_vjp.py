@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 import torch
 
+from palaestra.algos.dqn.objective import dqn_loss, dqn_loss_vjp
 from palaestra.algos.learners import heads
-from palaestra.algos.learners.losses import dqn_loss, dqn_loss_vjp, ppo_loss, ppo_loss_vjp
 from palaestra.algos.learners.mlp import mlp_forward, mlp_forward_vjp
 from palaestra.algos.learners.xp import numpy_ops, torch_ops
+from palaestra.algos.ppo.objective import ppo_loss, ppo_loss_vjp
 
 RNG = np.random.default_rng(0)
 
@@ -229,6 +230,8 @@ def test_ppo_loss_vjp(name: str) -> None:
 def test_actor_critic_loss_vjps(n_critics: int) -> None:
     """The SAC/TD3 losses' VJPs, with a tie between critics (torch.minimum splits it)."""
     from palaestra.algos.learners import losses
+    from palaestra.algos.sac import objective as sac
+    from palaestra.algos.td3 import objective as td3
 
     n = 10
     qs = [_f32(n) for _ in range(n_critics)]
@@ -245,24 +248,24 @@ def test_actor_critic_loss_vjps(n_critics: int) -> None:
         _close(ours, t.grad)
 
     t_qs = [_leaf(q) for q in qs]
-    _, _, tape = losses.soft_actor_loss(numpy_ops, 0.2, log_prob, qs)
-    loss, _, _ = losses.soft_actor_loss(torch_ops, 0.2, t_lp, t_qs)
+    _, _, tape = sac.soft_actor_loss(numpy_ops, 0.2, log_prob, qs)
+    loss, _, _ = sac.soft_actor_loss(torch_ops, 0.2, t_lp, t_qs)
     loss.backward()
-    g_lp, g_qs = losses.soft_actor_loss_vjp(tape)
+    g_lp, g_qs = sac.soft_actor_loss_vjp(tape)
     _close(g_lp, t_lp.grad)
     for ours, t in zip(g_qs, t_qs):
         _close(ours, t.grad)
 
     t_q = _leaf(qs[0])
-    _, _, tape = losses.deterministic_actor_loss(numpy_ops, qs[0])
-    losses.deterministic_actor_loss(torch_ops, t_q)[0].backward()
-    _close(losses.deterministic_actor_loss_vjp(tape), t_q.grad)
+    _, _, tape = td3.deterministic_actor_loss(numpy_ops, qs[0])
+    td3.deterministic_actor_loss(torch_ops, t_q)[0].backward()
+    _close(td3.deterministic_actor_loss_vjp(tape), t_q.grad)
 
     log_alpha = np.array([-0.3], np.float32)
     t_alpha = _leaf(log_alpha)
-    _, _, tape = losses.ent_coef_loss(numpy_ops, log_alpha, log_prob, -1.0)
-    losses.ent_coef_loss(torch_ops, t_alpha, t_lp.detach(), -1.0)[0].backward()
-    _close(losses.ent_coef_loss_vjp(tape), t_alpha.grad)
+    _, _, tape = sac.ent_coef_loss(numpy_ops, log_alpha, log_prob, -1.0)
+    sac.ent_coef_loss(torch_ops, t_alpha, t_lp.detach(), -1.0)[0].backward()
+    _close(sac.ent_coef_loss_vjp(tape), t_alpha.grad)
 
 
 def test_large_products_agree_with_numpy() -> None:

@@ -492,3 +492,8 @@ def build_learner(
         optimizers = sorted({type(g.optimizer).__name__ for g in groups.values()})
         return NumpyLearner(nets, groups, f"small MLPs with {'/'.join(optimizers)} on the CPU")
     return TorchLearner(nets, groups, device, f"numpy cannot: {why_not}", joint)
+
+
+def critics(xp: Any, run: Run, names: list[str], obs: Any, actions: Any) -> list[Any]:
+    """``Q(obs, actions)`` ``[B]`` of each named critic."""
+    return [run(name, (obs, actions))[:, 0] for name in names]

@@ -19,7 +19,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from palaestra.algos.networks import FlattenExtractor
+from palaestra.algos.common.networks import FlattenExtractor
 
 __all__ = [
     "ACTIVATIONS",

@@ -1,0 +1,250 @@
+"""What PPO and A2C share: the actor-critic and its learner, rollout collection with the
+values of a whole rollout in one batched forward, GAE, the bootstrap of truncated episodes,
+the ``learn`` loop (collect, log, train) and the partial rollout kept for exact resume.
+
+An on-policy algorithm adds its constructor, its optimizer default, ``train`` (its loss over
+the rollout buffer) and what it saves; everything else is here, so both run the same steps
+in the same order (PPO's golden hashes did not change when this was taken out of ``ppo.py``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+
+from palaestra import spaces
+from palaestra.algos.common.base import BaseAlgorithm, round_up_steps
+from palaestra.algos.common.policies import ActorCritic, ActorCriticPolicy, extractor_class
+from palaestra.algos.common.rollout_store import RolloutStore
+from palaestra.algos.learners import Group, Net
+
+__all__ = ["OnPolicyAlgorithm"]
+
+
+class OnPolicyAlgorithm(BaseAlgorithm):
+    """Rollouts of ``n_steps`` per env into a ``RolloutStore``, then ``train()``.
+
+    Subclasses set ``n_steps``, ``gamma``, ``gae_lambda`` and ``lr_schedule`` before
+    ``_init_common`` and implement ``_optimizer_choice``, ``train`` and
+    ``_check_rollout_size``."""
+
+    supported_action_spaces = (
+        spaces.Discrete,
+        spaces.Box,
+        spaces.MultiDiscrete,
+        spaces.MultiBinary,
+    )
+    _policy_class_base = ActorCriticPolicy
+    policy: ActorCritic
+    n_steps: int
+    gamma: float
+    gae_lambda: float
+
+    def _optimizer_choice(self, kwargs: dict[str, Any]) -> tuple[type, dict[str, Any]]:
+        """The optimizer class and its kwargs, taking them out of ``kwargs`` (the policy's)."""
+        raise NotImplementedError
+
+    def _check_rollout_size(self) -> None:
+        raise NotImplementedError
+
+    def train(self) -> None:
+        raise NotImplementedError
+
+    def _setup_model(self) -> None:
+        self.set_random_seed(self.seed)
+        kwargs = dict(self.policy_kwargs)
+        optimizer_class, optimizer_kwargs = self._optimizer_choice(kwargs)
+        backend = kwargs.pop("backend", "auto")
+        kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
+        policy: ActorCritic
+        if isinstance(self.policy_name, type):  # an ActorCriticPolicy subclass (SB3's guide)
+            policy_class: Any = self.policy_name
+            policy = policy_class(
+                self.observation_space, self.action_space, self.lr_schedule, **kwargs
+            )
+        else:
+            policy = ActorCritic(self.observation_space, self.action_space, **kwargs)
+        policy = policy.to(self.device)
+        params = list(policy.parameters())
+        optimizer = self._make_optimizer(params, optimizer_class, optimizer_kwargs)
+        pi_modules, vf_modules, why = policy.mlp_modules()
+        head = policy.action_head
+        extras = {"log_std": head.log_std} if head.kind == "gaussian" else {}
+        if pi_modules is not None and vf_modules is not None:
+            # The flat buffer's order (actor, critic, log-std) sets the order in which the
+            # gradient norm is summed: kept from the numpy trainer it replaces.
+            ordered = [p for m in pi_modules + vf_modules for p in m.parameters()]
+            params = list(dict.fromkeys(ordered + list(extras.values()) + params))
+        nets = {
+            "pi": Net(policy.pi_out, pi_modules, group="policy", why=why),
+            "vf": Net(policy.vf_out, vf_modules, group="policy", why=why),
+        }
+        self._set_learner(
+            policy,
+            optimizer,
+            backend,
+            nets,
+            {"policy": Group(optimizer, params, extras)},
+            joint={("pi", "vf"): policy.pi_and_vf},
+        )
+        self._head = head
+        self._make_rollout_buffer()
+
+    def _make_rollout_buffer(self) -> None:
+        self.rollout_buffer = RolloutStore(
+            self.n_steps,
+            self.observation_space,
+            self.action_space,
+            self.n_envs,
+            self.gamma,
+            self.gae_lambda,
+        )
+
+    def final_timesteps(self, total_timesteps: int) -> int:
+        # Whole rollouts of n_steps per env, counted from where the one under way began.
+        rollout = self.n_steps * self.n_envs
+        start = self.num_timesteps - self.rollout_buffer.pos * self.n_envs
+        return round_up_steps(start, self.num_timesteps, total_timesteps, rollout)
+
+    def _on_n_envs_changed(self) -> None:
+        self._check_rollout_size()
+        self._make_rollout_buffer()
+
+    def _sample(self, obs: Any, deterministic: bool) -> tuple[np.ndarray, np.ndarray]:
+        """``(actions, log_probs)`` for a batch of raw observations."""
+        log_std = self.learner.extra("log_std") if self._head.kind == "gaussian" else None
+        return self._head.sample(self.learner.forward("pi", obs), log_std, self._rng, deterministic)
+
+    def _values(self, obs: Any) -> np.ndarray:
+        """``V(obs)`` ``[B]``, in chunks (a whole rollout of images may not fit at once)."""
+        if isinstance(obs, dict):
+            n = len(next(iter(obs.values())))
+            chunks = [{k: v[i : i + 8192] for k, v in obs.items()} for i in range(0, n, 8192)]
+        else:
+            chunks = [obs[i : i + 8192] for i in range(0, len(obs), 8192)]
+        with self.learner.session():  # a whole rollout: threads cost more than they save
+            out = [self.learner.forward("vf", chunk)[:, 0] for chunk in chunks]
+        return out[0] if len(out) == 1 else np.concatenate(out)
+
+    def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
+        return self._sample(observation, deterministic)[0]
+
+    # -- learning ----------------------------------------------------------------------------
+    def _learn(
+        self,
+        total_timesteps: int,
+        callback: Any,
+        log_interval: int | None,
+        tb_log_name: str,
+        reset_num_timesteps: bool,
+        progress_bar: bool,
+    ) -> None:
+        """Alternate ``n_steps``-per-env rollouts and ``train()``.
+
+        A callback that stops training ends the rollout after its step is stored; the partial
+        rollout stays in the buffer (and in a saved model), and the next ``learn`` completes it,
+        so a stopped and resumed run updates at the same steps as one never stopped."""
+        callback = self._setup_learn(
+            total_timesteps, callback, reset_num_timesteps, tb_log_name, progress_bar
+        )
+        callback.on_training_start(self._callback_locals(), {})
+        iteration = 0
+        with self._learning_session():
+            while self.num_timesteps < self._total_timesteps:
+                if not self._collect_rollout(callback):
+                    break
+                iteration += 1
+                self._update_progress()
+                if log_interval is not None and iteration % log_interval == 0:
+                    self.dump_logs(iteration)
+                self.train()
+                self.rollout_buffer.reset()
+        callback.on_training_end()
+
+    def dump_logs(self, iteration: int = 0) -> None:
+        """Write the episode statistics, fps and what was recorded since the last dump
+        (SB3's ``dump_logs``; ``iteration > 0`` also logs ``time/iterations``)."""
+        if iteration > 0:
+            self.logger.record("time/iterations", iteration, exclude="tensorboard")
+        self._record_episode_stats()
+        self.logger.dump(step=self.num_timesteps)
+
+    def _on_env_reset(self, restart: bool) -> None:
+        self.rollout_buffer.reset()  # a partial rollout only continues its own episodes
+
+    def _collect_rollout(self, callback: Any) -> bool:
+        """Fill the rest of the rollout buffer; False if a callback asked to stop."""
+        env, buf = self.env, self.rollout_buffer
+        box = self.action_space if isinstance(self.action_space, spaces.Box) else None
+        callback.on_rollout_start()
+        # The values of the whole rollout come from one batched forward at its end (the
+        # parameters do not change during a rollout): per step, only the policy.
+        bits = isinstance(self.action_space, spaces.MultiBinary)
+        while not buf.full:
+            actions, log_probs = self._sample(self._last_obs, False)
+            if bits:
+                actions = actions.astype(self.action_space.dtype)  # Bernoulli samples are floats
+            env_actions = np.clip(actions, box.low, box.high) if box is not None else actions
+            new_obs, rewards, dones, infos = env.step(env_actions)
+            running = self._stepped(callback, actions, new_obs, rewards, dones, infos)
+            rewards = np.asarray(rewards, dtype=np.float32)
+            if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
+                rewards = self._bootstrap_truncated(rewards, dones, infos)
+            buf.add(
+                self._last_obs,
+                actions,
+                rewards,
+                self._last_episode_starts,  # type: ignore[arg-type]
+                None,
+                log_probs,
+            )
+            self._last_obs, self._last_episode_starts = new_obs, dones
+            if not running:
+                return False
+        buf.values[...] = self._values(buf.flat_observations()).reshape(buf.values.shape)
+        # The last step's dones (also after a resume that found the buffer already full).
+        assert self._last_episode_starts is not None
+        buf.compute_returns_and_advantage(self._values(self._last_obs), self._last_episode_starts)
+        callback.update_locals({"rollout_buffer": buf})
+        callback.on_rollout_end()
+        return True
+
+    def _bootstrap_truncated(
+        self, rewards: np.ndarray, dones: np.ndarray, infos: list[dict[str, Any]]
+    ) -> np.ndarray:
+        """Add ``gamma * V(terminal_obs)`` where an episode was cut by a time limit (SB3)."""
+        idx = [
+            i
+            for i in np.flatnonzero(dones)
+            if infos[i].get("TimeLimit.truncated", False)
+            and infos[i].get("terminal_observation") is not None
+        ]
+        if not idx:
+            return rewards
+        terminal = [infos[i]["terminal_observation"] for i in idx]
+        if isinstance(terminal[0], dict):
+            batch: Any = {k: np.stack([t[k] for t in terminal]) for k in terminal[0]}
+        else:
+            batch = np.stack(terminal)
+        rewards = rewards.copy()
+        rewards[idx] += self.gamma * self._values(batch)
+        return rewards
+
+    # -- persistence ---------------------------------------------------------------------------
+    def _loop_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        return self.rollout_buffer.partial_state()
+
+    def _load_loop_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
+        self.rollout_buffer.load_partial_state(meta, arrays)
+
+
+def default_adam(kwargs: dict[str, Any]) -> tuple[type, dict[str, Any]]:
+    """SB3's ``ActorCriticPolicy`` optimizer: ``optimizer_class`` (Adam) with ``eps=1e-5``
+    for Adam unless given, taken out of the policy ``kwargs``."""
+    optimizer_class = kwargs.pop("optimizer_class", torch.optim.Adam)
+    optimizer_kwargs = dict(kwargs.pop("optimizer_kwargs", None) or {})
+    if optimizer_class is torch.optim.Adam:
+        optimizer_kwargs.setdefault("eps", 1e-5)
+    return optimizer_class, optimizer_kwargs

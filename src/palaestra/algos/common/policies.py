@@ -1,0 +1,286 @@
+"""The two policy networks: DQN's Q-network and PPO's actor-critic, built from a policy name
+(``"MlpPolicy"``, ``"CnnPolicy"``, ``"MultiInputPolicy"``) and SB3's ``policy_kwargs``."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import torch
+from torch import nn
+
+from palaestra import spaces
+from palaestra.algos.common.distributions import ActionHead
+from palaestra.algos.common.networks import (
+    BaseFeaturesExtractor,
+    CombinedExtractor,
+    FlattenExtractor,
+    MlpExtractor,
+    NatureCNN,
+    make_extractor,
+    mlp,
+    preprocess_obs,
+)
+from palaestra.algos.common.spaces_util import is_image_space
+
+__all__ = [
+    "POLICY_EXTRACTORS",
+    "ActorCritic",
+    "ActorCriticPolicy",
+    "extractor_class",
+]
+
+POLICY_EXTRACTORS: dict[str, type[BaseFeaturesExtractor]] = {
+    "MlpPolicy": FlattenExtractor,
+    "CnnPolicy": NatureCNN,
+    "MultiInputPolicy": CombinedExtractor,
+}
+
+
+def extractor_class(policy: Any) -> type[BaseFeaturesExtractor]:
+    """The default features extractor of a policy name (``FlattenExtractor`` for an
+    ``ActorCriticPolicy`` subclass, as SB3's); ``ValueError`` for anything else."""
+    if isinstance(policy, type) and issubclass(policy, ActorCriticPolicy):
+        return FlattenExtractor
+    if not isinstance(policy, str) or policy not in POLICY_EXTRACTORS:
+        raise ValueError(
+            f"Policy {policy!r} unknown: use one of {', '.join(map(repr, POLICY_EXTRACTORS))}"
+        )
+    return POLICY_EXTRACTORS[policy]
+
+
+def _numpy_input_problem(
+    space: spaces.Space[Any], extractor: nn.Module, normalize_images: bool
+) -> str:
+    """Why a net's input is not the raw observation flattened to float32 ("" if it is)."""
+    if not isinstance(extractor, FlattenExtractor):
+        return f"the features extractor is {type(extractor).__name__}"
+    if not isinstance(space, spaces.Box):
+        return f"{type(space).__name__} observations are preprocessed (one-hot) in torch"
+    if is_image_space(space) and normalize_images:
+        return "image observations are scaled in torch"
+    return ""
+
+
+def _split_arch(net_arch: Any, features_extractor_class: type) -> tuple[list[int], list[int]]:
+    if net_arch is None:
+        return ([], []) if features_extractor_class is NatureCNN else ([64, 64], [64, 64])
+    if isinstance(net_arch, dict):
+        return list(net_arch.get("pi", [])), list(net_arch.get("vf", []))
+    if isinstance(net_arch, (list, tuple)) and all(isinstance(w, int) for w in net_arch):
+        return list(net_arch), list(net_arch)  # SB3 >= 1.8: a list means the same arch for both
+    raise ValueError(
+        f"net_arch must be a list of ints or dict(pi=[...], vf=[...]), got {net_arch!r}"
+    )
+
+
+def _ortho_init(module: nn.Module, gain: float) -> None:
+    """Orthogonal weights, zero biases (OpenAI baselines' PPO init, kept by SB3)."""
+    for m in module.modules():
+        if isinstance(m, (nn.Linear, nn.Conv2d)):
+            nn.init.orthogonal_(m.weight, gain=gain)
+            if m.bias is not None:
+                m.bias.data.fill_(0.0)
+
+
+class ActorCritic(nn.Module):
+    """PPO's policy and value function: separate pi/vf MLPs (SB3 default ``[64, 64]`` Tanh) on
+    a features extractor shared by default, an ``ActionHead`` and a linear value head."""
+
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
+        features_extractor_class: type[BaseFeaturesExtractor] = FlattenExtractor,
+        features_extractor_kwargs: dict[str, Any] | None = None,
+        net_arch: Any = None,
+        activation_fn: type[nn.Module] = nn.Tanh,
+        ortho_init: bool = True,
+        log_std_init: float = 0.0,
+        share_features_extractor: bool = True,
+        normalize_images: bool = True,
+    ) -> None:
+        super().__init__()
+        self.observation_space, self.action_space = observation_space, action_space
+        self.normalize_images, self.ortho_init = normalize_images, ortho_init
+        self.net_arch, self.activation_fn = net_arch, activation_fn
+        kwargs = features_extractor_kwargs
+        self.features_extractor = make_extractor(
+            features_extractor_class, observation_space, kwargs
+        )
+        self.vf_features_extractor = (
+            None
+            if share_features_extractor
+            else make_extractor(features_extractor_class, observation_space, kwargs)
+        )
+        self.features_dim = self.features_extractor.features_dim
+        self._features_extractor_class = features_extractor_class
+        self._build_mlp_extractor()
+        latent_pi, latent_vf = self._latent_dims()
+        self.action_head = ActionHead(action_space, latent_pi, log_std_init)
+        self.value_head = nn.Linear(latent_vf, 1)
+        if ortho_init:
+            # Gains from SB3 / baselines: sqrt(2) body, 0.01 policy output, 1 value output.
+            for part, gain in [
+                (self.features_extractor, math.sqrt(2)),
+                (self.vf_features_extractor, math.sqrt(2)),
+                *[(body, math.sqrt(2)) for body in self._bodies()],
+                (self.action_head.net, 0.01),
+                (self.value_head, 1.0),
+            ]:
+                if part is not None:
+                    _ortho_init(part, gain)
+
+    # -- the actor and critic bodies between the features and the heads (SB3's
+    # ``mlp_extractor``; ``ActorCriticPolicy`` builds them SB3's way) ----------------------
+    def _build_mlp_extractor(self) -> None:
+        pi_arch, vf_arch = _split_arch(self.net_arch, self._features_extractor_class)
+        self.pi_net = mlp(self.features_dim, pi_arch, self.activation_fn)
+        self.vf_net = mlp(self.features_dim, vf_arch, self.activation_fn)
+        self._latent = (
+            pi_arch[-1] if pi_arch else self.features_dim,
+            vf_arch[-1] if vf_arch else self.features_dim,
+        )
+
+    def _latent_dims(self) -> tuple[int, int]:
+        return self._latent
+
+    def _bodies(self) -> list[nn.Module]:
+        return [self.pi_net, self.vf_net]
+
+    def _pi_latent(self, features: torch.Tensor) -> torch.Tensor:
+        return self.pi_net(features)
+
+    def _vf_latent(self, features: torch.Tensor) -> torch.Tensor:
+        return self.vf_net(features)
+
+    def mlp_modules(self) -> tuple[list[nn.Module] | None, list[nn.Module] | None, str]:
+        """``(pi modules, vf modules, why)``: what the numpy learner reads as the actor and
+        critic MLPs, or None and why not."""
+        why = _numpy_input_problem(
+            self.observation_space, self.features_extractor, self.normalize_images
+        )
+        if why:
+            return None, None, why
+        vf_extractor = self.vf_features_extractor or self.features_extractor
+        return (
+            [self.features_extractor, self.pi_net, self.action_head.net],
+            [vf_extractor, self.vf_net, self.value_head],
+            "",
+        )
+
+    def pi_out(self, obs: Any) -> torch.Tensor:
+        """The action head's outputs (logits, or the Gaussian's mean) for a raw obs batch."""
+        x = preprocess_obs(obs, self.observation_space, self.normalize_images)
+        return self.action_head.net(self._pi_latent(self.features_extractor(x)))
+
+    def vf_out(self, obs: Any) -> torch.Tensor:
+        """``V(obs)`` as ``[B, 1]``."""
+        return self.value_head(self._latents(obs)[1])
+
+    def pi_and_vf(self, obs: Any) -> tuple[torch.Tensor, torch.Tensor]:
+        """Both outputs with one pass of a shared features extractor."""
+        latent_pi, latent_vf = self._latents(obs)
+        return self.action_head.net(latent_pi), self.value_head(latent_vf)
+
+    def _latents(self, obs: Any) -> tuple[torch.Tensor, torch.Tensor]:
+        x = preprocess_obs(obs, self.observation_space, self.normalize_images)
+        features = self.features_extractor(x)
+        vf_features = (
+            features if self.vf_features_extractor is None else self.vf_features_extractor(x)
+        )
+        return self._pi_latent(features), self._vf_latent(vf_features)
+
+    def evaluate_actions(
+        self, obs: Any, actions: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """SB3's ``(values [B], log_prob [B], entropy [B])`` of env actions (torch, autograd):
+        the head's ``evaluate`` on the torch namespace."""
+        from palaestra.algos.learners.xp import torch_ops
+
+        pi, vf = self.pi_and_vf(obs)
+        log_std = getattr(self.action_head, "log_std", None)
+        idx = torch.as_tensor(self.action_head.index(actions.cpu().numpy()), device=pi.device)
+        log_prob, entropy, _ = self.action_head.evaluate(torch_ops, pi, log_std, idx)
+        return vf.squeeze(1), log_prob, entropy.expand(pi.shape[0])
+
+    def predict_values(self, obs: Any) -> torch.Tensor:
+        """``V(obs)`` ``[B]``."""
+        return self.value_head(self._latents(obs)[1]).squeeze(1)
+
+
+class ActorCriticPolicy(ActorCritic):
+    """SB3's ``ActorCriticPolicy`` face, for subclasses written by SB3's custom-policy guide:
+    the constructor takes ``(observation_space, action_space, lr_schedule, **SB3 kwargs)``,
+    the bodies are ``self.mlp_extractor`` (an ``MlpExtractor`` unless ``_build_mlp_extractor``
+    is overridden with any module having ``latent_dim_pi``/``latent_dim_vf`` and
+    ``forward_actor``/``forward_critic``), over ``self.features_dim`` features.
+
+    ``PPO(MyPolicy, env)`` or ``A2C(...)`` trains it on the torch learner (the numpy learner
+    runs only palaestra's own MLP policy). The optimizer stays the algorithm's to build, from
+    ``optimizer_class``/``optimizer_kwargs`` in ``policy_kwargs`` as for ``"MlpPolicy"``."""
+
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Space[Any],
+        lr_schedule: Any = None,
+        net_arch: Any = None,
+        activation_fn: type[nn.Module] = nn.Tanh,
+        ortho_init: bool = True,
+        use_sde: bool = False,
+        log_std_init: float = 0.0,
+        full_std: bool = True,
+        use_expln: bool = False,
+        squash_output: bool = False,
+        features_extractor_class: type[BaseFeaturesExtractor] = FlattenExtractor,
+        features_extractor_kwargs: dict[str, Any] | None = None,
+        share_features_extractor: bool = True,
+        normalize_images: bool = True,
+        optimizer_class: Any = None,
+        optimizer_kwargs: dict[str, Any] | None = None,
+    ) -> None:
+        if use_sde or squash_output:
+            raise NotImplementedError("use_sde and squash_output are not supported yet")
+        self.lr_schedule = lr_schedule
+        super().__init__(
+            observation_space,
+            action_space,
+            features_extractor_class,
+            features_extractor_kwargs,
+            net_arch,
+            activation_fn,
+            ortho_init,
+            log_std_init,
+            share_features_extractor,
+            normalize_images,
+        )
+
+    def _build_mlp_extractor(self) -> None:
+        """SB3's default: ``MlpExtractor`` with ``net_arch`` (None: ``[64, 64]`` for both,
+        none after ``NatureCNN``)."""
+        pi_arch, vf_arch = _split_arch(self.net_arch, self._features_extractor_class)
+        arch = {"pi": pi_arch, "vf": vf_arch}
+        self.mlp_extractor = MlpExtractor(self.features_dim, arch, self.activation_fn)
+
+    def _latent_dims(self) -> tuple[int, int]:
+        for name in ("latent_dim_pi", "latent_dim_vf", "forward_actor", "forward_critic"):
+            if not hasattr(self.mlp_extractor, name):
+                raise TypeError(
+                    f"{type(self).__name__}.mlp_extractor ({type(self.mlp_extractor).__name__}) "
+                    f"has no {name}: the actor/critic body needs latent_dim_pi, latent_dim_vf, "
+                    "forward_actor and forward_critic (see MlpExtractor)"
+                )
+        return int(self.mlp_extractor.latent_dim_pi), int(self.mlp_extractor.latent_dim_vf)
+
+    def _bodies(self) -> list[nn.Module]:
+        return [self.mlp_extractor]
+
+    def _pi_latent(self, features: torch.Tensor) -> torch.Tensor:
+        return self.mlp_extractor.forward_actor(features)
+
+    def _vf_latent(self, features: torch.Tensor) -> torch.Tensor:
+        return self.mlp_extractor.forward_critic(features)
+
+    def mlp_modules(self) -> tuple[list[nn.Module] | None, list[nn.Module] | None, str]:
+        return None, None, f"the policy is a custom {type(self).__name__}"

@@ -1,0 +1,81 @@
+"""DDPG as SB3 defines it: TD3 with one critic, no target policy smoothing and no policy delay."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+
+from palaestra.algos.common.schedules import Schedule
+from palaestra.algos.td3.policies import TD3Policy
+from palaestra.algos.td3.td3 import TD3
+
+__all__ = ["DDPG"]
+
+
+class DDPG(TD3):
+    """DDPG as SB3 defines it: TD3 with one critic (``n_critics=1`` unless ``policy_kwargs``
+    says otherwise), no target policy smoothing (``target_noise_clip=0``) and
+    ``policy_delay=1``; SB3's constructor arguments and defaults."""
+
+    _policy_defaults = {"n_critics": 1}  # SB3's DDPG, unless policy_kwargs says otherwise
+
+    def __init__(
+        self,
+        policy: str | type[TD3Policy],
+        env: Any,
+        learning_rate: float | Schedule = 1e-3,
+        buffer_size: int = 1_000_000,
+        learning_starts: int = 100,
+        batch_size: int = 256,
+        tau: float = 0.005,
+        gamma: float = 0.99,
+        train_freq: int | tuple[int, str] = 1,
+        gradient_steps: int = 1,
+        action_noise: Any = None,
+        replay_buffer_class: None = None,
+        replay_buffer_kwargs: dict[str, Any] | None = None,
+        optimize_memory_usage: bool = False,
+        n_steps: int = 1,
+        stats_window_size: int = 100,
+        tensorboard_log: str | None = None,
+        policy_kwargs: dict[str, Any] | None = None,
+        verbose: int = 0,
+        seed: int | None = None,
+        device: torch.device | str = "auto",
+        num_threads: int | None = None,
+        _init_setup_model: bool = True,
+    ) -> None:
+        super().__init__(
+            policy=policy,
+            env=env,
+            learning_rate=learning_rate,
+            buffer_size=buffer_size,
+            learning_starts=learning_starts,
+            batch_size=batch_size,
+            tau=tau,
+            gamma=gamma,
+            train_freq=train_freq,
+            gradient_steps=gradient_steps,
+            action_noise=action_noise,
+            replay_buffer_class=replay_buffer_class,
+            replay_buffer_kwargs=replay_buffer_kwargs,
+            optimize_memory_usage=optimize_memory_usage,
+            n_steps=n_steps,
+            policy_delay=1,
+            target_policy_noise=0.1,
+            target_noise_clip=0.0,
+            stats_window_size=stats_window_size,
+            tensorboard_log=tensorboard_log,
+            policy_kwargs=policy_kwargs,
+            verbose=verbose,
+            seed=seed,
+            device=device,
+            num_threads=num_threads,
+            _init_setup_model=_init_setup_model,
+        )
+
+    def _hyperparameters(self) -> dict[str, Any]:
+        """TD3's keys without the three DDPG fixes (a file cannot change them)."""
+        fixed = ("policy_delay", "target_policy_noise", "target_noise_clip")
+        return {k: v for k, v in super()._hyperparameters().items() if k not in fixed}

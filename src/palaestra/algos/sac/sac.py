@@ -1,0 +1,257 @@
+"""SAC (Haarnoja et al. 2018) with Stable-Baselines3's parameters, defaults and update rules."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+import torch
+
+from palaestra.algos.common.continuous_policies import ContinuousCritic, SquashedGaussianActor
+from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
+from palaestra.algos.common.policies import _numpy_input_problem
+from palaestra.algos.common.schedules import Schedule
+from palaestra.algos.learners import Group, Net
+from palaestra.algos.learners.heads import squashed_gaussian_rsample
+from palaestra.algos.learners.xp import numpy_ops
+from palaestra.algos.sac.objective import (
+    EntCoefObjective,
+    SACActorObjective,
+    SACCriticObjective,
+)
+from palaestra.algos.sac.policies import CnnPolicy, MlpPolicy, MultiInputPolicy, SACPolicy
+
+__all__ = ["SAC"]
+
+
+def _ent_coef_init(ent_coef: Any) -> tuple[bool, float]:
+    """``"auto"`` / ``"auto_0.1"`` (learned, from 1.0 / 0.1) or a fixed number > 0."""
+    if isinstance(ent_coef, str):
+        head, _, value = ent_coef.partition("_")
+        try:
+            init = float(value) if value else 1.0
+        except ValueError:
+            init = -1.0
+        if head != "auto" or not init > 0 or not math.isfinite(init):
+            raise ValueError(
+                f'ent_coef must be "auto", "auto_<initial value > 0>" or a number > 0, '
+                f"got {ent_coef!r}"
+            )
+        return True, init
+    if isinstance(ent_coef, bool) or not isinstance(ent_coef, (int, float)) or not ent_coef > 0:
+        raise ValueError(
+            f'ent_coef must be "auto", "auto_<value>" or a number > 0, got {ent_coef!r}'
+        )
+    return False, float(ent_coef)
+
+
+class SAC(ActorCriticOffPolicy):
+    """Soft Actor-Critic: ``SAC(env, ...)``; arguments as SB3's ``SAC``.
+
+    Kept from SB3: a tanh-squashed Gaussian actor (log-std in [-20, 2]), twin critics and
+    their polyak-averaged targets (``tau``, every ``target_update_interval`` gradient steps),
+    the entropy coefficient learned in log space towards ``target_entropy`` (``"auto"``:
+    ``-dim(A)``) unless fixed, uniform actions before ``learning_starts``. Changed: noise is
+    drawn from the model's generator (same seed, same run, on either learner), and the
+    temperature is updated after the actor with the actor's log-probs of that step, which
+    is the same update as SB3's (the coefficient used by both losses is the one before it).
+    ``use_sde`` (gSDE) is not implemented.
+    """
+
+    policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {
+        "MlpPolicy": MlpPolicy,
+        "CnnPolicy": CnnPolicy,
+        "MultiInputPolicy": MultiInputPolicy,
+    }
+    _policy_class_base = SACPolicy
+
+    def __init__(
+        self,
+        policy: str | type[SACPolicy],
+        env: Any,
+        learning_rate: float | Schedule = 3e-4,
+        buffer_size: int = 1_000_000,
+        learning_starts: int = 100,
+        batch_size: int = 256,
+        tau: float = 0.005,
+        gamma: float = 0.99,
+        train_freq: int | tuple[int, str] = 1,
+        gradient_steps: int = 1,
+        action_noise: Any = None,
+        replay_buffer_class: None = None,
+        replay_buffer_kwargs: dict[str, Any] | None = None,
+        optimize_memory_usage: bool = False,
+        n_steps: int = 1,
+        ent_coef: str | float = "auto",
+        target_update_interval: int = 1,
+        target_entropy: str | float = "auto",
+        use_sde: bool = False,
+        sde_sample_freq: int = -1,
+        use_sde_at_warmup: bool = False,
+        stats_window_size: int = 100,
+        tensorboard_log: str | None = None,
+        policy_kwargs: dict[str, Any] | None = None,
+        verbose: int = 0,
+        seed: int | None = None,
+        device: torch.device | str = "auto",
+        num_threads: int | None = None,
+        _init_setup_model: bool = True,
+    ) -> None:
+        if use_sde or use_sde_at_warmup:
+            raise NotImplementedError("use_sde (gSDE) is not supported by palaestra's SAC yet")
+        self._learn_ent_coef, self._ent_coef_init = _ent_coef_init(ent_coef)
+        if isinstance(target_entropy, str) and target_entropy != "auto":
+            raise ValueError(f'target_entropy must be "auto" or a number, got {target_entropy!r}')
+        interval = target_update_interval
+        if isinstance(interval, bool) or not isinstance(interval, int) or interval < 1:
+            raise ValueError(f"target_update_interval must be a positive int, got {interval!r}")
+        self.ent_coef, self.target_entropy_setting = ent_coef, target_entropy
+        self.target_update_interval = interval
+        self._init_model(
+            policy=policy,
+            env=env,
+            learning_rate=learning_rate,
+            buffer_size=buffer_size,
+            learning_starts=learning_starts,
+            batch_size=batch_size,
+            tau=tau,
+            gamma=gamma,
+            train_freq=train_freq,
+            gradient_steps=gradient_steps,
+            action_noise=action_noise,
+            replay_buffer_class=replay_buffer_class,
+            replay_buffer_kwargs=replay_buffer_kwargs,
+            optimize_memory_usage=optimize_memory_usage,
+            n_steps=n_steps,
+            stats_window_size=stats_window_size,
+            tensorboard_log=tensorboard_log,
+            policy_kwargs=policy_kwargs,
+            verbose=verbose,
+            seed=seed,
+            device=device,
+            num_threads=num_threads,
+            init_setup_model=_init_setup_model,
+        )
+
+    def _setup_model(self) -> None:
+        self._check_action_space()
+        self.set_random_seed(self.seed)
+        policy = self._make_policy(
+            actor=SquashedGaussianActor, critic=ContinuousCritic, critic_target=ContinuousCritic
+        )
+        actor, critic, critic_target = policy.actor, policy.critic, policy.critic_target
+        backend = self.policy_kwargs.get("backend", "auto")
+        self.target_entropy = (
+            float(-np.prod(self.action_space.shape).astype(np.float32))
+            if self.target_entropy_setting == "auto"
+            else float(self.target_entropy_setting)
+        )
+        log_ent_coef = torch.nn.Parameter(torch.full((1,), math.log(self._ent_coef_init)))
+        if self._learn_ent_coef:
+            # Kept in the policy's state (``ent_coef.log_ent_coef``) so the model file has it.
+            ent_coef = torch.nn.ParameterDict({"log_ent_coef": log_ent_coef}).to(self.device)
+            policy.add_module("ent_coef", ent_coef)
+        why = self._custom_policy(policy) or _numpy_input_problem(
+            self.observation_space, actor.features_extractor, actor.normalize_images
+        )
+        nets = {
+            "latent": Net(
+                actor.latent,
+                None if why else [actor.features_extractor, actor.latent_pi],
+                group="actor",
+                why=why,
+            ),
+            "mu": Net(actor.mu, [actor.mu], group="actor"),
+            "log_std": Net(actor.log_std, [actor.log_std], group="actor"),
+        }
+        critic_nets, critic_params = self._critic_nets(critic, critic_target, policy)
+        nets.update(critic_nets)
+        actor_params = list(actor.parameters())
+        groups = {
+            "actor": Group(self._make_optimizer_for(actor_params, policy), actor_params),
+            "critic": Group(self._make_optimizer_for(critic_params, policy), critic_params),
+        }
+        if self._learn_ent_coef:
+            # SB3: plain Adam at the learning rate, whatever optimizer the networks use.
+            ent_optimizer = self._make_optimizer([log_ent_coef], torch.optim.Adam, {})
+            groups["ent_coef"] = Group(
+                ent_optimizer, [log_ent_coef], {"log_ent_coef": log_ent_coef}
+            )
+        self._set_learner(policy, groups["actor"].optimizer, backend, nets, groups)
+        self._groups = list(groups)
+        self._make_replay_buffer()
+
+    @property
+    def actor(self) -> SquashedGaussianActor:
+        return self.policy.actor
+
+    @property
+    def critic(self) -> Any:
+        return self.policy.critic
+
+    @property
+    def critic_target(self) -> Any:
+        return self.policy.critic_target
+
+    def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
+        optimizers = super()._optimizers()
+        groups = self.learner.groups
+        if "ent_coef" in groups:
+            optimizers["ent_coef_optimizer"] = ("ent_coef_optimizer", groups["ent_coef"].optimizer)
+        return optimizers
+
+    def _current_ent_coef(self) -> float:
+        if not self._learn_ent_coef:
+            return self._ent_coef_init
+        return float(np.exp(self.learner.extra("log_ent_coef")[0]))
+
+    # -- acting ------------------------------------------------------------------------------
+    def _policy_actions(self, obs: Any, deterministic: bool) -> np.ndarray:
+        latent = self.learner.forward("latent", obs)
+        mean = self.learner.forward("mu", latent)
+        if deterministic:
+            return np.tanh(mean)
+        log_std = self.learner.forward("log_std", latent)
+        noise = self._rng.standard_normal(mean.shape, np.float32)
+        return squashed_gaussian_rsample(numpy_ops, mean, log_std, noise)[0]
+
+    # -- learning ----------------------------------------------------------------------------
+    def train(self, gradient_steps: int, batch_size: int = 64) -> None:
+        """``gradient_steps`` updates of the critics, the actor and the temperature."""
+        for group in self._groups:
+            self._update_learning_rate(group)
+        logs: dict[str, list[float]] = {}
+        with self.learner.session():
+            for step in range(gradient_steps):
+                batch = self._sample_batch(batch_size)
+                shape = (batch_size, self.action_dim)
+                batch["noise"] = self._rng.standard_normal(shape, np.float32)
+                batch["next_noise"] = self._rng.standard_normal(shape, np.float32)
+                ent_coef = self._current_ent_coef()
+                logs.setdefault("ent_coef", []).append(ent_coef)
+                critic = SACCriticObjective(self._n_critics, self.gamma, ent_coef)
+                metrics, _ = self.learner.update("critic", critic, batch)
+                actor = SACActorObjective(self._n_critics, ent_coef, self.action_dim)
+                metrics.update(self.learner.update("actor", actor, batch)[0])
+                if self._learn_ent_coef:
+                    temperature = EntCoefObjective(self.target_entropy, actor.last_log_prob)
+                    metrics.update(self.learner.update("ent_coef", temperature, {})[0])
+                if step % self.target_update_interval == 0:
+                    self._polyak_critics()
+                for key, value in metrics.items():
+                    logs.setdefault(key, []).append(value)
+        self._n_updates += gradient_steps
+        self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
+        for key in ("ent_coef", "actor_loss", "critic_loss", "ent_coef_loss"):
+            if key in logs:
+                self.logger.record(f"train/{key}", float(np.mean(logs[key])))
+
+    # -- persistence ---------------------------------------------------------------------------
+    def _hyperparameters(self) -> dict[str, Any]:
+        return self._off_policy_hyperparameters() | {
+            "action_noise": self._noise_json(),
+            "ent_coef": self.ent_coef,
+            "target_update_interval": self.target_update_interval,
+            "target_entropy": self.target_entropy_setting,
+        }
