@@ -16,7 +16,7 @@ from typing import Any
 from palaestra import error
 from palaestra.compat._optional import gymnasium_missing
 from palaestra.core import Env
-from palaestra.envs.env_spec import EnvSpec, VectorizeMode
+from palaestra.env_spec import EnvSpec, VectorizeMode
 
 __all__ = ["GYMNASIUM_PREFIX", "gymnasium_spec", "make_gymnasium", "make_vec_gymnasium"]
 

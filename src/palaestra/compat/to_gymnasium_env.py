@@ -21,7 +21,7 @@ from palaestra.compat.spaces import (
     to_gymnasium_value,
 )
 from palaestra.core import Env
-from palaestra.envs.env_spec import EnvSpec
+from palaestra.env_spec import EnvSpec
 
 try:
     import gymnasium

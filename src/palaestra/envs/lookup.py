@@ -18,7 +18,7 @@ from types import ModuleType
 from typing import Any
 
 from palaestra import error, logger
-from palaestra.envs.env_spec import (
+from palaestra.env_spec import (
     EnvCreator,
     EnvSpec,
     WrapperSpec,

@@ -7,7 +7,7 @@ them, so that ``str(env)`` reads as in Gymnasium:
 ``<TimeLimit<OrderEnforcing<PassiveEnvChecker<MountainCarEnv<MountainCar-v0>>>>>``.
 
 The registry itself lives in :mod:`palaestra.envs.lookup` and the spec dataclasses in
-:mod:`palaestra.envs.env_spec`; this module re-exports both so that it is the one import users
+:mod:`palaestra.env_spec`; this module re-exports both so that it is the one import users
 need, as ``gymnasium.envs.registration`` is.
 """
 
@@ -20,7 +20,7 @@ from typing import Any
 
 from palaestra import error, logger
 from palaestra.core import Env, Wrapper
-from palaestra.envs.env_spec import (
+from palaestra.env_spec import (
     EnvCreator,
     EnvSpec,
     VectorizeMode,
