@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import TYPE_CHECKING, Any, Protocol
@@ -26,6 +27,7 @@ __all__ = [
     "VectorizeMode",
     "WrapperSpec",
     "get_env_id",
+    "install_maker",
     "parse_env_id",
 ]
 
@@ -34,6 +36,17 @@ __all__ = [
 ENV_ID_RE = re.compile(
     r"^(?:(?P<namespace>[\w:-]+)\/)?(?:(?P<name>[\w:.-]+?))(?:-v(?P<version>\d+))?$"
 )
+
+
+# The function `EnvSpec.make` calls: `palaestra.envs.registration.make`, installed by the
+# registry when it is imported, so that the spec (used by `core`) never imports the registry.
+_maker: Callable[..., Env[Any, Any]] | None = None
+
+
+def install_maker(maker: Callable[..., Env[Any, Any]]) -> None:
+    """Make ``maker`` the function :meth:`EnvSpec.make` calls (the registry's ``make``)."""
+    global _maker
+    _maker = maker
 
 
 class EnvCreator(Protocol):
@@ -123,9 +136,12 @@ class EnvSpec:
 
     def make(self, **kwargs: Any) -> Env[Any, Any]:
         """``make(self, **kwargs)``."""
-        from palaestra.envs.registration import make
-
-        return make(self, **kwargs)
+        if _maker is None:
+            raise error.Error(
+                f"EnvSpec.make({self.id!r}) needs palaestra's registry, which installs make() "
+                "when it is imported: import palaestra first"
+            )
+        return _maker(self, **kwargs)
 
     def to_json(self) -> str:
         """This spec as a JSON string; raises ``ValueError`` if a field holds a callable."""

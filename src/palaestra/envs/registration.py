@@ -26,6 +26,7 @@ from palaestra.env_spec import (
     VectorizeMode,
     WrapperSpec,
     get_env_id,
+    install_maker,
     parse_env_id,
 )
 from palaestra.envs.lookup import (
@@ -245,6 +246,8 @@ def make(
         env = getattr(rendering, render_wrapper)(env)
     return env
 
+
+install_maker(make)
 
 # Vector options that palaestra's native batches (palaestra.vector.native) accept directly.
 _NATIVE_VECTOR_KWARGS = {"copy", "autoreset_mode"}
