@@ -17,6 +17,7 @@ from palaestra import error
 from palaestra.compat._optional import gymnasium_missing
 from palaestra.core import Env
 from palaestra.env_spec import EnvSpec, VectorizeMode
+from palaestra.envs.lookup import ForeignRegistry, foreign_registries, load_env_creator
 
 __all__ = ["GYMNASIUM_PREFIX", "gymnasium_spec", "make_gymnasium", "make_vec_gymnasium"]
 
@@ -110,8 +111,6 @@ def _gymnasium_spec(gymnasium: Any, spec: EnvSpec, gym_id: str) -> Any:
 
 def _apply_wrappers(env: Env[Any, Any], spec: EnvSpec) -> Env[Any, Any]:
     """The palaestra wrappers recorded in ``spec`` (``Wrapper.spec`` adds one per layer)."""
-    from palaestra.envs.lookup import load_env_creator
-
     for wrapper_spec in spec.additional_wrappers:
         if wrapper_spec.kwargs is None:
             raise ValueError(
@@ -153,3 +152,8 @@ def make_vec_gymnasium(
     make_one = functools.partial(_make_one, id, list(wrappers or []), kwargs)
     cls = vector.SyncVectorEnv if mode is VectorizeMode.SYNC else vector.AsyncVectorEnv
     return cls([make_one] * num_envs, **(vector_kwargs or {}))
+
+
+foreign_registries[GYMNASIUM_PREFIX] = ForeignRegistry(
+    make=make_gymnasium, make_vec=make_vec_gymnasium, spec=gymnasium_spec
+)

@@ -31,6 +31,7 @@ from palaestra.env_spec import (
 )
 from palaestra.envs.lookup import (
     find_highest_version,
+    foreign_registry,
     load_env_creator,
     namespace,
     pprint_registry,
@@ -59,12 +60,6 @@ __all__ = [
     "registry",
     "spec",
 ]
-
-
-def _is_gymnasium_id(id: Any) -> bool:
-    """``"gymnasium:Taxi-v4"`` (or a spec with such an id): made by ``palaestra.compat``."""
-    name = id.id if isinstance(id, EnvSpec) else id
-    return isinstance(name, str) and name.startswith("gymnasium:")
 
 
 def _render_modes_of(env_creator: Any) -> Iterable[str] | None:
@@ -185,12 +180,9 @@ def make(
     """
     from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
 
-    # -- "gymnasium:<id>": Gymnasium's registry, through palaestra.compat ----------------------
-    if _is_gymnasium_id(id):
-        from palaestra.compat.registry import make_gymnasium
-
-        return make_gymnasium(id, max_episode_steps, disable_env_checker, **kwargs)
-    # -- end "gymnasium:" ----------------------------------------------------------------------
+    foreign = foreign_registry(id)  # "gymnasium:<id>": Gymnasium's, through palaestra.compat
+    if foreign is not None:
+        return foreign.make(id, max_episode_steps, disable_env_checker, **kwargs)
     if isinstance(id, EnvSpec):
         env_spec = id
     elif isinstance(id, str):
@@ -278,14 +270,9 @@ def make_vec(
     spec's vector entry point if it has one, else sync); ``vector_kwargs`` go to the vector
     env, ``wrappers`` wrap each copy (sync/async only), ``kwargs`` go to each env.
     """
-    # -- "gymnasium:<id>": Gymnasium's registry, through palaestra.compat ----------------------
-    if _is_gymnasium_id(id):
-        from palaestra.compat.registry import make_vec_gymnasium
-
-        return make_vec_gymnasium(
-            id, num_envs, vectorization_mode, vector_kwargs, wrappers, **kwargs
-        )
-    # -- end "gymnasium:" ----------------------------------------------------------------------
+    foreign = foreign_registry(id)  # "gymnasium:<id>": Gymnasium's, through palaestra.compat
+    if foreign is not None:
+        return foreign.make_vec(id, num_envs, vectorization_mode, vector_kwargs, wrappers, **kwargs)
     if isinstance(id, EnvSpec):
         env_spec = id
     elif isinstance(id, str):
