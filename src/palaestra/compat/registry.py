@@ -14,14 +14,12 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from palaestra import error
-from palaestra.compat._optional import gymnasium_missing
+from palaestra.compat._optional import GYMNASIUM_PREFIX, gymnasium_missing
 from palaestra.core import Env
 from palaestra.env_spec import EnvSpec, VectorizeMode
 from palaestra.envs.lookup import ForeignRegistry, foreign_registries, load_env_creator
 
 __all__ = ["GYMNASIUM_PREFIX", "gymnasium_spec", "make_gymnasium", "make_vec_gymnasium"]
-
-GYMNASIUM_PREFIX = "gymnasium:"
 
 
 def make_gymnasium(
@@ -39,7 +37,7 @@ def make_gymnasium(
         import gymnasium
     except ImportError as exc:
         raise gymnasium_missing(f"making {id if isinstance(id, str) else id.id!r}") from exc
-    from palaestra.compat.from_gymnasium_env import from_gymnasium
+    from palaestra.compat.adapters import from_gymnasium
 
     spec = id if isinstance(id, EnvSpec) else None
     gym_id = (spec.id if spec is not None else str(id))[len(GYMNASIUM_PREFIX) :]
@@ -84,7 +82,7 @@ def gymnasium_spec(id: str) -> EnvSpec:
         import gymnasium
     except ImportError as exc:
         raise gymnasium_missing(f"looking up {id!r}") from exc
-    from palaestra.compat.from_gymnasium_env import _palaestra_spec
+    from palaestra.compat.adapters import _palaestra_spec
 
     gym_id = id[len(GYMNASIUM_PREFIX) :]
     with _registry_errors(gymnasium, gym_id):
