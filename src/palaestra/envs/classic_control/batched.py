@@ -20,7 +20,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from palaestra.envs.classic_control._common import check_box_batch, check_discrete_batch
+from palaestra.envs.action_checks import check_box_batch, check_discrete_batch
 from palaestra.envs.classic_control._draws import PreDrawn
 from palaestra.envs.classic_control._ops import ARRAY
 from palaestra.error import ResetNeeded

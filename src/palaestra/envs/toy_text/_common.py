@@ -15,7 +15,7 @@ import numpy as np
 
 from palaestra import error, logger
 from palaestra.core import Env
-from palaestra.envs.classic_control._common import check_discrete_batch
+from palaestra.envs.action_checks import check_discrete_batch
 from palaestra.envs.toy_text._streams import RowStreams
 from palaestra.spaces import Discrete, Space
 from palaestra.utils.seeding import np_random
