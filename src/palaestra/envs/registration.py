@@ -14,6 +14,7 @@ need, as ``gymnasium.envs.registration`` is.
 from __future__ import annotations
 
 import copy
+import functools
 import importlib.util
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
@@ -53,6 +54,7 @@ __all__ = [
     "make",
     "make_vec",
     "namespace",
+    "native_batch",
     "parse_env_id",
     "pprint_registry",
     "register",
@@ -245,8 +247,23 @@ install_maker(make)
 _NATIVE_VECTOR_KWARGS = {"copy", "autoreset_mode"}
 
 
-def _is_native(entry_point: Any) -> bool:
-    return isinstance(entry_point, str) and entry_point.startswith("palaestra.vector.native:")
+def native_batch(spec: EnvSpec) -> tuple[Any, Any] | None:
+    """``(batch class, env class)`` when ``spec``'s vector entry point names a native batch
+    (a class with ``is_native_batch``: classic control's and toy text's ``*Batch``), else None.
+
+    An entry point that does not load is not a native batch here: the error comes where the
+    entry point is used, as for any other vector entry point.
+    """
+    entry = spec.vector_entry_point
+    if entry is None:
+        return None
+    try:
+        creator = load_env_creator(entry) if isinstance(entry, str) else entry
+    except (ImportError, AttributeError):
+        return None
+    if not getattr(creator, "is_native_batch", False):
+        return None
+    return creator, _load_creator(spec)
 
 
 def _vector_available() -> bool:
@@ -295,7 +312,7 @@ def make_vec(
         # to such ids, which only a SyncVectorEnv takes: keep that code working.
         entry = env_spec.vector_entry_point
         sync_args = bool(wrappers) or not set(vector_kwargs) <= _NATIVE_VECTOR_KWARGS
-        if entry is None or (_is_native(entry) and sync_args):
+        if entry is None or (sync_args and native_batch(env_spec) is not None):
             mode = VectorizeMode.SYNC
         else:
             mode = VectorizeMode.VECTOR_ENTRY_POINT
@@ -354,7 +371,8 @@ def _make_with_vector_entry_point(
     wrappers: Sequence[Any],
     env_kwargs: dict[str, Any],
 ) -> Any:
-    if set(vector_kwargs) <= _NATIVE_VECTOR_KWARGS and _is_native(env_spec.vector_entry_point):
+    native = native_batch(env_spec)
+    if native is not None and set(vector_kwargs) <= _NATIVE_VECTOR_KWARGS:
         env_kwargs = {**env_kwargs, **vector_kwargs}
         vector_kwargs = {}
     if vector_kwargs:
@@ -378,7 +396,12 @@ def _make_with_vector_entry_point(
             f"Cannot create vectorized environment for {id} because it doesn't have a vector "
             "entry point defined."
         )
-    env_creator = load_env_creator(entry) if isinstance(entry, str) else entry
+    if native is not None:
+        from palaestra.vector.native import batched_vector_env  # lazy: import speed
+
+        env_creator: Callable[..., Any] = functools.partial(batched_vector_env, *native)
+    else:
+        env_creator = load_env_creator(entry) if isinstance(entry, str) else entry
     if env_spec.max_episode_steps is not None and "max_episode_steps" not in env_kwargs:
         env_kwargs["max_episode_steps"] = env_spec.max_episode_steps
     return env_creator(num_envs=num_envs, **env_kwargs)

@@ -80,6 +80,8 @@ class ToyTextBatch:
     of the last reset or step, one array per key (or None when every info is empty).
     """
 
+    # A registry entry's vector_entry_point may name the class: make_vec runs it natively.
+    is_native_batch: ClassVar[bool] = True
     single_observation_space: Space[Any]
     single_action_space: Discrete
     streams_class: ClassVar[type[RowStreams]] = RowStreams
