@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import copy
 import functools
-import importlib.util
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
@@ -266,13 +265,6 @@ def native_batch(spec: EnvSpec) -> tuple[Any, Any] | None:
     return creator, _load_creator(spec)
 
 
-def _vector_available() -> bool:
-    # origin is None for a bare directory (namespace package): palaestra.vector while it is
-    # still being written, without the __init__ that exports the vector envs.
-    found = importlib.util.find_spec("palaestra.vector")
-    return found is not None and found.origin is not None
-
-
 def make_vec(
     id: str | EnvSpec,
     num_envs: int = 1,
@@ -335,9 +327,7 @@ def make_vec(
                 f"Cannot create vectorized environment for {env_spec.id} because it doesn't have "
                 "an entry point defined."
             )
-        if not _vector_available():
-            raise NotImplementedError("make_vec arrives with palaestra.vector")
-        vector: Any = importlib.import_module("palaestra.vector")
+        from palaestra import vector  # lazy: import speed (worker machinery, ~30 ms)
 
         def create_single_env() -> Env[Any, Any]:
             single_env = make(env_spec, **env_kwargs.copy())
@@ -409,14 +399,13 @@ def _make_with_vector_entry_point(
 
 def _check_autoreset_metadata(env: Any) -> None:
     """Warn, as Gymnasium does, when a vector env does not declare its autoreset mode."""
-    if not _vector_available():
-        return  # nothing to compare against until palaestra.vector exists
-    autoreset_mode = importlib.import_module("palaestra.vector").AutoresetMode
+    from palaestra.vector import AutoresetMode  # lazy: import speed
+
     if "autoreset_mode" not in env.metadata:
         logger.warn(
             f"The VectorEnv ({env}) is missing AutoresetMode metadata, metadata={env.metadata}"
         )
-    elif not isinstance(env.metadata["autoreset_mode"], autoreset_mode):
+    elif not isinstance(env.metadata["autoreset_mode"], AutoresetMode):
         logger.warn(
             f"The VectorEnv ({env}) metadata['autoreset_mode'] is not an instance of "
             f"AutoresetMode, {type(env.metadata['autoreset_mode'])}."
