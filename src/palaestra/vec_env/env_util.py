@@ -12,12 +12,12 @@ import numpy as np
 
 from palaestra import error, logger
 from palaestra.core import Env
+from palaestra.envs.atari.ale_engine import vector_interface_available
 from palaestra.envs.registration import native_batch, resolve_id
 from palaestra.vec_env.atari_vec_env import AtariGameMonitor, AtariVecEnv, atari_wrapper_settings
 from palaestra.vec_env.base import VecEnv
 from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
 from palaestra.vec_env.monitor import VecMonitor
-from palaestra.vector.ale_engine import vector_interface_available
 from palaestra.vector.native import batched_vector_env
 
 

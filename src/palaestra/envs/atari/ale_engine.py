@@ -1,4 +1,6 @@
 """The ALE engine: ale-py's ``ALEVectorInterface`` steps N preprocessed games on C++ threads.
+It is the Atari family's native batch, so it lives with the Atari envs (``vector`` never
+imports the env packages).
 
 The interface does the Atari preprocessing itself (frame skip with max-pooling, grayscale,
 area resize, frame stack, no-op and FIRE resets, reward clipping, episode frame limit) and
