@@ -18,7 +18,7 @@ from palaestra.vec_env.atari_vec_env import AtariGameMonitor, AtariVecEnv, atari
 from palaestra.vec_env.base import VecEnv
 from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
 from palaestra.vec_env.monitor import VecMonitor
-from palaestra.vector.native import batched_vector_env
+from palaestra.vector.native import BatchedVectorEnv, batched_vector_env
 
 
 def _native_batch(env_id: Any, env_kwargs: dict[str, Any], n_envs: int) -> BatchedVecEnv | None:
@@ -35,6 +35,7 @@ def _native_batch(env_id: Any, env_kwargs: dict[str, Any], n_envs: int) -> Batch
     native = batched_vector_env(
         *classes, num_envs=n_envs, max_episode_steps=spec.max_episode_steps, **kwargs
     )
+    assert isinstance(native, BatchedVectorEnv)  # no render_mode: the batch itself
     venv = BatchedVecEnv(native.batch, spec.max_episode_steps, native.metadata)
     venv.spec = spec
     return venv

@@ -17,7 +17,9 @@ from typing import TYPE_CHECKING, Any
 
 from palaestra.vector.engine_env import EngineVectorEnv
 from palaestra.vector.native_engine import NativeEngine
+from palaestra.vector.sync_vector_env import SyncVectorEnv
 from palaestra.vector.vector_env import AutoresetMode
+from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
 
 if TYPE_CHECKING:
     from palaestra.vector.native_engine import NativeBatch
@@ -64,14 +66,16 @@ def batched_vector_env(
     whose ``vector_entry_point`` names a native batch); ``env_cls`` is the id's single env,
     whose metadata the vector env reports and which renders when there is a ``render_mode``.
     ``kwargs`` go to the batch (the env's own arguments)."""
-    vector_kwargs = {"copy": copy, "autoreset_mode": autoreset_mode}
     if render_mode is not None:
         # Native batches do not draw: envs that must render run as real envs, in a loop.
+        vector_kwargs = {"copy": copy, "autoreset_mode": autoreset_mode}
         return _rendering_envs(
             env_cls, num_envs, max_episode_steps, render_mode, vector_kwargs, kwargs
         )
     batch = batch_cls(num_envs, **kwargs)
-    return BatchedVectorEnv(batch, max_episode_steps, metadata=env_cls.metadata, **vector_kwargs)
+    return BatchedVectorEnv(
+        batch, max_episode_steps, copy, autoreset_mode, metadata=env_cls.metadata
+    )
 
 
 def _rendering_envs(
@@ -82,9 +86,6 @@ def _rendering_envs(
     vector_kwargs: dict[str, Any],
     env_kwargs: dict[str, Any],
 ) -> EngineVectorEnv:
-    from palaestra.vector.sync_vector_env import SyncVectorEnv
-    from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
-
     def one() -> Any:
         env = OrderEnforcing(PassiveEnvChecker(env_cls(render_mode=render_mode, **env_kwargs)))
         return env if max_episode_steps is None else TimeLimit(env, max_episode_steps)
