@@ -19,6 +19,7 @@ from palaestra.envs.registration import (
 )
 from palaestra import error, logger, spaces, utils, wrappers
 from palaestra import envs  # registers the built-in environments
+import palaestra.compat.registry  # noqa: F401 -- fills the "gymnasium:" id prefix
 
 __version__ = "0.1.0"
 

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any, Generic, Literal, SupportsFloat, TypeVar
 import numpy as np
 
 from palaestra import logger
+from palaestra.env_spec import EnvSpec, WrapperSpec
 from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.utils.seeding import LazyRandom
 from palaestra.utils.seeding import np_random as _make_rng
@@ -20,7 +21,6 @@ from palaestra.utils.seeding import np_random as _make_rng
 if TYPE_CHECKING:
     from typing_extensions import Self
 
-    from palaestra.envs.registration import EnvSpec, WrapperSpec
     from palaestra.spaces import Space
 
 ObsType = TypeVar("ObsType")
@@ -242,8 +242,6 @@ class Wrapper(
     @classmethod
     def wrapper_spec_with(cls, kwargs: dict[str, Any] | None) -> WrapperSpec:
         """Like :meth:`wrapper_spec`, with ``None`` meaning "arguments unknown"."""
-        from palaestra.envs.registration import WrapperSpec
-
         return WrapperSpec(
             name=cls.class_name(), entry_point=f"{cls.__module__}:{cls.__name__}", kwargs=kwargs
         )

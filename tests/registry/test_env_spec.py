@@ -98,6 +98,20 @@ def test_spec_make_uses_make(toy_ids: tuple[str, ...]) -> None:
     assert str(env) == str(make("PalTest/Toy-v3", size=4))
 
 
+def test_spec_make_without_an_installed_maker_says_what_to_do(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The registry installs make() when it is imported; the spec module never imports it.
+    import palaestra.env_spec
+
+    assert palaestra.env_spec._maker is make
+    monkeypatch.setattr(palaestra.env_spec, "_maker", None)
+    with pytest.raises(
+        palaestra.error.Error, match=r"EnvSpec.make\('Toy-v0'\) needs palaestra's registry"
+    ):
+        EnvSpec("Toy-v0").make()
+
+
 def _registry_of(lib_spec: type) -> dict[str, object]:
     ids_and_entries = [
         ("CartPole-v1", "palaestra.envs.classic_control.cartpole:CartPoleEnv"),

@@ -219,15 +219,6 @@ def test_make_vec_validates_before_vectorizing(toy_ids: tuple[str, ...]) -> None
         registration.make_vec("PalTest/Toy-v3", vectorization_mode="vector_entry_point")
 
 
-def test_make_vec_without_palaestra_vector(
-    toy_ids: tuple[str, ...], monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setattr(registration, "_vector_available", lambda: False)
-    for mode in (None, "sync", "async"):
-        with pytest.raises(NotImplementedError, match=r"make_vec arrives with palaestra\.vector"):
-            registration.make_vec("PalTest/Toy-v3", num_envs=2, vectorization_mode=mode)
-
-
 class _FakeVectorEnv:
     metadata: ClassVar[dict[str, Any]] = {}
     spec: EnvSpec | None = None
@@ -243,7 +234,9 @@ class _FakeVectorEnv:
 def test_make_vec_with_a_vector_entry_point(
     clean_registry: None, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(registration, "_vector_available", lambda: False)
+    from palaestra.vector import AutoresetMode
+
+    monkeypatch.setattr(_FakeVectorEnv, "metadata", {"autoreset_mode": AutoresetMode.NEXT_STEP})
     register("Vec-v0", vector_entry_point=_FakeVectorEnv, max_episode_steps=9, kwargs={"a": 1})
     env = registration.make_vec("Vec-v0", num_envs=4, b=2)
     assert (env.num_envs, env.kwargs) == (4, {"a": 1, "b": 2, "max_episode_steps": 9})
@@ -259,7 +252,6 @@ def test_make_vec_with_a_vector_entry_point(
         registration.make_vec("Vec-v0", vectorization_mode="sync")
 
 
-@pytest.mark.skipif(not registration._vector_available(), reason="palaestra.vector not there yet")
 @pytest.mark.parametrize("mode", ["sync", "async"])
 def test_make_vec_matches_gymnasium(toy_ids: tuple[str, ...], mode: str) -> None:
     env = registration.make_vec("PalTest/Toy-v3", num_envs=2, vectorization_mode=mode)
@@ -272,7 +264,6 @@ def test_make_vec_matches_gymnasium(toy_ids: tuple[str, ...], mode: str) -> None
         gym_env.close()
 
 
-@pytest.mark.skipif(not registration._vector_available(), reason="palaestra.vector not there yet")
 def test_make_vec_warns_about_missing_autoreset_metadata(clean_registry: None) -> None:
     register("Vec-v0", vector_entry_point=_FakeVectorEnv)
     with pytest.warns(UserWarning, match="is missing AutoresetMode metadata"):

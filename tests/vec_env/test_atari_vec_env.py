@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from palaestra import error
+from palaestra.envs.atari.ale_engine import ALESettings
 from palaestra.vec_env import AtariVecEnv, SubprocVecEnv, VecMonitor, make_atari_env
 from palaestra.vec_env.atari_vec_env import AtariGameMonitor, atari_wrapper_settings
 from palaestra.vec_env.env_util import _atari_engine
-from palaestra.vector.ale_engine import ALESettings
 
 pytest.importorskip("ale_py")
 ale_vector_env = pytest.importorskip("ale_py.vector_env")

@@ -16,10 +16,10 @@ import pytest
 
 import palaestra as gym
 from palaestra import error
+from palaestra.envs.atari.ale_engine import ALEVectorEngine
 from palaestra.envs.atari.vector import AtariVectorEnv
+from palaestra.utils.stacked_infos import StackedInfos
 from palaestra.vector import AutoresetMode
-from palaestra.vector.ale_engine import ALEVectorEngine
-from palaestra.vector.stacked_infos import StackedInfos
 
 ale_py = pytest.importorskip("ale_py")
 ale_vector_env = pytest.importorskip("ale_py.vector_env")

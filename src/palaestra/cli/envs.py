@@ -13,11 +13,11 @@ import re
 from typing import Any
 
 import palaestra
+from palaestra.envs.atari.games import ENTRY_POINT as _ATARI_ENTRY
 from palaestra.envs.registration import load_env_creator
 
 __all__ = ["add_parser", "env_rows", "run"]
 
-_ATARI_ENTRY = "palaestra.envs.atari."
 _ATARI_OBS = {
     "rgb": "Box(0, 255, (210, 160, 3), uint8)",
     "grayscale": "Box(0, 255, (210, 160), uint8)",
@@ -32,7 +32,7 @@ def _one_line(space: Any) -> str:
 def _spaces(spec: Any) -> tuple[str, str, bool]:
     """``(observation space, action space, is_atari)`` as text."""
     entry = spec.entry_point
-    if isinstance(entry, str) and entry.startswith(_ATARI_ENTRY):
+    if entry == _ATARI_ENTRY:
         obs = _ATARI_OBS.get(spec.kwargs.get("obs_type", "rgb"), "?")
         full = spec.kwargs.get("full_action_space", False)
         return obs, "Discrete(18)" if full else "Discrete(<=18)", True

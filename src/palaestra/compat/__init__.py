@@ -21,7 +21,12 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from palaestra.compat.from_gymnasium_env import PalaestraEnvAdapter, from_gymnasium
+    from palaestra.compat.adapters import (
+        GymnasiumEnvAdapter,
+        PalaestraEnvAdapter,
+        from_gymnasium,
+        to_gymnasium,
+    )
     from palaestra.compat.sb3 import from_sb3
     from palaestra.compat.spaces import (
         from_gymnasium_space,
@@ -29,16 +34,15 @@ if TYPE_CHECKING:
         to_gymnasium_space,
         to_gymnasium_value,
     )
-    from palaestra.compat.to_gymnasium_env import GymnasiumEnvAdapter, to_gymnasium
     from palaestra.compat.torch_file import UnsafeFileError, read_torch_state_dict
 
 # Each name lives in a module that imports its optional dependency (gymnasium, torch) at the top:
 # importing palaestra.compat itself stays free, and the first use says what is missing.
 _WHERE = {
-    "to_gymnasium": "to_gymnasium_env",
-    "GymnasiumEnvAdapter": "to_gymnasium_env",
-    "from_gymnasium": "from_gymnasium_env",
-    "PalaestraEnvAdapter": "from_gymnasium_env",
+    "to_gymnasium": "adapters",
+    "GymnasiumEnvAdapter": "adapters",
+    "from_gymnasium": "adapters",
+    "PalaestraEnvAdapter": "adapters",
     "to_gymnasium_space": "spaces",
     "from_gymnasium_space": "spaces",
     "to_gymnasium_value": "spaces",

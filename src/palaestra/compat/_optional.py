@@ -1,8 +1,12 @@
-"""The error raised when Gymnasium, which only ``palaestra.compat`` uses, is missing."""
+"""What ``palaestra.compat`` needs before Gymnasium is imported: the error raised when it is
+missing, and the id prefix of Gymnasium's registry."""
 
 from __future__ import annotations
 
 from palaestra.error import DependencyNotInstalled
+
+# "gymnasium:Taxi-v4" is Gymnasium's Taxi-v4 (palaestra.compat.registry makes it).
+GYMNASIUM_PREFIX = "gymnasium:"
 
 
 def gymnasium_missing(

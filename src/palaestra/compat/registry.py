@@ -14,13 +14,12 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from palaestra import error
-from palaestra.compat._optional import gymnasium_missing
+from palaestra.compat._optional import GYMNASIUM_PREFIX, gymnasium_missing
 from palaestra.core import Env
-from palaestra.envs.env_spec import EnvSpec, VectorizeMode
+from palaestra.env_spec import EnvSpec, VectorizeMode
+from palaestra.envs.lookup import ForeignRegistry, foreign_registries, load_env_creator
 
 __all__ = ["GYMNASIUM_PREFIX", "gymnasium_spec", "make_gymnasium", "make_vec_gymnasium"]
-
-GYMNASIUM_PREFIX = "gymnasium:"
 
 
 def make_gymnasium(
@@ -38,7 +37,7 @@ def make_gymnasium(
         import gymnasium
     except ImportError as exc:
         raise gymnasium_missing(f"making {id if isinstance(id, str) else id.id!r}") from exc
-    from palaestra.compat.from_gymnasium_env import from_gymnasium
+    from palaestra.compat.adapters import from_gymnasium
 
     spec = id if isinstance(id, EnvSpec) else None
     gym_id = (spec.id if spec is not None else str(id))[len(GYMNASIUM_PREFIX) :]
@@ -83,7 +82,7 @@ def gymnasium_spec(id: str) -> EnvSpec:
         import gymnasium
     except ImportError as exc:
         raise gymnasium_missing(f"looking up {id!r}") from exc
-    from palaestra.compat.from_gymnasium_env import _palaestra_spec
+    from palaestra.compat.adapters import _palaestra_spec
 
     gym_id = id[len(GYMNASIUM_PREFIX) :]
     with _registry_errors(gymnasium, gym_id):
@@ -110,8 +109,6 @@ def _gymnasium_spec(gymnasium: Any, spec: EnvSpec, gym_id: str) -> Any:
 
 def _apply_wrappers(env: Env[Any, Any], spec: EnvSpec) -> Env[Any, Any]:
     """The palaestra wrappers recorded in ``spec`` (``Wrapper.spec`` adds one per layer)."""
-    from palaestra.envs.lookup import load_env_creator
-
     for wrapper_spec in spec.additional_wrappers:
         if wrapper_spec.kwargs is None:
             raise ValueError(
@@ -142,7 +139,7 @@ def make_vec_gymnasium(
 ) -> Any:
     """``num_envs`` Gymnasium envs in a palaestra ``SyncVectorEnv`` (default) or
     ``AsyncVectorEnv``; arguments as for ``palaestra.make_vec``."""
-    from palaestra import vector
+    from palaestra import vector  # lazy: import speed (import palaestra loads this module)
 
     mode = VectorizeMode(vectorization_mode or VectorizeMode.SYNC)
     if mode is VectorizeMode.VECTOR_ENTRY_POINT:
@@ -153,3 +150,8 @@ def make_vec_gymnasium(
     make_one = functools.partial(_make_one, id, list(wrappers or []), kwargs)
     cls = vector.SyncVectorEnv if mode is VectorizeMode.SYNC else vector.AsyncVectorEnv
     return cls([make_one] * num_envs, **(vector_kwargs or {}))
+
+
+foreign_registries[GYMNASIUM_PREFIX] = ForeignRegistry(
+    make=make_gymnasium, make_vec=make_vec_gymnasium, spec=gymnasium_spec
+)

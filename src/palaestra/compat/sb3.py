@@ -122,7 +122,7 @@ def _palaestra_env(env: Any) -> Any:
     if isinstance(env, VecEnv):
         return env
     try:
-        from palaestra.compat.from_gymnasium_env import from_gymnasium
+        from palaestra.compat.adapters import from_gymnasium
 
         return from_gymnasium(env)
     except (ImportError, TypeError) as exc:

@@ -6,42 +6,42 @@ from palaestra.envs.registration import make, pprint_registry, register, registr
 __all__ = ["make", "pprint_registry", "register", "registry", "spec"]
 
 # Classic control: Gymnasium 1.x's ids, entry-point class names, limits and thresholds. The
-# modules are imported only when make() loads an entry point. The native batched engines
-# (``classic_control.*Batch``) get their vector entry points with the vector API, which adds
-# autoreset and time limits on top of them.
+# modules are imported only when make() loads an entry point. Each id's vector entry point is
+# its native batch (``classic_control.*Batch``): make_vec runs it behind the vector API
+# (palaestra.vector.native), which adds autoreset and time limits on top of it.
 _CC = "palaestra.envs.classic_control"
 _CLASSIC_CONTROL: dict[str, dict] = {
     "CartPole-v0": dict(
-        vector_entry_point="palaestra.vector.native:cartpole",
+        vector_entry_point=f"{_CC}.cartpole:CartPoleBatch",
         entry_point=f"{_CC}.cartpole:CartPoleEnv",
         max_episode_steps=200,
         reward_threshold=195.0,
     ),
     "CartPole-v1": dict(
-        vector_entry_point="palaestra.vector.native:cartpole",
+        vector_entry_point=f"{_CC}.cartpole:CartPoleBatch",
         entry_point=f"{_CC}.cartpole:CartPoleEnv",
         max_episode_steps=500,
         reward_threshold=475.0,
     ),
     "MountainCar-v0": dict(
-        vector_entry_point="palaestra.vector.native:mountain_car",
+        vector_entry_point=f"{_CC}.mountain_car:MountainCarBatch",
         entry_point=f"{_CC}.mountain_car:MountainCarEnv",
         max_episode_steps=200,
         reward_threshold=-110.0,
     ),
     "MountainCarContinuous-v0": dict(
-        vector_entry_point="palaestra.vector.native:continuous_mountain_car",
+        vector_entry_point=f"{_CC}.continuous_mountain_car:ContinuousMountainCarBatch",
         entry_point=f"{_CC}.continuous_mountain_car:Continuous_MountainCarEnv",
         max_episode_steps=999,
         reward_threshold=90.0,
     ),
     "Pendulum-v1": dict(
-        vector_entry_point="palaestra.vector.native:pendulum",
+        vector_entry_point=f"{_CC}.pendulum:PendulumBatch",
         entry_point=f"{_CC}.pendulum:PendulumEnv",
         max_episode_steps=200,
     ),
     "Acrobot-v1": dict(
-        vector_entry_point="palaestra.vector.native:acrobot",
+        vector_entry_point=f"{_CC}.acrobot:AcrobotBatch",
         entry_point=f"{_CC}.acrobot:AcrobotEnv",
         max_episode_steps=500,
         reward_threshold=-100.0,
@@ -93,35 +93,35 @@ for _id, _kwargs in _BOX2D.items():
 _TT = "palaestra.envs.toy_text"
 _TOY_TEXT: dict[str, dict] = {
     "Blackjack-v1": dict(
-        vector_entry_point="palaestra.vector.native:blackjack",
+        vector_entry_point=f"{_TT}.blackjack:BlackjackBatch",
         entry_point=f"{_TT}.blackjack:BlackjackEnv",
         kwargs={"sab": True, "natural": False},
     ),
     "FrozenLake-v1": dict(
-        vector_entry_point="palaestra.vector.native:frozen_lake",
+        vector_entry_point=f"{_TT}.frozen_lake:FrozenLakeBatch",
         entry_point=f"{_TT}.frozen_lake:FrozenLakeEnv",
         kwargs={"map_name": "4x4"},
         max_episode_steps=100,
         reward_threshold=0.70,  # optimum 0.74
     ),
     "FrozenLake8x8-v1": dict(
-        vector_entry_point="palaestra.vector.native:frozen_lake",
+        vector_entry_point=f"{_TT}.frozen_lake:FrozenLakeBatch",
         entry_point=f"{_TT}.frozen_lake:FrozenLakeEnv",
         kwargs={"map_name": "8x8"},
         max_episode_steps=200,
         reward_threshold=0.85,  # optimum 0.91
     ),
     "CliffWalking-v1": dict(
-        vector_entry_point="palaestra.vector.native:cliff_walking",
+        vector_entry_point=f"{_TT}.cliffwalking:CliffWalkingBatch",
         entry_point=f"{_TT}.cliffwalking:CliffWalkingEnv",
     ),
     "CliffWalkingSlippery-v1": dict(
-        vector_entry_point="palaestra.vector.native:cliff_walking",
+        vector_entry_point=f"{_TT}.cliffwalking:CliffWalkingBatch",
         entry_point=f"{_TT}.cliffwalking:CliffWalkingEnv",
         kwargs={"is_slippery": True},
     ),
     "Taxi-v4": dict(
-        vector_entry_point="palaestra.vector.native:taxi",
+        vector_entry_point=f"{_TT}.taxi:TaxiBatch",
         entry_point=f"{_TT}.taxi:TaxiEnv",
         max_episode_steps=200,
         reward_threshold=8,  # optimum 8.46

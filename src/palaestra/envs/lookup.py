@@ -14,11 +14,12 @@ import importlib.util
 import re
 from collections import defaultdict
 from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from types import ModuleType
 from typing import Any
 
 from palaestra import error, logger
-from palaestra.envs.env_spec import (
+from palaestra.env_spec import (
     EnvCreator,
     EnvSpec,
     WrapperSpec,
@@ -27,6 +28,35 @@ from palaestra.envs.env_spec import (
 )
 
 registry: dict[str, EnvSpec] = {}
+
+
+@dataclass(frozen=True)
+class ForeignRegistry:
+    """Another library's registry, reached by an id prefix (``"gymnasium:Taxi-v4"``).
+
+    ``make``, ``make_vec`` and ``spec`` take the same arguments as palaestra's own and receive
+    the id (or spec) with its prefix.
+    """
+
+    make: Callable[..., Any]
+    make_vec: Callable[..., Any]
+    spec: Callable[[str], EnvSpec]
+
+
+# id prefix -> the registry that makes such ids. Filled by the package that talks to the
+# other library (`palaestra.compat` adds "gymnasium:"), so the registry never imports it.
+foreign_registries: dict[str, ForeignRegistry] = {}
+
+
+def foreign_registry(id: Any) -> ForeignRegistry | None:
+    """The registry of another library that ``id`` (an id or a spec) names by its prefix."""
+    name = id.id if isinstance(id, EnvSpec) else id
+    if isinstance(name, str):
+        for prefix, found in foreign_registries.items():
+            if name.startswith(prefix):
+                return found
+    return None
+
 
 # Namespaces that an optional package provides: namespace -> (import name, pip name, extra).
 # An unknown id in one of them gets "pip install palaestra[extra]" instead of "not found".
@@ -216,10 +246,9 @@ def register_envs(env_module: ModuleType) -> None:
 def spec(env_id: str) -> EnvSpec:
     """The registered :class:`EnvSpec` of ``env_id``; helpful errors if there is none.
     ``"gymnasium:<id>"``: the spec in Gymnasium's registry (what ``make`` would build)."""
-    if env_id.startswith("gymnasium:"):
-        from palaestra.compat.registry import gymnasium_spec
-
-        return gymnasium_spec(env_id)
+    foreign = foreign_registry(env_id)
+    if foreign is not None:
+        return foreign.spec(env_id)
     env_spec = registry.get(env_id)
     if env_spec is None:
         ns, name, version = parse_env_id(env_id)

@@ -7,29 +7,31 @@ them, so that ``str(env)`` reads as in Gymnasium:
 ``<TimeLimit<OrderEnforcing<PassiveEnvChecker<MountainCarEnv<MountainCar-v0>>>>>``.
 
 The registry itself lives in :mod:`palaestra.envs.lookup` and the spec dataclasses in
-:mod:`palaestra.envs.env_spec`; this module re-exports both so that it is the one import users
+:mod:`palaestra.env_spec`; this module re-exports both so that it is the one import users
 need, as ``gymnasium.envs.registration`` is.
 """
 
 from __future__ import annotations
 
 import copy
-import importlib.util
+import functools
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 from palaestra import error, logger
 from palaestra.core import Env, Wrapper
-from palaestra.envs.env_spec import (
+from palaestra.env_spec import (
     EnvCreator,
     EnvSpec,
     VectorizeMode,
     WrapperSpec,
     get_env_id,
+    install_maker,
     parse_env_id,
 )
 from palaestra.envs.lookup import (
     find_highest_version,
+    foreign_registry,
     load_env_creator,
     namespace,
     pprint_registry,
@@ -51,6 +53,7 @@ __all__ = [
     "make",
     "make_vec",
     "namespace",
+    "native_batch",
     "parse_env_id",
     "pprint_registry",
     "register",
@@ -58,12 +61,6 @@ __all__ = [
     "registry",
     "spec",
 ]
-
-
-def _is_gymnasium_id(id: Any) -> bool:
-    """``"gymnasium:Taxi-v4"`` (or a spec with such an id): made by ``palaestra.compat``."""
-    name = id.id if isinstance(id, EnvSpec) else id
-    return isinstance(name, str) and name.startswith("gymnasium:")
 
 
 def _render_modes_of(env_creator: Any) -> Iterable[str] | None:
@@ -184,12 +181,9 @@ def make(
     """
     from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
 
-    # -- "gymnasium:<id>": Gymnasium's registry, through palaestra.compat ----------------------
-    if _is_gymnasium_id(id):
-        from palaestra.compat.registry import make_gymnasium
-
-        return make_gymnasium(id, max_episode_steps, disable_env_checker, **kwargs)
-    # -- end "gymnasium:" ----------------------------------------------------------------------
+    foreign = foreign_registry(id)  # "gymnasium:<id>": Gymnasium's, through palaestra.compat
+    if foreign is not None:
+        return foreign.make(id, max_episode_steps, disable_env_checker, **kwargs)
     if isinstance(id, EnvSpec):
         env_spec = id
     elif isinstance(id, str):
@@ -246,19 +240,29 @@ def make(
     return env
 
 
+install_maker(make)
+
 # Vector options that palaestra's native batches (palaestra.vector.native) accept directly.
 _NATIVE_VECTOR_KWARGS = {"copy", "autoreset_mode"}
 
 
-def _is_native(entry_point: Any) -> bool:
-    return isinstance(entry_point, str) and entry_point.startswith("palaestra.vector.native:")
+def native_batch(spec: EnvSpec) -> tuple[Any, Any] | None:
+    """``(batch class, env class)`` when ``spec``'s vector entry point names a native batch
+    (a class with ``is_native_batch``: classic control's and toy text's ``*Batch``), else None.
 
-
-def _vector_available() -> bool:
-    # origin is None for a bare directory (namespace package): palaestra.vector while it is
-    # still being written, without the __init__ that exports the vector envs.
-    found = importlib.util.find_spec("palaestra.vector")
-    return found is not None and found.origin is not None
+    An entry point that does not load is not a native batch here: the error comes where the
+    entry point is used, as for any other vector entry point.
+    """
+    entry = spec.vector_entry_point
+    if entry is None:
+        return None
+    try:
+        creator = load_env_creator(entry) if isinstance(entry, str) else entry
+    except (ImportError, AttributeError):
+        return None
+    if not getattr(creator, "is_native_batch", False):
+        return None
+    return creator, _load_creator(spec)
 
 
 def make_vec(
@@ -275,14 +279,9 @@ def make_vec(
     spec's vector entry point if it has one, else sync); ``vector_kwargs`` go to the vector
     env, ``wrappers`` wrap each copy (sync/async only), ``kwargs`` go to each env.
     """
-    # -- "gymnasium:<id>": Gymnasium's registry, through palaestra.compat ----------------------
-    if _is_gymnasium_id(id):
-        from palaestra.compat.registry import make_vec_gymnasium
-
-        return make_vec_gymnasium(
-            id, num_envs, vectorization_mode, vector_kwargs, wrappers, **kwargs
-        )
-    # -- end "gymnasium:" ----------------------------------------------------------------------
+    foreign = foreign_registry(id)  # "gymnasium:<id>": Gymnasium's, through palaestra.compat
+    if foreign is not None:
+        return foreign.make_vec(id, num_envs, vectorization_mode, vector_kwargs, wrappers, **kwargs)
     if isinstance(id, EnvSpec):
         env_spec = id
     elif isinstance(id, str):
@@ -305,7 +304,7 @@ def make_vec(
         # to such ids, which only a SyncVectorEnv takes: keep that code working.
         entry = env_spec.vector_entry_point
         sync_args = bool(wrappers) or not set(vector_kwargs) <= _NATIVE_VECTOR_KWARGS
-        if entry is None or (_is_native(entry) and sync_args):
+        if entry is None or (sync_args and native_batch(env_spec) is not None):
             mode = VectorizeMode.SYNC
         else:
             mode = VectorizeMode.VECTOR_ENTRY_POINT
@@ -328,9 +327,7 @@ def make_vec(
                 f"Cannot create vectorized environment for {env_spec.id} because it doesn't have "
                 "an entry point defined."
             )
-        if not _vector_available():
-            raise NotImplementedError("make_vec arrives with palaestra.vector")
-        vector: Any = importlib.import_module("palaestra.vector")
+        from palaestra import vector  # lazy: import speed (worker machinery, ~30 ms)
 
         def create_single_env() -> Env[Any, Any]:
             single_env = make(env_spec, **env_kwargs.copy())
@@ -364,7 +361,8 @@ def _make_with_vector_entry_point(
     wrappers: Sequence[Any],
     env_kwargs: dict[str, Any],
 ) -> Any:
-    if set(vector_kwargs) <= _NATIVE_VECTOR_KWARGS and _is_native(env_spec.vector_entry_point):
+    native = native_batch(env_spec)
+    if native is not None and set(vector_kwargs) <= _NATIVE_VECTOR_KWARGS:
         env_kwargs = {**env_kwargs, **vector_kwargs}
         vector_kwargs = {}
     if vector_kwargs:
@@ -388,7 +386,12 @@ def _make_with_vector_entry_point(
             f"Cannot create vectorized environment for {id} because it doesn't have a vector "
             "entry point defined."
         )
-    env_creator = load_env_creator(entry) if isinstance(entry, str) else entry
+    if native is not None:
+        from palaestra.vector.native import batched_vector_env  # lazy: import speed
+
+        env_creator: Callable[..., Any] = functools.partial(batched_vector_env, *native)
+    else:
+        env_creator = load_env_creator(entry) if isinstance(entry, str) else entry
     if env_spec.max_episode_steps is not None and "max_episode_steps" not in env_kwargs:
         env_kwargs["max_episode_steps"] = env_spec.max_episode_steps
     return env_creator(num_envs=num_envs, **env_kwargs)
@@ -396,14 +399,13 @@ def _make_with_vector_entry_point(
 
 def _check_autoreset_metadata(env: Any) -> None:
     """Warn, as Gymnasium does, when a vector env does not declare its autoreset mode."""
-    if not _vector_available():
-        return  # nothing to compare against until palaestra.vector exists
-    autoreset_mode = importlib.import_module("palaestra.vector").AutoresetMode
+    from palaestra.vector import AutoresetMode  # lazy: import speed
+
     if "autoreset_mode" not in env.metadata:
         logger.warn(
             f"The VectorEnv ({env}) is missing AutoresetMode metadata, metadata={env.metadata}"
         )
-    elif not isinstance(env.metadata["autoreset_mode"], autoreset_mode):
+    elif not isinstance(env.metadata["autoreset_mode"], AutoresetMode):
         logger.warn(
             f"The VectorEnv ({env}) metadata['autoreset_mode'] is not an instance of "
             f"AutoresetMode, {type(env.metadata['autoreset_mode'])}."

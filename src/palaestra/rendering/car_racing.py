@@ -12,12 +12,33 @@ from __future__ import annotations
 
 import itertools
 import math
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from palaestra.rendering import gfx
+
+
+@dataclass(frozen=True)
+class Dims:
+    """The env's constants the picture needs. The env module owns them and passes them in, so
+    this module never imports the env (which imports this module to draw)."""
+
+    playfield: float
+    grass_dim: float
+    max_shape_dim: float
+    scale: float
+    zoom: float
+    state_size: tuple[int, int]  # (W, H) of the observation
+    video_size: tuple[int, int]  # (W, H) of a video frame
+    hull_color: tuple[float, float, float]  # 0..1
+    wheel_w: float
+    wheel_r: float
+    car_size: float
+    wheel_white: tuple[int, int, int]
+
 
 W, H = 1000, 800
 _TWO_PI = 2 * math.pi
@@ -101,25 +122,23 @@ def _pg_polygon(img: np.ndarray, pts: Any, color: tuple[int, int, int]) -> None:
                         np.trunc(arr[:, 1]).astype(np.int64), color)  # fmt: skip
 
 
-def _draw_road(img: np.ndarray, env: Any, zoom: float, trans: Any, rot: Any) -> None:
-    from palaestra.envs.box2d import car_racing as cr
-
-    b = cr.PLAYFIELD
+def _draw_road(img: np.ndarray, env: Any, zoom: float, trans: Any, rot: Any, dims: Dims) -> None:
+    b = dims.playfield
     field = np.array([[(b, b), (b, -b), (-b, -b), (-b, b)]])
     _gfx_polygons(img, _to_screen(field, rot, zoom, trans), [_rgb(env.bg_color)])
-    grass = _to_screen(_grass_patches(cr.GRASS_DIM), rot, zoom, trans)
-    grass = grass[_visible(grass, cr.MAX_SHAPE_DIM)]
+    grass = _to_screen(_grass_patches(dims.grass_dim), rot, zoom, trans)
+    grass = grass[_visible(grass, dims.max_shape_dim)]
     _gfx_polygons(img, grass, [_rgb(env.grass_color)] * len(grass))
     if env.road_poly:
         polys = np.array([p for p, _ in env.road_poly], dtype=np.float64)  # [M, 4, 2]
         screen = _to_screen(polys, rot, zoom, trans)
-        shown = np.flatnonzero(_visible(screen, cr.MAX_SHAPE_DIM)).tolist()
+        shown = np.flatnonzero(_visible(screen, dims.max_shape_dim)).tolist()
         _gfx_polygons(img, screen[shown], [_rgb(env.road_poly[i][1]) for i in shown])
 
 
-def _draw_car(img: np.ndarray, car: Any, zoom: float, trans: Any, rot: Any, marks: bool) -> None:
-    from palaestra.envs.box2d import car_dynamics as cd
-
+def _draw_car(
+    img: np.ndarray, car: Any, zoom: float, trans: Any, rot: Any, marks: bool, dims: Dims
+) -> None:
     def screen(points: list[tuple[float, float]]) -> np.ndarray:
         return _to_screen(np.asarray(points, dtype=np.float64), rot, zoom, trans)
 
@@ -136,7 +155,7 @@ def _draw_car(img: np.ndarray, car: Any, zoom: float, trans: Any, rot: Any, mark
     bodies: list[tuple[Any, tuple[int, int, int], Any]] = [
         (w.body, (0, 0, 0), w) for w in car.wheels
     ]
-    bodies.append((car.hull, _rgb([c * 255 for c in cd.HULL_COLOR]), None))
+    bodies.append((car.hull, _rgb([c * 255 for c in dims.hull_color]), None))
     for body, color, wheel in bodies:
         for f in body.fixtures:
             trans_b = f.body.transform
@@ -153,11 +172,11 @@ def _draw_car(img: np.ndarray, car: Any, zoom: float, trans: Any, rot: Any, mark
                 c1 = float(np.sign(c1))
             if s2 > 0:
                 c2 = float(np.sign(c2))
-            ww, wr, size = cd.WHEEL_W, cd.WHEEL_R, cd.SIZE
+            ww, wr, size = dims.wheel_w, dims.wheel_r, dims.car_size
             band = [(-ww * size, +wr * c1 * size), (+ww * size, +wr * c1 * size),
                     (+ww * size, +wr * c2 * size), (-ww * size, +wr * c2 * size)]  # fmt: skip
             path = [tuple(trans_b * v) for v in band]
-            _pg_polygon(img, screen(path), cd.WHEEL_WHITE)
+            _pg_polygon(img, screen(path), dims.wheel_white)
 
 
 def _draw_indicators(img: np.ndarray, car: Any) -> None:
@@ -191,29 +210,27 @@ def _draw_indicators(img: np.ndarray, car: Any) -> None:
             _pg_polygon(img, points, color)
 
 
-def render(env: Any, mode: str) -> np.ndarray:
+def render(env: Any, mode: str, dims: Dims) -> np.ndarray:
     """The frame of ``env`` (a CarRacing) for ``mode``: ``state_pixels`` (96x96) or
-    ``rgb_array`` / ``human`` (600x400)."""
-    from palaestra.envs.box2d import car_racing as cr
-
+    ``rgb_array`` / ``human`` (600x400); ``dims`` are the env's constants."""
     car = env.car
     angle = -car.hull.angle
     # The first second zooms in from far away.
-    zoom = 0.1 * cr.SCALE * max(1 - env.t, 0) + cr.ZOOM * cr.SCALE * min(env.t, 1)
+    zoom = 0.1 * dims.scale * max(1 - env.t, 0) + dims.zoom * dims.scale * min(env.t, 1)
     pos = car.hull.position
     rot = _rotator(angle)
     scroll = _rotate(np.array([-(pos[0]) * zoom, -(pos[1]) * zoom]), rot)
     trans = (W / 2 + float(scroll[0]), H / 4 + float(scroll[1]))
 
     img = np.zeros((H, W, 3), dtype=np.uint8)
-    _draw_road(img, env, zoom, trans, rot)
-    _draw_car(img, car, zoom, trans, rot, marks=mode != "state_pixels")
+    _draw_road(img, env, zoom, trans, rot, dims)
+    _draw_car(img, car, zoom, trans, rot, marks=mode != "state_pixels", dims=dims)
     img = img[::-1].copy()  # pygame.transform.flip(surf, False, True)
     _draw_indicators(img, car)
     _draw_score(img, env.reward)
     if mode == "state_pixels":
-        return gfx.smoothscale_shrink(img, cr.STATE_W, cr.STATE_H)
-    return gfx.smoothscale_shrink(img, cr.VIDEO_W, cr.VIDEO_H)
+        return gfx.smoothscale_shrink(img, *dims.state_size)
+    return gfx.smoothscale_shrink(img, *dims.video_size)
 
 
 # Seven-segment digits for the score: segments a-g as (x0, y0, x1, y1) boxes in a 20x30 cell.

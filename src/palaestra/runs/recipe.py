@@ -45,6 +45,7 @@ import palaestra
 from palaestra import spaces
 from palaestra.core import Wrapper
 from palaestra.envs.atari.checks import import_ale_py
+from palaestra.envs.atari.games import ENTRY_POINT as ATARI_ENTRY_POINT
 from palaestra.runs import known_names
 from palaestra.runs.errors import RunError
 
@@ -68,7 +69,6 @@ __all__ = [
     "wrapper_module",
 ]
 
-ATARI_ENTRY_POINT = "palaestra.envs.atari.env:AtariEnv"
 ATARI_HZ = 60.0  # frames the (NTSC) Atari 2600 draws per second
 # AtariWrapper's keyword arguments (SB3's names), the only keys an ``atari`` mapping may hold.
 WRAPPER_KEYS = (

@@ -4,7 +4,8 @@
 elements into it and ``iterate`` walks a batch (an element of the batched space) back out.
 
 Semantics are those of ``gymnasium.vector.utils``; import them from
-``palaestra.spaces.batching``, which also holds the batched spaces themselves.
+``palaestra.spaces.batching``, which also holds the batched spaces themselves. ``Graph`` and
+``Sequence`` register their own handlers (they are built on these functions).
 """
 
 from __future__ import annotations
@@ -19,11 +20,9 @@ from palaestra.error import CustomSpaceError
 from palaestra.spaces.box import Box
 from palaestra.spaces.dict import Dict
 from palaestra.spaces.discrete import Discrete
-from palaestra.spaces.graph import Graph, GraphInstance
 from palaestra.spaces.multi_binary import MultiBinary
 from palaestra.spaces.multi_discrete import MultiDiscrete
 from palaestra.spaces.oneof import OneOf
-from palaestra.spaces.sequence import Sequence
 from palaestra.spaces.space import Space, foreign_space_hint
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
@@ -167,33 +166,9 @@ def _empty_dict(space: Dict, n: int = 1, fn: Callable[..., Any] = np.zeros) -> d
     return {key: create_empty_array(subspace, n=n, fn=fn) for key, subspace in space.items()}
 
 
-@create_empty_array.register(Graph)
-def _empty_graph(
-    space: Graph, n: int = 1, fn: Callable[..., Any] = np.zeros
-) -> tuple[GraphInstance, ...]:
-    edge_space = space.edge_space
-    return tuple(
-        GraphInstance(
-            nodes=create_empty_array(space.node_space, n=1, fn=fn),
-            edges=None if edge_space is None else create_empty_array(edge_space, n=1, fn=fn),
-            edge_links=None if edge_space is None else fn((1, 2), dtype=np.int64),
-        )
-        for _ in range(n)
-    )
-
-
 @create_empty_array.register(Text)
 def _empty_text(space: Text, n: int = 1, fn: Callable[..., Any] = np.zeros) -> tuple[str, ...]:
     return tuple(space.characters[0] * space.min_length for _ in range(n))
-
-
-@create_empty_array.register(Sequence)
-def _empty_sequence(
-    space: Sequence, n: int = 1, fn: Callable[..., Any] = np.zeros
-) -> tuple[Any, ...]:
-    if space.stack:
-        return tuple(create_empty_array(space.feature_space, n=1, fn=fn) for _ in range(n))
-    return tuple(() for _ in range(n))
 
 
 @create_empty_array.register(OneOf)

@@ -21,11 +21,9 @@ from palaestra.spaces.batched_samples import concatenate, create_empty_array, it
 from palaestra.spaces.box import Box
 from palaestra.spaces.dict import Dict
 from palaestra.spaces.discrete import Discrete
-from palaestra.spaces.graph import Graph
 from palaestra.spaces.multi_binary import MultiBinary
 from palaestra.spaces.multi_discrete import MultiDiscrete
 from palaestra.spaces.oneof import OneOf
-from palaestra.spaces.sequence import Sequence
 from palaestra.spaces.space import Space, foreign_space_hint
 from palaestra.spaces.text import Text
 from palaestra.spaces.tuple import Tuple
@@ -205,9 +203,8 @@ def _differing_dict(spaces: PySequence[Dict]) -> Dict:
     )
 
 
-@batch_differing_spaces.register(Graph)
+# Graph and Sequence register this too, in their own modules (they are built on batch_space).
 @batch_differing_spaces.register(Text)
-@batch_differing_spaces.register(Sequence)
 @batch_differing_spaces.register(OneOf)
 def _differing_as_tuple(spaces: PySequence[Space[Any]]) -> Tuple:
     return Tuple([deepcopy(space) for space in spaces], seed=deepcopy(spaces[0].np_random))

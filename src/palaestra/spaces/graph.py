@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from collections.abc import Sequence as PySequence
 from typing import Any, Literal, NamedTuple
 
@@ -11,10 +11,9 @@ import numpy.typing as npt
 
 from palaestra import logger
 from palaestra.error import CustomSpaceError
+from palaestra.spaces.batched_samples import create_empty_array, iterate
+from palaestra.spaces.batching import _differing_as_tuple, batch_differing_spaces, batch_space
 from palaestra.spaces.space import InvalidMask, Space
-
-# `palaestra.spaces.batching` imports this module (for GraphInstance), so the batching functions
-# are imported inside the methods that need them.
 
 
 class GraphInstance(NamedTuple):
@@ -46,8 +45,6 @@ class Graph(Space[GraphInstance]):
         seed: int | np.random.Generator | None = None,
     ) -> None:
         """Build the space; ``edge_space=None`` means graphs without edges."""
-        from palaestra.spaces.batching import batch_space
-
         for name, space in (("node_space", node_space), ("edge_space", edge_space)):
             # Gymnasium fails later with an obscure dispatch error; say what is wrong here.
             if space is not None and not isinstance(space, Space):
@@ -104,8 +101,6 @@ class Graph(Space[GraphInstance]):
 
         ``mask``/``probability`` is ``(node_mask, edge_mask)``, passed to the batched subspaces.
         """
-        from palaestra.spaces.batching import batch_space
-
         if num_nodes <= 0:
             raise InvalidMask(
                 f"The number of nodes is expected to be greater than 0, actual value: {num_nodes}"
@@ -152,8 +147,6 @@ class Graph(Space[GraphInstance]):
 
     def contains(self, x: Any) -> bool:
         """Whether ``x`` is a GraphInstance with valid nodes, edges and in-range integer links."""
-        from palaestra.spaces.batching import iterate
-
         # Any GraphInstance-shaped namedtuple (e.g. gymnasium's) is accepted, for interop.
         if not _is_graph_instance(x) or x.nodes is None:
             return False
@@ -213,3 +206,21 @@ class Graph(Space[GraphInstance]):
             else:
                 result.append(GraphInstance(nodes, None, None))
         return result
+
+
+@create_empty_array.register(Graph)
+def _empty_graph(
+    space: Graph, n: int = 1, fn: Callable[..., Any] = np.zeros
+) -> tuple[GraphInstance, ...]:
+    edge_space = space.edge_space
+    return tuple(
+        GraphInstance(
+            nodes=create_empty_array(space.node_space, n=1, fn=fn),
+            edges=None if edge_space is None else create_empty_array(edge_space, n=1, fn=fn),
+            edge_links=None if edge_space is None else fn((1, 2), dtype=np.int64),
+        )
+        for _ in range(n)
+    )
+
+
+batch_differing_spaces.register(Graph)(_differing_as_tuple)

@@ -2,16 +2,15 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from typing import Any, Literal
 
 import numpy as np
 
 from palaestra.error import CustomSpaceError
+from palaestra.spaces.batched_samples import concatenate, create_empty_array, iterate
+from palaestra.spaces.batching import _differing_as_tuple, batch_differing_spaces, batch_space
 from palaestra.spaces.space import InvalidMask, InvalidProbabilityMask, Space
-
-# `palaestra.spaces.batching` imports this module to register its handlers, so the functions it
-# provides are imported inside the methods that need them.
 
 
 class Sequence(Space[Any]):
@@ -34,8 +33,6 @@ class Sequence(Space[Any]):
         stack: bool = False,
     ) -> None:
         """Build sequences of ``space`` elements; ``stack`` returns them as one batch."""
-        from palaestra.spaces.batching import batch_space
-
         if not isinstance(space, Space):
             raise TypeError(
                 "Expects the feature space to be instance of a palaestra Space, "
@@ -97,8 +94,6 @@ class Sequence(Space[Any]):
             length = self.np_random.geometric(0.25)
             values = tuple(self.feature_space.sample() for _ in range(length))
         if self.stack:
-            from palaestra.spaces.batching import concatenate, create_empty_array
-
             out = create_empty_array(self.feature_space, len(values))
             return concatenate(self.feature_space, values, out)
         return values
@@ -140,8 +135,6 @@ class Sequence(Space[Any]):
     def contains(self, x: Any) -> bool:
         """Whether ``x`` is a tuple (or, stacked, a batch) of feature-space elements."""
         if self.stack:
-            from palaestra.spaces.batching import iterate
-
             # Gymnasium raises TypeError for non-iterables; "not a member" is the useful answer.
             try:
                 return all(
@@ -172,3 +165,15 @@ class Sequence(Space[Any]):
             and self.feature_space == other.feature_space
             and self.stack == other.stack
         )
+
+
+@create_empty_array.register(Sequence)
+def _empty_sequence(
+    space: Sequence, n: int = 1, fn: Callable[..., Any] = np.zeros
+) -> tuple[Any, ...]:
+    if space.stack:
+        return tuple(create_empty_array(space.feature_space, n=1, fn=fn) for _ in range(n))
+    return tuple(() for _ in range(n))
+
+
+batch_differing_spaces.register(Sequence)(_differing_as_tuple)

@@ -17,14 +17,14 @@ from typing import Any
 
 import numpy as np
 
+from palaestra.envs.atari.ale_engine import ALESettings, ALEVectorEngine
+from palaestra.envs.atari.games import ENTRY_POINT as _ATARI_ENTRY_POINT
 from palaestra.vec_env.base import StepReturn
 from palaestra.vec_env.engine_vec_env import EngineVecEnv
 from palaestra.vec_env.monitor import VecMonitor
-from palaestra.vector.ale_engine import ALESettings, ALEVectorEngine
 
 __all__ = ["AtariGameMonitor", "AtariVecEnv", "atari_wrapper_settings"]
 
-_ATARI_ENTRY_POINT = "palaestra.envs.atari.env:AtariEnv"
 # The settings of an Atari id's spec that ALEVectorInterface also has.
 _SPEC_SETTINGS = ("repeat_action_probability", "full_action_space", "frameskip")
 

@@ -12,31 +12,30 @@ import numpy as np
 
 from palaestra import error, logger
 from palaestra.core import Env
+from palaestra.envs.atari.ale_engine import vector_interface_available
+from palaestra.envs.registration import native_batch, resolve_id
 from palaestra.vec_env.atari_vec_env import AtariGameMonitor, AtariVecEnv, atari_wrapper_settings
 from palaestra.vec_env.base import VecEnv
 from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
 from palaestra.vec_env.monitor import VecMonitor
-from palaestra.vector.ale_engine import vector_interface_available
-
-_NATIVE = "palaestra.vector.native:"
+from palaestra.vector.native import BatchedVectorEnv, batched_vector_env
 
 
 def _native_batch(env_id: Any, env_kwargs: dict[str, Any], n_envs: int) -> BatchedVecEnv | None:
     """The native batch for a built-in id, or None when the id has none."""
     if not isinstance(env_id, str):
         return None
-    from palaestra.envs.registration import load_env_creator, resolve_id
-
     spec = resolve_id(env_id)
-    entry = spec.vector_entry_point
-    if not (isinstance(entry, str) and entry.startswith(_NATIVE)) or spec.additional_wrappers:
+    classes = native_batch(spec)
+    if classes is None or spec.additional_wrappers:
         return None
     kwargs = {**spec.kwargs, **env_kwargs}
     if kwargs.pop("render_mode", None) is not None:
         return None  # native batches do not render: build real envs instead
-    native = load_env_creator(entry)(
-        num_envs=n_envs, max_episode_steps=spec.max_episode_steps, **kwargs
+    native = batched_vector_env(
+        *classes, num_envs=n_envs, max_episode_steps=spec.max_episode_steps, **kwargs
     )
+    assert isinstance(native, BatchedVectorEnv)  # no render_mode: the batch itself
     venv = BatchedVecEnv(native.batch, spec.max_episode_steps, native.metadata)
     venv.spec = spec
     return venv

@@ -15,7 +15,7 @@ import numpy as np
 from palaestra import error
 from palaestra.spaces import Box
 from palaestra.spaces.batched_samples import iterate
-from palaestra.vector.engine import Engine, Infos, row_seeds
+from palaestra.vector.engine import Engine, Infos, copy_obs, row_seeds
 from palaestra.vector.vector_env import AutoresetMode
 
 
@@ -68,27 +68,10 @@ def take_rows(space: Any, obs: Any, rows: np.ndarray) -> list[Any]:
         return list(obs[rows])  # fancy indexing copies: [R, *shape] -> R row arrays
     wanted = set(rows.tolist())
     return [
-        _copy_obs(item)
+        copy_obs(item)
         for i, item in enumerate(iterate(space, obs))
         if i in wanted  # iterate walks every row; only non-Box spaces take this path
     ]
-
-
-def copy_obs(item: Any) -> Any:
-    """A copy of one observation that keeps its types (arrays, dicts, tuples, NamedTuples)."""
-    return _copy_obs(item)
-
-
-def _copy_obs(item: Any) -> Any:
-    if isinstance(item, np.ndarray):
-        return item.copy()
-    if isinstance(item, dict):
-        return {k: _copy_obs(v) for k, v in item.items()}
-    if isinstance(item, tuple):
-        if hasattr(item, "_fields"):  # a NamedTuple such as GraphInstance keeps its type
-            return type(item)(*(_copy_obs(v) for v in item))
-        return tuple(_copy_obs(v) for v in item)
-    return item
 
 
 class Autoresetter:

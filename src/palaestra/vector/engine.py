@@ -288,8 +288,6 @@ class LoopEngine:
     def final_observations(self, rows: np.ndarray) -> list[Any]:
         """Copies of the observations the sub-envs in ``rows`` returned from their last step
         (read before autoreset replaces them)."""
-        from palaestra.vector.autoreset import copy_obs  # autoreset imports this module
-
         return [copy_obs(self._env_obs[i]) for i in rows.tolist()]
 
     def _targets(self, rows: Rows) -> list[Env[Any, Any]]:
@@ -318,3 +316,16 @@ class LoopEngine:
         """Close each sub-env."""
         for env in self.envs:
             env.close()
+
+
+def copy_obs(item: Any) -> Any:
+    """A copy of one observation that keeps its types (arrays, dicts, tuples, NamedTuples)."""
+    if isinstance(item, np.ndarray):
+        return item.copy()
+    if isinstance(item, dict):
+        return {k: copy_obs(v) for k, v in item.items()}
+    if isinstance(item, tuple):
+        if hasattr(item, "_fields"):  # a NamedTuple such as GraphInstance keeps its type
+            return type(item)(*(copy_obs(v) for v in item))
+        return tuple(copy_obs(v) for v in item)
+    return item

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from palaestra.utils.stacked_infos import StackedInfos
 from palaestra.vector.autoreset import Transition
-from palaestra.vector.stacked_infos import StackedInfos
 
 
 def add_info(infos: dict[str, Any], env_info: dict[str, Any], i: int, n: int) -> dict[str, Any]:

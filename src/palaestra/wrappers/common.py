@@ -30,7 +30,7 @@ from palaestra.utils.passive_env_checker import (
 from palaestra.utils.record_constructor import RecordConstructorArgs
 
 if TYPE_CHECKING:
-    from palaestra.envs.env_spec import EnvSpec
+    from palaestra.env_spec import EnvSpec
 
 __all__ = ["OrderEnforcing", "PassiveEnvChecker", "TimeLimit"]
 

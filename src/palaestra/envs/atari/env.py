@@ -19,6 +19,7 @@ import numpy as np
 
 from palaestra import error, logger
 from palaestra.core import Env
+from palaestra.envs.action_checks import check_discrete_action, invalid_action
 from palaestra.envs.atari.actions import direction_table, keys_for
 from palaestra.envs.atari.checks import (
     RENDER_MODES,
@@ -28,7 +29,6 @@ from palaestra.envs.atari.checks import (
     import_ale_py,
 )
 from palaestra.envs.atari.games import check_game
-from palaestra.envs.classic_control._common import check_discrete_action, invalid_action
 from palaestra.spaces import Box, Dict, Discrete
 from palaestra.utils.seeding import np_random as make_rng
 

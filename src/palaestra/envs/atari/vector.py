@@ -31,8 +31,8 @@ from typing import Any
 
 from palaestra import error
 from palaestra.core import Env
+from palaestra.envs.atari.ale_engine import ALESettings, ALEVectorEngine, vector_interface_available
 from palaestra.envs.atari.games import check_game
-from palaestra.vector.ale_engine import ALESettings, ALEVectorEngine, vector_interface_available
 from palaestra.vector.engine import Engine
 from palaestra.vector.engine_env import EngineVectorEnv
 from palaestra.vector.vector_env import AutoresetMode
@@ -118,7 +118,7 @@ class AtariVectorEnv(EngineVectorEnv):
     """``num_envs`` copies of ``game`` (a snake_case ROM id) as one vector env.
 
     Keyword arguments and defaults are ale-py's ``AtariVectorEnv``'s (see
-    :class:`~palaestra.vector.ale_engine.ALESettings`); ``autoreset_mode`` is NEXT_STEP,
+    :class:`~palaestra.envs.atari.ale_engine.ALESettings`); ``autoreset_mode`` is NEXT_STEP,
     SAME_STEP or DISABLED.
 
     >>> import palaestra as gym

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from palaestra import error
-from palaestra.envs.classic_control._common import invalid_action
+from palaestra.envs.action_checks import invalid_action
 
 _REAL_KINDS = "biuf"
 

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from palaestra import error
+from palaestra.envs.box2d import car_dynamics
 from palaestra.envs.box2d._common import (
     box_action,
     check_bool,
@@ -29,6 +30,7 @@ from palaestra.envs.box2d._common import (
 )
 from palaestra.envs.box2d.car_dynamics import Car, Wheel
 from palaestra.envs.classic_control._common import ClassicControlEnv, checked_options
+from palaestra.rendering import car_racing as scene
 from palaestra.spaces import Box, Discrete
 
 STATE_W, STATE_H = 96, 96
@@ -46,6 +48,22 @@ BORDER = 8 / SCALE
 BORDER_MIN_COUNT = 4
 GRASS_DIM = PLAYFIELD / 20.0
 MAX_SHAPE_DIM = max(GRASS_DIM, TRACK_WIDTH, TRACK_DETAIL_STEP) * math.sqrt(2) * ZOOM * SCALE
+
+# What the picture needs of this module's constants (rendering never imports the env).
+_DIMS = scene.Dims(
+    playfield=PLAYFIELD,
+    grass_dim=GRASS_DIM,
+    max_shape_dim=MAX_SHAPE_DIM,
+    scale=SCALE,
+    zoom=ZOOM,
+    state_size=(STATE_W, STATE_H),
+    video_size=(VIDEO_W, VIDEO_H),
+    hull_color=car_dynamics.HULL_COLOR,
+    wheel_w=car_dynamics.WHEEL_W,
+    wheel_r=car_dynamics.WHEEL_R,
+    car_size=car_dynamics.SIZE,
+    wheel_white=car_dynamics.WHEEL_WHITE,
+)
 CHECKPOINTS = 12
 
 
@@ -426,10 +444,8 @@ class CarRacing(ClassicControlEnv):
     # -- rendering --------------------------------------------------------------------------
 
     def _draw(self, mode: str) -> np.ndarray:
-        from palaestra.rendering import car_racing as scene
-
         assert self.car is not None
-        return scene.render(self, mode)
+        return scene.render(self, mode, _DIMS)
 
     def _frame(self) -> np.ndarray:
         if self.car is None:

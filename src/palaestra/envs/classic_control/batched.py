@@ -20,7 +20,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from palaestra.envs.classic_control._common import check_box_batch, check_discrete_batch
+from palaestra.envs.action_checks import check_box_batch, check_discrete_batch
 from palaestra.envs.classic_control._draws import PreDrawn
 from palaestra.envs.classic_control._ops import ARRAY
 from palaestra.error import ResetNeeded
@@ -31,6 +31,8 @@ from palaestra.utils.seeding import np_random
 class BatchedEnv:
     """``num_envs`` envs of one kind, as arrays. Subclasses fill in the class variables."""
 
+    # A registry entry's vector_entry_point may name the class: make_vec runs it natively.
+    is_native_batch: ClassVar[bool] = True
     state_dim: ClassVar[int]
     reset_draws: ClassVar[int]  # uniform doubles one reset consumes
     # Whether an observation is a function of the float64 state alone, so one pass over all

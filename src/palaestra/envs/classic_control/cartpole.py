@@ -15,10 +15,10 @@ from typing import Any
 import numpy as np
 
 from palaestra import error, logger
+from palaestra.envs.action_checks import check_discrete_action
 from palaestra.envs.classic_control._common import (
     RENDER_MODES,
     ClassicControlEnv,
-    check_discrete_action,
     expose_params,
     parse_reset_bounds,
     state_array,

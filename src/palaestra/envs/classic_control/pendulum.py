@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 from palaestra import error
+from palaestra.envs.action_checks import check_box_action
 from palaestra.envs.classic_control._common import (
     RENDER_MODES,
     ClassicControlEnv,
-    check_box_action,
     checked_options,
     expose_params,
     parse_number,

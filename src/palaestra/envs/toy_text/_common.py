@@ -15,7 +15,7 @@ import numpy as np
 
 from palaestra import error, logger
 from palaestra.core import Env
-from palaestra.envs.classic_control._common import check_discrete_batch
+from palaestra.envs.action_checks import check_discrete_batch
 from palaestra.envs.toy_text._streams import RowStreams
 from palaestra.spaces import Discrete, Space
 from palaestra.utils.seeding import np_random
@@ -80,6 +80,8 @@ class ToyTextBatch:
     of the last reset or step, one array per key (or None when every info is empty).
     """
 
+    # A registry entry's vector_entry_point may name the class: make_vec runs it natively.
+    is_native_batch: ClassVar[bool] = True
     single_observation_space: Space[Any]
     single_action_space: Discrete
     streams_class: ClassVar[type[RowStreams]] = RowStreams

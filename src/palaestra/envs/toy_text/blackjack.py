@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from palaestra import error
-from palaestra.envs.classic_control._common import check_discrete_action
+from palaestra.envs.action_checks import check_discrete_action
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.toy_text._common import ToyTextBatch, ToyTextEnv
 from palaestra.envs.toy_text._streams import HalfWordStreams

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, Transitions, TransitionTable
+from palaestra.error import ResetNeeded
 
 UP, RIGHT, DOWN, LEFT = 0, 1, 2, 3
 _MOVES = {UP: (-1, 0), RIGHT: (0, 1), DOWN: (1, 0), LEFT: (0, -1)}
@@ -89,8 +90,6 @@ class CliffWalkingEnv(TabularEnv):
         from palaestra.rendering.toy_text import render_cliff_walking
 
         if self.s is None:
-            from palaestra.error import ResetNeeded
-
             raise ResetNeeded("Call reset before render.")
         return render_cliff_walking(self.s)
 

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, Transitions, TransitionTable
+from palaestra.error import ResetNeeded
 from palaestra.utils.colorize import colorize
 from palaestra.utils.seeding import np_random
 
@@ -233,8 +234,6 @@ class FrozenLakeEnv(TabularEnv):
         from palaestra.rendering.toy_text import render_frozen_lake
 
         if self.s is None:
-            from palaestra.error import ResetNeeded
-
             raise ResetNeeded("Call reset before render.")
         return render_frozen_lake(self.desc, self.s, self.lastaction)
 

@@ -22,9 +22,10 @@ from typing import Any
 import numpy as np
 
 from palaestra import error
-from palaestra.envs.classic_control._common import check_discrete_action
+from palaestra.envs.action_checks import check_discrete_action
 from palaestra.envs.toy_text._common import ToyTextBatch, ToyTextEnv
 from palaestra.spaces import Discrete
+from palaestra.utils.stacked_infos import StackedInfos
 
 Transitions = dict[int, dict[int, list[tuple[float, int, Any, bool]]]]
 
@@ -152,10 +153,6 @@ class TabularBatch(ToyTextBatch):
 
     def __init__(self, num_envs: int, table: TransitionTable) -> None:
         super().__init__(num_envs)
-        # Imported here: a single env (make) should not load the vector package.
-        from palaestra.vector.stacked_infos import StackedInfos
-
-        self._stacked = StackedInfos
         self.table = table
         self.single_observation_space = Discrete(table.n_states)
         self.single_action_space = Discrete(table.n_actions)
@@ -182,7 +179,7 @@ class TabularBatch(ToyTextBatch):
 
     def _reset_infos(self, rows: np.ndarray, mask: np.ndarray | None) -> Any:
         prob = np.full(self.num_envs, self.reset_prob)  # int64 for int 1, as Gymnasium stacks
-        return self._stacked(self._info_arrays(prob), self.num_envs, mask)
+        return StackedInfos(self._info_arrays(prob), self.num_envs, mask)
 
     def _info_arrays(self, prob: np.ndarray) -> dict[str, np.ndarray]:
         return {"prob": prob}
@@ -216,11 +213,11 @@ class TabularBatch(ToyTextBatch):
         return new
 
     def _step_infos(self, rows: np.ndarray) -> Any:
-        return self._stacked(self._info_arrays(self._prob.copy()), self.num_envs)
+        return StackedInfos(self._info_arrays(self._prob.copy()), self.num_envs)
 
     def _merge_infos(self, step_infos: Any, reset_infos: Any, resetting: np.ndarray) -> Any:
         # A float array: a reset row's int 1 reads 1.0 beside the step rows' probabilities
         # (Gymnasium's stacking would take the dtype of whichever row comes first).
         prob = step_infos.arrays["prob"]
         prob[resetting] = self.reset_prob
-        return self._stacked(self._info_arrays(prob), self.num_envs)
+        return StackedInfos(self._info_arrays(prob), self.num_envs)

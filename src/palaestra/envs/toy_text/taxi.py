@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, Transitions, TransitionTable
+from palaestra.error import ResetNeeded
 from palaestra.utils.colorize import colorize
 
 MAP = [
@@ -246,8 +247,6 @@ class TaxiEnv(TabularEnv):
         from palaestra.rendering.toy_text import render_taxi
 
         if self.s is None:
-            from palaestra.error import ResetNeeded
-
             raise ResetNeeded("Call reset before render.")
         if self.lastaction is not None and self.lastaction < 4:
             self.taxi_orientation = self.lastaction  # the taxi faces its last move

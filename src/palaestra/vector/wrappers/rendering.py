@@ -23,6 +23,7 @@ import numpy as np
 from palaestra import logger
 from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.vector.vector_env import AutoresetMode, VectorEnv, VectorWrapper
+from palaestra.wrappers.resize import resize_area
 
 __all__ = ["HumanRendering", "RecordVideo"]
 
@@ -30,8 +31,6 @@ __all__ = ["HumanRendering", "RecordVideo"]
 def _scale(frame: np.ndarray, height: int, width: int) -> np.ndarray:
     """``frame`` (H, W, C) resized to (height, width): area average when shrinking (no
     OpenCV), nearest pixel otherwise."""
-    from palaestra.wrappers.resize import resize_area
-
     h, w = frame.shape[:2]
     if (height, width) == (h, w):
         return frame

@@ -20,6 +20,7 @@ from palaestra.vector.vector_env import (
     VectorObservationWrapper,
     VectorRewardWrapper,
 )
+from palaestra.wrappers.transform_reward import ClipReward as SingleClip
 
 
 class TransformObservation(VectorObservationWrapper[Any, Any, np.ndarray]):
@@ -161,8 +162,6 @@ class ClipReward(VectorRewardWrapper[Any, Any, np.ndarray]):
         min_reward: float | np.ndarray | None = None,
         max_reward: float | np.ndarray | None = None,
     ) -> None:
-        from palaestra.wrappers.transform_reward import ClipReward as SingleClip
-
         super().__init__(env)
         SingleClip(Env(), min_reward=min_reward, max_reward=max_reward)  # same bound checks
         self.min_reward, self.max_reward = min_reward, max_reward

@@ -1,10 +1,12 @@
 """The ALE engine: ale-py's ``ALEVectorInterface`` steps N preprocessed games on C++ threads.
+It is the Atari family's native batch, so it lives with the Atari envs (``vector`` never
+imports the env packages).
 
 The interface does the Atari preprocessing itself (frame skip with max-pooling, grayscale,
 area resize, frame stack, no-op and FIRE resets, reward clipping, episode frame limit) and
 returns batched arrays. This engine adds what the :class:`~palaestra.vector.engine.Engine`
 protocol asks for: batch-level checks (an out-of-range action would hang ALE's worker thread
-for good), infos kept as arrays (:class:`~palaestra.vector.stacked_infos.StackedInfos`) and
+for good), infos kept as arrays (:class:`~palaestra.utils.stacked_infos.StackedInfos`) and
 seeds checked against ALE's range.
 
 The interface always runs in ALE's own NEXT_STEP mode, which resets exactly the rows the
@@ -27,8 +29,8 @@ from palaestra.envs.atari.checks import import_ale_py
 from palaestra.envs.atari.games import check_game
 from palaestra.spaces import Box, Discrete, Space
 from palaestra.spaces.batching import batch_space
+from palaestra.utils.stacked_infos import StackedInfos
 from palaestra.vector.engine import Rows, StepResult
-from palaestra.vector.stacked_infos import StackedInfos
 
 MAX_SEED = 2**31 - 1  # ALE takes C ints; negative means "keep the current seed"
 
