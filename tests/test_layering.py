@@ -43,9 +43,6 @@ KNOWN_CIRCLES: list[list[str]] = [
         "palaestra.wrappers",
         "palaestra.wrappers.vector",
     ],
-    # runs/ (the run API's layout, not the env side): settings.py imports folder.py inside a
-    # function, folder.py imports settings.py at the top.
-    ["palaestra.runs.folder", "palaestra.runs.settings"],
 ]
 
 # package -> packages (or modules) it must never reach; "spaces" is checked by an allow-list.
