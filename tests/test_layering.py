@@ -32,8 +32,6 @@ KNOWN_CIRCLES: list[list[str]] = [
     # Gymnasium's path `palaestra.wrappers.vector` (a lazy attribute of the wrappers package)
     # re-exports the vector wrappers, which are built on the single-env wrappers.
     [
-        "palaestra.vector",
-        "palaestra.vector.native",
         "palaestra.vector.wrappers",
         "palaestra.vector.wrappers.array_conversion",
         "palaestra.vector.wrappers.normalize",

@@ -169,3 +169,11 @@ def test_render_mode_falls_back_to_real_envs():
     envs.reset(seed=0)
     frames = envs.render()
     assert len(frames) == 2 and frames[0].shape == (400, 600, 3)
+
+
+def test_a_native_batch_refuses_a_render_mode():
+    from palaestra.envs.classic_control.cartpole import CartPoleBatch, CartPoleEnv
+    from palaestra.vector.native import batched_vector_env
+
+    with pytest.raises(ValueError, match=r"native batches do not render \(render_mode='human'\)"):
+        batched_vector_env(CartPoleBatch, CartPoleEnv, 2, render_mode="human")
