@@ -10,7 +10,9 @@ The layers, bottom up (a package imports only from the packages below it):
 - ``spaces`` imports only ``palaestra.error``, ``palaestra.logger`` and ``palaestra.utils``'s
   basics (``utils.seeding``; the ``utils`` package ``__init__`` that importing it runs);
 - ``vector`` never imports the env packages (``palaestra.envs``): a registry entry hands it the
-  classes of a native batch;
+  classes of a native batch; nor the wrappers (``palaestra.wrappers``): the vector wrappers,
+  built on the single-env ones, live in ``palaestra.wrappers.vector`` (Gymnasium's layout), and
+  ``make_vec`` wraps the real envs it builds for a native batch that would have to render;
 - ``envs`` never imports ``compat`` (which fills the registry's ``"gymnasium:"`` prefix),
   ``algos``, ``runs`` or ``cli``;
 - ``algos`` never imports ``runs`` or ``cli``.
@@ -28,7 +30,7 @@ from tests.layout.import_graph import Edge, all_edges, circles
 
 # package -> packages (or modules) it must never reach; "spaces" is checked by an allow-list.
 FORBIDDEN: dict[str, tuple[str, ...]] = {
-    "palaestra.vector": ("palaestra.envs",),
+    "palaestra.vector": ("palaestra.envs", "palaestra.wrappers"),
     "palaestra.envs": ("palaestra.compat", "palaestra.algos", "palaestra.runs", "palaestra.cli"),
     "palaestra.algos": ("palaestra.runs", "palaestra.cli"),
 }
