@@ -411,8 +411,12 @@ def _rendering_envs(
     """What ``make_vec`` builds, with a ``render_mode``, for an id whose vector entry point is a
     native batch: batches do not draw, so the envs run as real envs (with the wrappers
     ``make()`` adds) in a ``SyncVectorEnv``."""
-    from palaestra import vector  # lazy: import speed (worker machinery, ~30 ms)
-    from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
+    from palaestra import vector  # lazy: import-time — multiprocessing, ~30 ms
+    from palaestra.wrappers.common import (  # lazy: import-time — passive env checker
+        OrderEnforcing,
+        PassiveEnvChecker,
+        TimeLimit,
+    )
 
     def one() -> Env[Any, Any]:
         env = OrderEnforcing(PassiveEnvChecker(env_cls(render_mode=render_mode, **env_kwargs)))

@@ -66,7 +66,7 @@ LAZY_NAMES = ("ArrayConversion", "NumpyToTorch")
 
 def __getattr__(name: str) -> Any:  # PEP 562 module attribute
     if name in LAZY_NAMES:
-        from palaestra.wrappers.vector import array_conversion  # lazy: import speed (torch)
+        from palaestra.wrappers.vector import array_conversion  # lazy: import-time — torch
 
         return getattr(array_conversion, name)
     raise AttributeError(f"module 'palaestra.wrappers.vector' has no attribute {name!r}")
