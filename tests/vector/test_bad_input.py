@@ -7,6 +7,7 @@ import pytest
 
 import palaestra as gym
 from palaestra.error import ClosedEnvironmentError, InvalidAction, ResetNeeded
+from palaestra.vector import AutoresetMode
 
 MODES = ["vector_entry_point", "sync", "async"]
 
@@ -156,6 +157,23 @@ def test_render_mode_falls_back_to_real_envs():
 
     envs = gym.make_vec("CartPole-v1", 2, render_mode="rgb_array")
     assert isinstance(envs, SyncVectorEnv)
+    # the wrappers make() adds, and the spec's step limit
+    assert (
+        str(envs.envs[0]) == "<TimeLimit<OrderEnforcing<PassiveEnvChecker<CartPoleEnv instance>>>>"
+    )
+    assert envs.envs[0]._max_episode_steps == 500
+    same_step = gym.make_vec(
+        "CartPole-v1", 2, render_mode="rgb_array", vector_kwargs={"autoreset_mode": "SameStep"}
+    )
+    assert same_step.metadata["autoreset_mode"] is AutoresetMode.SAME_STEP
     envs.reset(seed=0)
     frames = envs.render()
     assert len(frames) == 2 and frames[0].shape == (400, 600, 3)
+
+
+def test_a_native_batch_refuses_a_render_mode():
+    from palaestra.envs.classic_control.cartpole import CartPoleBatch, CartPoleEnv
+    from palaestra.vector.native import batched_vector_env
+
+    with pytest.raises(ValueError, match=r"native batches do not render \(render_mode='human'\)"):
+        batched_vector_env(CartPoleBatch, CartPoleEnv, 2, render_mode="human")

@@ -9,7 +9,7 @@ import sys
 
 def test_no_torch_gymnasium_or_sb3_on_import():
     code = (
-        "import sys, palaestra.vector, palaestra.vector.wrappers, palaestra.vec_env;"
+        "import sys, palaestra.vector, palaestra.wrappers.vector, palaestra.vec_env;"
         "print(sorted(m for m in ('torch', 'gymnasium', 'stable_baselines3') if m in sys.modules))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -19,8 +19,8 @@ import pytest
 import palaestra as gym
 from palaestra.utils import video
 from palaestra.vector import AutoresetMode, SyncVectorEnv
-from palaestra.vector.wrappers.rendering import _scale
 from palaestra.wrappers.vector import HumanRendering, RecordVideo
+from palaestra.wrappers.vector.rendering import _scale
 
 gymnasium = pytest.importorskip("gymnasium")
 pygame = pytest.importorskip("pygame")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import palaestra as gym
-import palaestra.vector.wrappers as vw
+import palaestra.wrappers.vector as vw
 from palaestra.error import InvalidBound
 from palaestra.vector import SyncVectorEnv
 

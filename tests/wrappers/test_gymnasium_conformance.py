@@ -22,7 +22,8 @@ from palaestra.wrappers import FilterObservation, StickyAction
 def test_every_vector_wrapper_imports_from_the_gymnasium_path(name):
     namespace: dict = {}
     exec(f"from palaestra.wrappers.vector import {name}", namespace)  # as users write it
-    assert namespace[name] is getattr(importlib.import_module("palaestra.vector.wrappers"), name)
+    assert namespace[name] is getattr(palaestra.wrappers.vector, name)
+    assert namespace[name].__module__.startswith("palaestra.wrappers.vector.")  # one definition
     assert palaestra.wrappers.vector is importlib.import_module("palaestra.wrappers.vector")
 
 

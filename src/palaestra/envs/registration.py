@@ -386,15 +386,44 @@ def _make_with_vector_entry_point(
             f"Cannot create vectorized environment for {id} because it doesn't have a vector "
             "entry point defined."
         )
-    if native is not None:
+    if native is not None and env_kwargs.get("render_mode") is not None:
+        env_creator: Callable[..., Any] = functools.partial(_rendering_envs, native[1])
+    elif native is not None:
         from palaestra.vector.native import batched_vector_env  # lazy: import speed
 
-        env_creator: Callable[..., Any] = functools.partial(batched_vector_env, *native)
+        env_creator = functools.partial(batched_vector_env, *native)
     else:
         env_creator = load_env_creator(entry) if isinstance(entry, str) else entry
     if env_spec.max_episode_steps is not None and "max_episode_steps" not in env_kwargs:
         env_kwargs["max_episode_steps"] = env_spec.max_episode_steps
     return env_creator(num_envs=num_envs, **env_kwargs)
+
+
+def _rendering_envs(
+    env_cls: Any,
+    num_envs: int = 1,
+    max_episode_steps: int | None = None,
+    render_mode: str | None = None,
+    copy: bool = True,
+    autoreset_mode: Any = None,  # None: the vector env's default (AutoresetMode.NEXT_STEP)
+    **env_kwargs: Any,
+) -> Any:
+    """What ``make_vec`` builds, with a ``render_mode``, for an id whose vector entry point is a
+    native batch: batches do not draw, so the envs run as real envs (with the wrappers
+    ``make()`` adds) in a ``SyncVectorEnv``."""
+    from palaestra import vector  # lazy: import-time — multiprocessing, ~30 ms
+    from palaestra.wrappers.common import (  # lazy: import-time — passive env checker
+        OrderEnforcing,
+        PassiveEnvChecker,
+        TimeLimit,
+    )
+
+    def one() -> Env[Any, Any]:
+        env = OrderEnforcing(PassiveEnvChecker(env_cls(render_mode=render_mode, **env_kwargs)))
+        return env if max_episode_steps is None else TimeLimit(env, max_episode_steps)
+
+    autoreset_mode = autoreset_mode or vector.AutoresetMode.NEXT_STEP
+    return vector.SyncVectorEnv([one] * num_envs, copy=copy, autoreset_mode=autoreset_mode)
 
 
 def _check_autoreset_metadata(env: Any) -> None:

@@ -3,8 +3,8 @@
 ``make_vec("CartPole-v1", n)`` returns one by default: the id's ``vector_entry_point`` names its
 native batch (``CartPoleBatch``) and :func:`batched_vector_env` runs it. It steps all ``n`` envs
 with one array op each and matches ``n`` single envs row for row: row i of ``reset(seed=s)`` is
-the env ``make(id)`` reset with ``seed=s + i``. Batches do not draw, so with a ``render_mode``
-:func:`batched_vector_env` returns a ``SyncVectorEnv`` of real envs instead. This module never
+the env ``make(id)`` reset with ``seed=s + i``. Batches do not draw: with a ``render_mode``
+``make_vec`` builds a ``SyncVectorEnv`` of real envs instead. This module never
 imports the env packages: the registry hands it the classes.
 
 The toy-text batches (FrozenLake, CliffWalking, Taxi, Blackjack) plug in the same way; they
@@ -17,9 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from palaestra.vector.engine_env import EngineVectorEnv
 from palaestra.vector.native_engine import NativeEngine
-from palaestra.vector.sync_vector_env import SyncVectorEnv
 from palaestra.vector.vector_env import AutoresetMode
-from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
 
 if TYPE_CHECKING:
     from palaestra.vector.native_engine import NativeBatch
@@ -61,33 +59,17 @@ def batched_vector_env(
     copy: bool = True,
     autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
     **kwargs: Any,
-) -> EngineVectorEnv:
+) -> BatchedVectorEnv:
     """``num_envs`` rows of ``batch_cls`` as a vector env (what ``make_vec`` builds for an id
     whose ``vector_entry_point`` names a native batch); ``env_cls`` is the id's single env,
-    whose metadata the vector env reports and which renders when there is a ``render_mode``.
-    ``kwargs`` go to the batch (the env's own arguments)."""
+    whose metadata the vector env reports. ``kwargs`` go to the batch (the env's own arguments);
+    a ``render_mode`` is refused (``make_vec`` builds real envs for one)."""
     if render_mode is not None:
-        # Native batches do not draw: envs that must render run as real envs, in a loop.
-        vector_kwargs = {"copy": copy, "autoreset_mode": autoreset_mode}
-        return _rendering_envs(
-            env_cls, num_envs, max_episode_steps, render_mode, vector_kwargs, kwargs
+        raise ValueError(
+            f"native batches do not render (render_mode={render_mode!r}): "
+            "make_vec builds real envs for a render_mode"
         )
     batch = batch_cls(num_envs, **kwargs)
     return BatchedVectorEnv(
         batch, max_episode_steps, copy, autoreset_mode, metadata=env_cls.metadata
     )
-
-
-def _rendering_envs(
-    env_cls: Any,
-    num_envs: int,
-    max_episode_steps: int | None,
-    render_mode: str,
-    vector_kwargs: dict[str, Any],
-    env_kwargs: dict[str, Any],
-) -> EngineVectorEnv:
-    def one() -> Any:
-        env = OrderEnforcing(PassiveEnvChecker(env_cls(render_mode=render_mode, **env_kwargs)))
-        return env if max_episode_steps is None else TimeLimit(env, max_episode_steps)
-
-    return SyncVectorEnv([one] * num_envs, **vector_kwargs)

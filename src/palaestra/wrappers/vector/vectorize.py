@@ -13,11 +13,11 @@ from typing import Any
 import numpy as np
 
 from palaestra.vector.vector_env import VectorEnv
-from palaestra.vector.wrappers.transforms import (
+from palaestra.wrappers import resize, transform_action, transform_observation
+from palaestra.wrappers.vector.transforms import (
     VectorizeTransformAction,
     VectorizeTransformObservation,
 )
-from palaestra.wrappers import resize, transform_action, transform_observation
 
 __all__ = [
     "ClipAction",

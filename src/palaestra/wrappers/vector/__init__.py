@@ -1,14 +1,18 @@
-"""Wrappers for vector environments (``gymnasium.wrappers.vector``).
+"""Wrappers for vector environments, at Gymnasium's path (``gymnasium.wrappers.vector``).
 
-``ArrayConversion`` and ``NumpyToTorch`` are loaded on first use (they may import torch).
+``from palaestra.wrappers.vector import DictInfoToList`` works as the Gymnasium import does, and
+``palaestra.wrappers.vector`` is an attribute of ``palaestra.wrappers`` read on first use. They
+sit under ``wrappers/`` because most are built on the single-env wrappers; ``palaestra.vector``
+(the vector envs) imports none of them. ``ArrayConversion`` and ``NumpyToTorch`` are loaded on
+first use (they may import torch).
 """
 
 from typing import Any
 
-from palaestra.vector.wrappers.episode_stats import DictInfoToList, RecordEpisodeStatistics
-from palaestra.vector.wrappers.normalize import NormalizeObservation, NormalizeReward
-from palaestra.vector.wrappers.rendering import HumanRendering, RecordVideo
-from palaestra.vector.wrappers.transforms import (
+from palaestra.wrappers.vector.episode_stats import DictInfoToList, RecordEpisodeStatistics
+from palaestra.wrappers.vector.normalize import NormalizeObservation, NormalizeReward
+from palaestra.wrappers.vector.rendering import HumanRendering, RecordVideo
+from palaestra.wrappers.vector.transforms import (
     ClipReward,
     TransformAction,
     TransformObservation,
@@ -17,7 +21,7 @@ from palaestra.vector.wrappers.transforms import (
     VectorizeTransformObservation,
     VectorizeTransformReward,
 )
-from palaestra.vector.wrappers.vectorize import (
+from palaestra.wrappers.vector.vectorize import (
     ClipAction,
     DtypeObservation,
     FilterObservation,
@@ -60,9 +64,9 @@ __all__ = [
 LAZY_NAMES = ("ArrayConversion", "NumpyToTorch")
 
 
-def __getattr__(name: str) -> Any:  # PEP 562: keep torch out of `import palaestra.vector`
+def __getattr__(name: str) -> Any:  # PEP 562 module attribute
     if name in LAZY_NAMES:
-        from palaestra.vector.wrappers import array_conversion
+        from palaestra.wrappers.vector import array_conversion  # lazy: import-time — torch
 
         return getattr(array_conversion, name)
-    raise AttributeError(f"module 'palaestra.vector.wrappers' has no attribute {name!r}")
+    raise AttributeError(f"module 'palaestra.wrappers.vector' has no attribute {name!r}")
