@@ -179,7 +179,11 @@ def make(
     >>> make("CartPole-v1", max_episode_steps=3, disable_env_checker=True).spec.max_episode_steps
     3
     """
-    from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
+    from palaestra.wrappers.common import (  # lazy: import-time — passive env checker
+        OrderEnforcing,
+        PassiveEnvChecker,
+        TimeLimit,
+    )
 
     foreign = foreign_registry(id)  # "gymnasium:<id>": Gymnasium's, through palaestra.compat
     if foreign is not None:
@@ -234,7 +238,7 @@ def make(
 
     if render_wrapper is not None:
         # Written by the rendering owner; imported only when a render mode needs it.
-        from palaestra.wrappers import rendering
+        from palaestra.wrappers import rendering  # lazy: import-time — render wrappers
 
         env = getattr(rendering, render_wrapper)(env)
     return env
