@@ -139,7 +139,7 @@ def make_vec_gymnasium(
 ) -> Any:
     """``num_envs`` Gymnasium envs in a palaestra ``SyncVectorEnv`` (default) or
     ``AsyncVectorEnv``; arguments as for ``palaestra.make_vec``."""
-    from palaestra import vector  # lazy: import speed (import palaestra loads this module)
+    from palaestra import vector  # lazy: import-time — multiprocessing
 
     mode = VectorizeMode(vectorization_mode or VectorizeMode.SYNC)
     if mode is VectorizeMode.VECTOR_ENTRY_POINT:

@@ -331,7 +331,7 @@ def make_vec(
                 f"Cannot create vectorized environment for {env_spec.id} because it doesn't have "
                 "an entry point defined."
             )
-        from palaestra import vector  # lazy: import speed (worker machinery, ~30 ms)
+        from palaestra import vector  # lazy: import-time — multiprocessing, ~30 ms
 
         def create_single_env() -> Env[Any, Any]:
             single_env = make(env_spec, **env_kwargs.copy())
@@ -391,7 +391,9 @@ def _make_with_vector_entry_point(
             "entry point defined."
         )
     if native is not None:
-        from palaestra.vector.native import batched_vector_env  # lazy: import speed
+        from palaestra.vector.native import (  # lazy: import-time — multiprocessing
+            batched_vector_env,
+        )
 
         env_creator: Callable[..., Any] = functools.partial(batched_vector_env, *native)
     else:
@@ -403,7 +405,7 @@ def _make_with_vector_entry_point(
 
 def _check_autoreset_metadata(env: Any) -> None:
     """Warn, as Gymnasium does, when a vector env does not declare its autoreset mode."""
-    from palaestra.vector import AutoresetMode  # lazy: import speed
+    from palaestra.vector import AutoresetMode  # lazy: import-time — multiprocessing
 
     if "autoreset_mode" not in env.metadata:
         logger.warn(
