@@ -6,9 +6,18 @@ import argparse
 import sys
 from typing import Any
 
+import numpy as np
+
 from palaestra.runs.errors import RunError
 
-__all__ = ["CLIError", "add_address", "add_allow_import", "add_timesteps", "eprint"]
+__all__ = [
+    "CLIError",
+    "add_address",
+    "add_allow_import",
+    "add_timesteps",
+    "eprint",
+    "format_duration",
+]
 
 
 class CLIError(RunError):
@@ -17,6 +26,14 @@ class CLIError(RunError):
     def line(self) -> str:
         """The single line printed on stderr."""
         return "palaestra: error: " + super().line()
+
+
+def format_duration(seconds: float) -> str:
+    """``3725.2`` -> ``"1:02:05"``."""
+    if not np.isfinite(seconds):
+        return "?"
+    whole = round(seconds)
+    return f"{whole // 3600}:{whole % 3600 // 60:02d}:{whole % 60:02d}"
 
 
 def eprint(*parts: Any) -> None:

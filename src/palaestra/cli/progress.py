@@ -12,18 +12,11 @@ from typing import Any
 import numpy as np
 
 from palaestra.algos.common.callbacks import BaseCallback
+from palaestra.cli.common import format_duration
 
 __all__ = ["GracefulStop", "LiveProgress", "format_duration"]
 
 LINE_INTERVAL_S = 2.0  # seconds between two plain progress lines
-
-
-def format_duration(seconds: float) -> str:
-    """``3725.2`` -> ``"1:02:05"``."""
-    if not np.isfinite(seconds):
-        return "?"
-    whole = round(seconds)
-    return f"{whole // 3600}:{whole % 3600 // 60:02d}:{whole % 60:02d}"
 
 
 class LiveProgress(BaseCallback):

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.cli.common import eprint
+from palaestra.cli.common import eprint, format_duration
 from palaestra.cli.evaluate import GAMES_NOTE, summary_lines
 from palaestra.error import DependencyNotInstalled
 from palaestra.runs import evaluate_run
@@ -35,8 +35,6 @@ __all__ = ["print_summary"]
 def print_summary(eval_episodes: int, result: Any) -> None:
     """Steps, wall time, fps, the recent training return, a deterministic evaluation, the
     learning curve, and the list of files written (``result``: a ``TrainResult``)."""
-    from palaestra.cli.progress import format_duration  # lazy: import-time — torch
-
     model, run_dir, algo = result.model, result.run_dir, result.spec.algo
     steps, seconds, env_id = result.session_steps, result.session_seconds, result.spec.env_id
     written = [CONFIG_FILE, "progress.csv", EPISODES_FILE, MODEL_FILE]

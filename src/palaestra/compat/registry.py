@@ -37,7 +37,7 @@ def make_gymnasium(
         import gymnasium
     except ImportError as exc:
         raise gymnasium_missing(f"making {id if isinstance(id, str) else id.id!r}") from exc
-    from palaestra.compat.adapters import from_gymnasium
+    from palaestra.compat.adapters import from_gymnasium  # lazy: optional-dep — gymnasium
 
     spec = id if isinstance(id, EnvSpec) else None
     gym_id = (spec.id if spec is not None else str(id))[len(GYMNASIUM_PREFIX) :]
@@ -82,7 +82,7 @@ def gymnasium_spec(id: str) -> EnvSpec:
         import gymnasium
     except ImportError as exc:
         raise gymnasium_missing(f"looking up {id!r}") from exc
-    from palaestra.compat.adapters import _palaestra_spec
+    from palaestra.compat.adapters import _palaestra_spec  # lazy: optional-dep — gymnasium
 
     gym_id = id[len(GYMNASIUM_PREFIX) :]
     with _registry_errors(gymnasium, gym_id):
@@ -139,7 +139,7 @@ def make_vec_gymnasium(
 ) -> Any:
     """``num_envs`` Gymnasium envs in a palaestra ``SyncVectorEnv`` (default) or
     ``AsyncVectorEnv``; arguments as for ``palaestra.make_vec``."""
-    from palaestra import vector  # lazy: import speed (import palaestra loads this module)
+    from palaestra import vector  # lazy: import-time — multiprocessing
 
     mode = VectorizeMode(vectorization_mode or VectorizeMode.SYNC)
     if mode is VectorizeMode.VECTOR_ENTRY_POINT:

@@ -117,12 +117,12 @@ def from_sb3(
 def _palaestra_env(env: Any) -> Any:
     if env is None or isinstance(env, (str, Env)):
         return env
-    from palaestra.vec_env import VecEnv
+    from palaestra.vec_env import VecEnv  # lazy: import-time — cloudpickle
 
     if isinstance(env, VecEnv):
         return env
     try:
-        from palaestra.compat.adapters import from_gymnasium
+        from palaestra.compat.adapters import from_gymnasium  # lazy: optional-dep — gymnasium
 
         return from_gymnasium(env)
     except (ImportError, TypeError) as exc:

@@ -179,7 +179,11 @@ def make(
     >>> make("CartPole-v1", max_episode_steps=3, disable_env_checker=True).spec.max_episode_steps
     3
     """
-    from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
+    from palaestra.wrappers.common import (  # lazy: import-time — passive env checker
+        OrderEnforcing,
+        PassiveEnvChecker,
+        TimeLimit,
+    )
 
     foreign = foreign_registry(id)  # "gymnasium:<id>": Gymnasium's, through palaestra.compat
     if foreign is not None:
@@ -234,7 +238,7 @@ def make(
 
     if render_wrapper is not None:
         # Written by the rendering owner; imported only when a render mode needs it.
-        from palaestra.wrappers import rendering
+        from palaestra.wrappers import rendering  # lazy: import-time — render wrappers
 
         env = getattr(rendering, render_wrapper)(env)
     return env
@@ -327,7 +331,7 @@ def make_vec(
                 f"Cannot create vectorized environment for {env_spec.id} because it doesn't have "
                 "an entry point defined."
             )
-        from palaestra import vector  # lazy: import speed (worker machinery, ~30 ms)
+        from palaestra import vector  # lazy: import-time — multiprocessing, ~30 ms
 
         def create_single_env() -> Env[Any, Any]:
             single_env = make(env_spec, **env_kwargs.copy())
@@ -389,7 +393,9 @@ def _make_with_vector_entry_point(
     if native is not None and env_kwargs.get("render_mode") is not None:
         env_creator: Callable[..., Any] = functools.partial(_rendering_envs, native[1])
     elif native is not None:
-        from palaestra.vector.native import batched_vector_env  # lazy: import speed
+        from palaestra.vector.native import (  # lazy: import-time — multiprocessing
+            batched_vector_env,
+        )
 
         env_creator = functools.partial(batched_vector_env, *native)
     else:
@@ -428,7 +434,7 @@ def _rendering_envs(
 
 def _check_autoreset_metadata(env: Any) -> None:
     """Warn, as Gymnasium does, when a vector env does not declare its autoreset mode."""
-    from palaestra.vector import AutoresetMode  # lazy: import speed
+    from palaestra.vector import AutoresetMode  # lazy: import-time — multiprocessing
 
     if "autoreset_mode" not in env.metadata:
         logger.warn(

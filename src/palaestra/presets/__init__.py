@@ -170,7 +170,7 @@ def merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
 def resolve(hyperparams: dict[str, Any]) -> dict[str, Any]:
     """Constructor kwargs with ``"lin_<x>"`` schedules, activation names and action-noise
     mappings turned into objects."""
-    from palaestra.algos.common.schedules import LinearSchedule
+    from palaestra.algos.common.schedules import LinearSchedule  # lazy: import-time — torch
 
     out: dict[str, Any] = {}
     for key, value in hyperparams.items():
@@ -209,7 +209,10 @@ def _resolve_policy_kwargs(policy_kwargs: dict[str, Any]) -> dict[str, Any]:
 
 
 def _resolve_action_noise(value: Any) -> Any:
-    from palaestra.algos.common.action_noise import ActionNoise, noise_from_json
+    from palaestra.algos.common.action_noise import (  # lazy: import-time — torch
+        ActionNoise,
+        noise_from_json,
+    )
 
     if isinstance(value, ActionNoise):  # a --set from Python code, already an object
         return value

@@ -94,7 +94,7 @@ def play(frames: Iterable[np.ndarray], fps: float = 30) -> Any:
 
     Return it as the last expression of a cell (or pass it to ``display``) to show it.
     """
-    from palaestra.utils.video import encode_gif
+    from palaestra.utils.video import encode_gif  # lazy: import-time — utils.video
 
     display = _ipython_display()
     data = base64.b64encode(encode_gif(frames, fps)).decode("ascii")

@@ -26,6 +26,7 @@ import numpy as np
 
 from palaestra import logger
 from palaestra.error import DependencyNotInstalled, dependency_not_installed
+from palaestra.rendering.notebook import LiveView, in_notebook
 
 __all__ = ["BACKENDS", "HumanWindow", "choose_backend"]
 
@@ -42,8 +43,6 @@ def _importable(name: str) -> bool:
 
 def choose_backend() -> str:
     """The backend a new window gets here; ``DependencyNotInstalled`` if there is none."""
-    from palaestra.rendering.notebook import in_notebook
-
     if in_notebook():
         return "notebook"
     os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
@@ -170,8 +169,6 @@ class HumanWindow:
         if self.backend == "matplotlib":
             self._impl = _MatplotlibFigure(title)
         elif self.backend == "notebook":
-            from palaestra.rendering.notebook import LiveView
-
             self._impl = LiveView()
 
     def show(self, frame: np.ndarray) -> None:

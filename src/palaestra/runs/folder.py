@@ -307,7 +307,7 @@ def check_run_config(
     _check_names(config, source)
     _check_pipeline(config, source)
     if "hyperparams" in config:
-        from palaestra.algos.common.hyperparams import (
+        from palaestra.algos.common.hyperparams import (  # lazy: import-time — torch
             check_run_hyperparams,  # lazy: import-time — torch
         )
 

@@ -50,7 +50,7 @@ def benchmark_step(env: Any, target_duration: float = 5, seed: int | None = None
 def benchmark_vector_step(env: Any, target_duration: float = 5, seed: int | None = None) -> float:
     """Env steps per second of a vector env under random actions (``num_envs`` per call; in
     the NEXT_STEP autoreset mode a step that only resets an env is not counted)."""
-    from palaestra.vector import AutoresetMode
+    from palaestra.vector import AutoresetMode  # lazy: import-time — multiprocessing
 
     env.action_space.seed(seed)
     env.reset(seed=seed)

@@ -19,6 +19,8 @@ import numpy as np
 
 from palaestra.envs.atari.ale_engine import ALESettings, ALEVectorEngine
 from palaestra.envs.atari.games import ENTRY_POINT as _ATARI_ENTRY_POINT
+from palaestra.envs.atari.vector import check_settings, make_atari_engine
+from palaestra.envs.lookup import resolve_id
 from palaestra.vec_env.base import StepReturn
 from palaestra.vec_env.engine_vec_env import EngineVecEnv
 from palaestra.vec_env.monitor import VecMonitor
@@ -33,7 +35,6 @@ def _game_and_defaults(env_id: str) -> tuple[str, dict[str, Any], Any]:
     """``(game, settings from the id's spec, spec)`` for an Atari id; a bare ROM id as is."""
     if "/" not in env_id and "-v" not in env_id:
         return env_id, {}, None
-    from palaestra.envs.lookup import resolve_id
 
     spec = resolve_id(env_id)
     if spec.entry_point != _ATARI_ENTRY_POINT:
@@ -61,8 +62,6 @@ class AtariVecEnv(EngineVecEnv):
     def __init__(
         self, env_id: str, n_envs: int = 1, *, frames_last: bool = False, **settings: Any
     ) -> None:
-        from palaestra.envs.atari.vector import check_settings, make_atari_engine
-
         game, defaults, self.spec = _game_and_defaults(env_id)
         options = check_settings({**defaults, **settings}, "AtariVecEnv")
         super().__init__(make_atari_engine(game, n_envs, options, frames_last), np.float32)
@@ -130,7 +129,6 @@ def atari_wrapper_settings(
     """
     if not isinstance(env_id, str):
         return "env_id is a callable, not an Atari id"
-    from palaestra.envs.lookup import resolve_id
 
     spec = resolve_id(env_id)
     if spec.entry_point != _ATARI_ENTRY_POINT:

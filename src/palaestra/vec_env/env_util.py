@@ -13,12 +13,14 @@ import numpy as np
 from palaestra import error, logger
 from palaestra.core import Env
 from palaestra.envs.atari.ale_engine import vector_interface_available
-from palaestra.envs.registration import native_batch, resolve_id
+from palaestra.envs.registration import make, native_batch, resolve_id
 from palaestra.vec_env.atari_vec_env import AtariGameMonitor, AtariVecEnv, atari_wrapper_settings
 from palaestra.vec_env.base import VecEnv
 from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
 from palaestra.vec_env.monitor import VecMonitor
 from palaestra.vector.native import BatchedVectorEnv, batched_vector_env
+from palaestra.wrappers.atari import AtariWrapper
+from palaestra.wrappers.monitor import Monitor
 
 
 def _native_batch(env_id: Any, env_kwargs: dict[str, Any], n_envs: int) -> BatchedVecEnv | None:
@@ -65,9 +67,6 @@ def make_vec_env(
     >>> vec_env.reset().shape
     (4, 2)
     """
-    from palaestra.envs.registration import make
-    from palaestra.wrappers.monitor import Monitor
-
     if isinstance(n_envs, bool) or not isinstance(n_envs, (int, np.integer)) or n_envs < 1:
         raise error.InvalidNumEnvs(f"make_vec_env: n_envs must be an int >= 1, got {n_envs!r}")
     env_kwargs = env_kwargs or {}
@@ -140,8 +139,6 @@ def _atari_engine(
     recipe itself. When a setting does not map (or ``recipe_only`` names arguments that only
     single envs take, such as ``monitor_dir``), a warning says which and None is returned.
     """
-    from palaestra.envs.lookup import resolve_id
-
     if vec_env_cls is not AtariVecEnv:
         return None
     if recipe_only:
@@ -188,8 +185,6 @@ def make_atari_env(
     >>> vec_env.reset().shape  # doctest: +SKIP
     (2, 84, 84, 1)
     """
-    from palaestra.wrappers.atari import AtariWrapper
-
     given = (monitor_dir, vec_env_kwargs, monitor_kwargs)
     names = ("monitor_dir", "vec_env_kwargs", "monitor_kwargs")
     recipe_only = tuple(name for name, value in zip(names, given) if value)

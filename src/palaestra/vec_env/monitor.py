@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from palaestra.vec_env.base import StepReturn, VecEnv, VecEnvWrapper
+from palaestra.wrappers.monitor import Monitor, ResultsWriter
 
 if TYPE_CHECKING:
     from palaestra.wrappers.monitor import ResultsWriter
@@ -31,7 +32,6 @@ class VecMonitor(VecEnvWrapper):
         self, venv: VecEnv, filename: str | None = None, info_keywords: tuple[str, ...] = ()
     ) -> None:
         super().__init__(venv)
-        from palaestra.wrappers.monitor import Monitor
 
         try:
             monitored = venv.env_is_wrapped(Monitor)[0]
@@ -59,8 +59,6 @@ class VecMonitor(VecEnvWrapper):
             self.results_writer = self._writer(filename)
 
     def _writer(self, filename: str, override_existing: bool = True) -> ResultsWriter:
-        from palaestra.wrappers.monitor import ResultsWriter
-
         spec = getattr(self.venv.unwrapped, "spec", None)
         env_id = None if spec is None else spec.id
         return ResultsWriter(

@@ -47,6 +47,7 @@ from palaestra.algos.common.schedules import Schedule
 from palaestra.algos.common.spaces_util import is_image_space, is_vectorized_observation
 from palaestra.algos.learners import Group, Learner, Net, build_learner
 from palaestra.core import Env, Wrapper
+from palaestra.wrappers.monitor import Monitor
 
 __all__ = ["BaseAlgorithm", "resolve_device", "round_up_steps"]
 
@@ -195,8 +196,11 @@ class BaseAlgorithm:
     # -- environment ---------------------------------------------------------------------------
     def _wrap_env(self, env: Any) -> Any:
         """Id string / Env / VecEnv -> a monitored VecEnv (SB3's ``_wrap_env``)."""
-        from palaestra.vec_env import DummyVecEnv, VecEnv, make_vec_env
-        from palaestra.wrappers.monitor import Monitor
+        from palaestra.vec_env import (  # lazy: import-time — cloudpickle
+            DummyVecEnv,
+            VecEnv,
+            make_vec_env,
+        )
 
         if isinstance(env, str):
             return make_vec_env(env, n_envs=1)  # the native batch of a built-in id, monitored
@@ -224,7 +228,7 @@ class BaseAlgorithm:
     def get_vec_normalize_env(self) -> Any:
         """The ``VecNormalize`` layer of the training env, or None (SB3's
         ``get_vec_normalize_env``: e.g. to save its statistics next to the model)."""
-        from palaestra.vec_env import unwrap_vec_normalize
+        from palaestra.vec_env import unwrap_vec_normalize  # lazy: import-time — cloudpickle
 
         return None if self.env is None else unwrap_vec_normalize(self.env)
 

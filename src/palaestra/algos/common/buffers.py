@@ -77,7 +77,7 @@ def _own_space(space: Any, what: str) -> spaces.Space[Any]:
     if isinstance(space, spaces.Space):
         return space
     if type(space).__module__.startswith("gymnasium"):
-        from palaestra.compat import from_gymnasium_space
+        from palaestra.compat import from_gymnasium_space  # lazy: optional-dep — gymnasium
 
         return from_gymnasium_space(space)
     raise TypeError(f"{what} must be a palaestra or Gymnasium space, got {space!r:.80}")

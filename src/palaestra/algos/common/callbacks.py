@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from palaestra.algos.common import evaluation
 from palaestra.error import InvalidCallback, dependency_not_installed
 from palaestra.utils.atomic_write import atomic_write
 
@@ -401,13 +402,13 @@ class EvalCallback(BaseCallback):
     def _on_step(self) -> bool:
         if self.eval_freq <= 0 or self.n_calls % self.eval_freq != 0:
             return True
-        from palaestra.algos.common.evaluation import evaluate_policy
-
         if _vec_normalize(self.model) is not None:
             # SB3 evaluates with the training env's normalisation statistics: without this the
             # eval env's VecNormalize keeps its own (never updated) ones, and eval rewards,
             # best_model and threshold stopping are wrong.
-            from palaestra.vec_env.util import sync_envs_normalization
+            from palaestra.vec_env.util import (  # lazy: import-time — cloudpickle
+                sync_envs_normalization,
+            )
 
             try:
                 sync_envs_normalization(self.training_env, self.eval_env)
@@ -417,7 +418,7 @@ class EvalCallback(BaseCallback):
                     "VecEnvWrapper layers, VecNormalize included)"
                 ) from e
         self._is_success_buffer = []
-        result: Any = evaluate_policy(
+        result: Any = evaluation.evaluate_policy(
             self.model,
             self.eval_env,
             n_eval_episodes=self.n_eval_episodes,
@@ -489,8 +490,7 @@ def _vec_normalize(model: Any) -> Any:
     getter = getattr(model, "get_vec_normalize_env", None)
     if getter is not None:
         return getter()
-    from palaestra.vec_env.base import VecEnv
-    from palaestra.vec_env.util import unwrap_vec_normalize
+    from palaestra.vec_env import VecEnv, unwrap_vec_normalize  # lazy: import-time — cloudpickle
 
     env = model.get_env()
     return unwrap_vec_normalize(env) if isinstance(env, VecEnv) else None

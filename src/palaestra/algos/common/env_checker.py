@@ -332,7 +332,7 @@ def _nested(space: Any) -> bool:
 
 def _check_nan(env: Env[Any, Any]) -> None:
     """Ten random steps through ``VecCheckNan``: a NaN or inf in them warns."""
-    from palaestra.vec_env import DummyVecEnv, VecCheckNan
+    from palaestra.vec_env import DummyVecEnv, VecCheckNan  # lazy: import-time — cloudpickle
 
     vec_env = VecCheckNan(DummyVecEnv([lambda: env]))
     vec_env.reset()

@@ -26,7 +26,7 @@ def _has_monitor(env: Any) -> bool:
 
 def _vec_monitored(venv: Any) -> bool:
     """A ``VecMonitor`` layer, or ``Monitor``-wrapped sub-envs (SB3's two checks)."""
-    from palaestra.vec_env import VecMonitor
+    from palaestra.vec_env import VecMonitor  # lazy: import-time — cloudpickle
 
     layer = venv
     while layer is not None:

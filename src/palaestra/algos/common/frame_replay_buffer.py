@@ -44,7 +44,7 @@ def frame_layout(space: spaces.Space[Any], venv: Any = None) -> tuple[int | None
     channel (HWC or CHW by SB3's smallest-axis rule), rank-4+ boxes (stacks of images) along
     their first axis, and anything else is one frame (``axis`` None).
     """
-    from palaestra.vec_env import VecFrameStack
+    from palaestra.vec_env import VecFrameStack  # lazy: import-time — cloudpickle
 
     if not isinstance(space, spaces.Box):
         raise ValueError(

@@ -26,6 +26,7 @@ import reprlib
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from palaestra.algos.common.action_noise import noise_from_json
 from palaestra.algos.common.model_io import ModelFileError
 
 __all__ = [
@@ -236,8 +237,6 @@ def _target_entropy(value: Any) -> str | None:
 
 
 def _action_noise(value: Any) -> str | None:
-    from palaestra.algos.common.action_noise import noise_from_json
-
     if value is None:
         return None
     try:

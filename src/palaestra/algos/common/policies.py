@@ -22,6 +22,7 @@ from palaestra.algos.common.networks import (
     preprocess_obs,
 )
 from palaestra.algos.common.spaces_util import is_image_space
+from palaestra.algos.learners.xp import torch_ops
 
 __all__ = [
     "POLICY_EXTRACTORS",
@@ -196,8 +197,6 @@ class ActorCritic(nn.Module):
     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """SB3's ``(values [B], log_prob [B], entropy [B])`` of env actions (torch, autograd):
         the head's ``evaluate`` on the torch namespace."""
-        from palaestra.algos.learners.xp import torch_ops
-
         pi, vf = self.pi_and_vf(obs)
         log_std = getattr(self.action_head, "log_std", None)
         idx = torch.as_tensor(self.action_head.index(actions.cpu().numpy()), device=pi.device)

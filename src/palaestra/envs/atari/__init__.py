@@ -15,7 +15,7 @@ __all__ = ["ROM_IDS", "AtariEnv", "atari_specs", "rom_id_to_name"]
 def __getattr__(name: str) -> Any:
     # The env module is imported on first use: `import palaestra` registers the ids only.
     if name == "AtariEnv":
-        from palaestra.envs.atari.env import AtariEnv
+        from palaestra.envs.atari.env import AtariEnv  # lazy: import-time — the ALE env module
 
         return AtariEnv
     raise AttributeError(f"module 'palaestra.envs.atari' has no attribute {name!r}")

@@ -29,6 +29,7 @@ from palaestra.envs.atari.checks import (
     import_ale_py,
 )
 from palaestra.envs.atari.games import check_game
+from palaestra.rendering import window
 from palaestra.spaces import Box, Dict, Discrete
 from palaestra.utils.seeding import np_random as make_rng
 
@@ -261,12 +262,10 @@ class AtariEnv(Env[Any, Any]):
         if self.render_mode == "rgb_array":
             return frame
         if self._window is None:  # created lazily: no display needed until the first frame
-            from palaestra.rendering.window import HumanWindow
-
             title = self.spec.id if self.spec is not None else f"Atari {self.game}"
             skip = self._frameskip
             mean_skip = skip if isinstance(skip, int) else (skip[0] + skip[1] - 1) / 2
-            self._window = HumanWindow(title, max(1, math.floor(EMULATOR_FPS / mean_skip)))
+            self._window = window.HumanWindow(title, max(1, math.floor(EMULATOR_FPS / mean_skip)))
         self._window.show(frame)
         return None
 

@@ -32,10 +32,14 @@ from typing import Any
 from palaestra import error
 from palaestra.core import Env
 from palaestra.envs.atari.ale_engine import ALESettings, ALEVectorEngine, vector_interface_available
+from palaestra.envs.atari.env import AtariEnv
 from palaestra.envs.atari.games import check_game
 from palaestra.vector.engine import Engine
 from palaestra.vector.engine_env import EngineVectorEnv
+from palaestra.vector.process_engine import ProcessEngine
 from palaestra.vector.vector_env import AutoresetMode
+from palaestra.wrappers import AtariPreprocessing, ClipReward, FrameStackObservation
+from palaestra.wrappers.atari import FireResetEnv
 
 __all__ = ["AtariVectorEnv", "make_atari_engine"]
 
@@ -65,8 +69,6 @@ def make_atari_engine(
 
 
 def _process_engine(game: str, num_envs: int, settings: ALESettings) -> Engine:
-    from palaestra.vector.process_engine import ProcessEngine
-
     unsupported = {
         "maxpool": not settings.maxpool,
         "life_loss_info": settings.life_loss_info,
@@ -86,10 +88,6 @@ def _process_engine(game: str, num_envs: int, settings: ALESettings) -> Engine:
 
 def preprocessed_env(game: str, settings: ALESettings) -> Env[Any, Any]:
     """One game with wrappers that mean what ``settings`` mean to ``ALEVectorInterface``."""
-    from palaestra.envs.atari.env import AtariEnv
-    from palaestra.wrappers import AtariPreprocessing, ClipReward, FrameStackObservation
-    from palaestra.wrappers.atari import FireResetEnv
-
     s = settings
     env: Env[Any, Any] = AtariEnv(
         game,

@@ -25,6 +25,7 @@ import numpy as np
 from palaestra import error
 from palaestra.envs.box2d._common import box_action, check_bool, import_box2d
 from palaestra.envs.classic_control._common import RENDER_MODES, ClassicControlEnv
+from palaestra.rendering import box2d_scenes as scenes
 from palaestra.spaces import Box
 
 # Gymnasium's constants (bipedal_walker.py): pixels unless divided by SCALE.
@@ -422,8 +423,6 @@ class BipedalWalker(ClassicControlEnv):
     # -- rendering ----------------------------------------------------------------------------
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering import box2d_scenes as scenes
-
         if self.hull is None:
             raise error.ResetNeeded("Call reset before render.")
         if self._strip is None:

@@ -31,6 +31,7 @@ from palaestra.envs.box2d._common import (
     import_box2d,
 )
 from palaestra.envs.classic_control._common import RENDER_MODES, ClassicControlEnv
+from palaestra.rendering import box2d_scenes as scenes
 from palaestra.spaces import Box, Discrete
 
 # Gymnasium's constants (lunar_lander.py), in its units: pixels unless divided by SCALE.
@@ -402,8 +403,6 @@ class LunarLander(ClassicControlEnv):
     # -- rendering ----------------------------------------------------------------------------
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering import box2d_scenes as scenes
-
         if self.lander is None:
             raise error.ResetNeeded("Call reset before render.")
         if self._background is None:

@@ -12,6 +12,7 @@ import numpy as np
 
 from palaestra import error, logger
 from palaestra.core import Env
+from palaestra.rendering import window
 
 RENDER_MODES = ["human", "rgb_array"]
 
@@ -107,10 +108,8 @@ class ClassicControlEnv(Env[np.ndarray, Any]):
         if self.render_mode == "rgb_array":
             return frame
         if self._window is None:  # created lazily: rgb_array users never need a display
-            from palaestra.rendering.window import HumanWindow
-
             title = self.spec.id if self.spec is not None else type(self).__name__
-            self._window = HumanWindow(title, self.metadata["render_fps"])
+            self._window = window.HumanWindow(title, self.metadata["render_fps"])
         self._window.show(frame)
         return None
 

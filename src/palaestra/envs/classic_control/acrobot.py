@@ -26,6 +26,7 @@ from palaestra.envs.classic_control._common import (
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.rendering.scenes import render_acrobot
 from palaestra.spaces import Box, Discrete
 
 AVAIL_TORQUE = (-1.0, 0.0, 1.0)
@@ -182,8 +183,6 @@ class AcrobotEnv(ClassicControlEnv):
         return reset_observation(state32)[0], {}
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering.scenes import render_acrobot
-
         if self._s is None:
             raise error.ResetNeeded("Call reset before render.")
         return render_acrobot(self._s[0], self._s[1])

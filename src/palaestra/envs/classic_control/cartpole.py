@@ -25,6 +25,7 @@ from palaestra.envs.classic_control._common import (
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.rendering.scenes import render_cartpole
 from palaestra.spaces import Box, Discrete
 
 
@@ -156,8 +157,6 @@ class CartPoleEnv(ClassicControlEnv):
         return np.array(self._s, dtype=np.float32), {}
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering.scenes import render_cartpole
-
         if self._s is None:
             raise error.ResetNeeded("Call reset before render.")
         return render_cartpole(np.array(self._s))

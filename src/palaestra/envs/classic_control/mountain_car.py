@@ -23,6 +23,7 @@ from palaestra.envs.classic_control._common import (
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.rendering.scenes import render_mountain_car
 from palaestra.spaces import Box, Discrete
 
 
@@ -122,8 +123,6 @@ class MountainCarEnv(ClassicControlEnv):
         return np.array(self._s, dtype=np.float32), {}
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering.scenes import render_mountain_car
-
         if self._s is None:
             raise error.ResetNeeded("Call reset before render.")
         return render_mountain_car(self._s[0], self.params.goal_position)

@@ -27,6 +27,7 @@ from palaestra.envs.classic_control._common import (
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.rendering.scenes import render_pendulum
 from palaestra.spaces import Box
 
 DEFAULT_X = math.pi
@@ -149,8 +150,6 @@ class PendulumEnv(ClassicControlEnv):
         return self._get_obs(), {}
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering.scenes import render_pendulum
-
         if self._s is None:
             raise error.ResetNeeded("Call reset before render.")
         return render_pendulum(self._s[0], self.last_u)

@@ -17,6 +17,7 @@ from palaestra import error, logger
 from palaestra.core import Env
 from palaestra.envs.action_checks import check_discrete_batch
 from palaestra.envs.toy_text._streams import RowStreams
+from palaestra.rendering import window
 from palaestra.spaces import Discrete, Space
 from palaestra.utils.seeding import np_random
 
@@ -59,10 +60,8 @@ class ToyTextEnv(Env[Any, Any]):
         if self.render_mode == "rgb_array":
             return frame
         if self._window is None:  # created lazily: rgb_array users never need a display
-            from palaestra.rendering.window import HumanWindow
-
             title = self.spec.id if self.spec is not None else type(self).__name__
-            self._window = HumanWindow(title, self.metadata["render_fps"])
+            self._window = window.HumanWindow(title, self.metadata["render_fps"])
         self._window.show(frame)
         return None
 

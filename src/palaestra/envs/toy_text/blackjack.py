@@ -21,6 +21,7 @@ from palaestra.envs.action_checks import check_discrete_action
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.toy_text._common import ToyTextBatch, ToyTextEnv
 from palaestra.envs.toy_text._streams import HalfWordStreams
+from palaestra.rendering.toy_text import render_blackjack
 from palaestra.spaces import Discrete, Tuple
 
 DECK = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 10, 10, 10)  # ace, 2-10, jack, queen, king
@@ -160,8 +161,6 @@ class BlackjackEnv(ToyTextEnv):
         return self._obs(), {}
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering.toy_text import render_blackjack
-
         if not self.player:
             raise error.ResetNeeded("Call reset before render.")
         player_sum, dealer_value, ace = self._obs()

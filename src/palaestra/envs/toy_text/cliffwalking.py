@@ -14,6 +14,7 @@ import numpy as np
 
 from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, Transitions, TransitionTable
 from palaestra.error import ResetNeeded
+from palaestra.rendering.toy_text import render_cliff_walking
 
 UP, RIGHT, DOWN, LEFT = 0, 1, 2, 3
 _MOVES = {UP: (-1, 0), RIGHT: (0, 1), DOWN: (1, 0), LEFT: (0, -1)}
@@ -87,8 +88,6 @@ class CliffWalkingEnv(TabularEnv):
         return "".join(parts) + "\n"
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering.toy_text import render_cliff_walking
-
         if self.s is None:
             raise ResetNeeded("Call reset before render.")
         return render_cliff_walking(self.s)

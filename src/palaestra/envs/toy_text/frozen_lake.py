@@ -17,6 +17,7 @@ import numpy as np
 
 from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, Transitions, TransitionTable
 from palaestra.error import ResetNeeded
+from palaestra.rendering.toy_text import render_frozen_lake
 from palaestra.utils.colorize import colorize
 from palaestra.utils.seeding import np_random
 
@@ -231,8 +232,6 @@ class FrozenLakeEnv(TabularEnv):
         return head + "\n".join("".join(line) for line in grid) + "\n"
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering.toy_text import render_frozen_lake
-
         if self.s is None:
             raise ResetNeeded("Call reset before render.")
         return render_frozen_lake(self.desc, self.s, self.lastaction)

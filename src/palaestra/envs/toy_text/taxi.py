@@ -15,6 +15,7 @@ import numpy as np
 
 from palaestra.envs.toy_text.tabular import TabularBatch, TabularEnv, Transitions, TransitionTable
 from palaestra.error import ResetNeeded
+from palaestra.rendering.toy_text import render_taxi
 from palaestra.utils.colorize import colorize
 
 MAP = [
@@ -244,8 +245,6 @@ class TaxiEnv(TabularEnv):
         return text + "\n"
 
     def _frame(self) -> np.ndarray:
-        from palaestra.rendering.toy_text import render_taxi
-
         if self.s is None:
             raise ResetNeeded("Call reset before render.")
         if self.lastaction is not None and self.lastaction < 4:
