@@ -24,11 +24,6 @@ from tests.layout.import_graph import Edge, all_edges, edges_of, module_names
 TAG = re.compile(r"^lazy: (import-time|optional-dep|cycle) — \S")
 MAX_FUNCTION_LEVEL_IMPORTS = 60
 
-# Being restructured on another branch (issue 25, the vector/wrappers step): their untagged
-# function-level imports are not checked yet. Remove this list when that branch is merged; the
-# test below fails once a package here has none left, so the list only shrinks.
-EXEMPT: tuple[str, ...] = ("palaestra.vector", "palaestra.wrappers")
-
 
 @functools.cache
 def _statements() -> dict[tuple[str, int], Edge]:
@@ -40,10 +35,6 @@ def _statements() -> dict[tuple[str, int], Edge]:
     return out
 
 
-def _exempt(module: str) -> bool:
-    return any(module == p or module.startswith(p + ".") for p in EXEMPT)
-
-
 def _untagged(statements: dict[tuple[str, int], Edge]) -> list[str]:
     return [
         f"{module}:{line} imports {edge.target} ({edge.comment or 'no comment'!r})"
@@ -53,7 +44,7 @@ def _untagged(statements: dict[tuple[str, int], Edge]) -> list[str]:
 
 
 def test_every_function_level_import_says_why() -> None:
-    checked = {key: e for key, e in _statements().items() if not _exempt(key[0])}
+    checked = _statements()
     assert checked, "no function-level imports found: is the graph read?"
     untagged = _untagged(checked)
     assert untagged == [], (
@@ -63,18 +54,8 @@ def test_every_function_level_import_says_why() -> None:
 
 
 def test_at_most_60_function_level_imports() -> None:
-    counted = [key for key in _statements() if not _exempt(key[0])]
+    counted = list(_statements())
     assert len(counted) <= MAX_FUNCTION_LEVEL_IMPORTS, sorted(counted)
-
-
-@pytest.mark.parametrize("package", EXEMPT)
-def test_an_exempt_package_still_needs_its_exemption(package: str) -> None:
-    inside = {
-        key: e
-        for key, e in _statements().items()
-        if _exempt(key[0]) and (key[0] == package or key[0].startswith(package + "."))
-    }
-    assert _untagged(inside), f"{package} has no untagged imports left: remove it from EXEMPT"
 
 
 @pytest.mark.parametrize(

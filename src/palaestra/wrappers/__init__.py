@@ -72,7 +72,7 @@ __all__ = sorted(_LAZY)
 
 def __getattr__(name: str) -> Any:  # PEP 562 module attribute, not wrapper forwarding
     if name == "vector":  # gymnasium.wrappers.vector: the submodule re-exporting them
-        value = importlib.import_module("palaestra.wrappers.vector")
+        value = importlib.import_module("palaestra.wrappers.vector")  # lazy: import-time — vector
         globals()[name] = value
         return value
     module = _LAZY.get(name)

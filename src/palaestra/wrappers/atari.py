@@ -18,6 +18,8 @@ import numpy as np
 
 from palaestra.core import Env, ObservationWrapper, RewardWrapper, Wrapper
 from palaestra.spaces import Box
+from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
+from palaestra.wrappers.monitor import Monitor
 from palaestra.wrappers.resize import resize_area, resize_area_f32
 from palaestra.wrappers.stateful_observation import MaxAndSkipObservation
 
@@ -255,9 +257,6 @@ class MaxAndSkipEnv(MaxAndSkipObservation[np.ndarray, int, np.ndarray]):
 def _observations_unused_below(env: Env[Any, Any]) -> bool:
     """Whether every layer between ``env`` and its base env passes steps through without
     looking at observations (``make``'s wrappers, ``Monitor``, the action-side SB3 wrappers)."""
-    from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
-    from palaestra.wrappers.monitor import Monitor
-
     passive = (OrderEnforcing, PassiveEnvChecker, TimeLimit, Monitor, StickyActionEnv, NoopResetEnv)
     layer: Any = env
     while isinstance(layer, Wrapper):

@@ -16,6 +16,7 @@ import numpy as np
 from palaestra.core import Env, Wrapper
 from palaestra.spaces import Box
 from palaestra.utils.record_constructor import RecordConstructorArgs
+from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
 from palaestra.wrappers.resize import resize_area
 
 __all__ = ["AtariPreprocessing"]
@@ -217,8 +218,6 @@ class AtariPreprocessing(Wrapper[np.ndarray, int, np.ndarray, int], RecordConstr
 
 def _observations_unused_below(env: Env[Any, Any]) -> bool:
     """Whether every layer between ``env`` and its base env ignores observations."""
-    from palaestra.wrappers.common import OrderEnforcing, PassiveEnvChecker, TimeLimit
-
     layer: Any = env
     while isinstance(layer, Wrapper):
         if type(layer) not in (OrderEnforcing, PassiveEnvChecker, TimeLimit):

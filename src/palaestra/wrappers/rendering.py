@@ -15,6 +15,7 @@ from typing import Any, SupportsFloat
 import numpy as np
 
 from palaestra.core import ActType, Env, ObsType, RenderFrame, Wrapper
+from palaestra.rendering.window import HumanWindow
 from palaestra.utils.record_constructor import RecordConstructorArgs
 
 __all__ = ["HumanRendering", "RenderCollection"]
@@ -128,8 +129,6 @@ class HumanRendering(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstruc
         return None
 
     def _render_frame(self) -> None:
-        from palaestra.rendering.window import HumanWindow
-
         frame = self.env.render()
         if isinstance(frame, list):
             if not frame:

@@ -19,7 +19,10 @@ import numpy as np
 from palaestra.core import ActType, Env, ObservationWrapper, ObsType, Wrapper, WrapperObsType
 from palaestra.error import InvalidBound
 from palaestra.spaces import Box, Dict, Space, Tuple
+from palaestra.spaces.utils import flatten as flatten_obs
+from palaestra.spaces.utils import flatten_space
 from palaestra.utils.record_constructor import RecordConstructorArgs
+from palaestra.wrappers.common import TimeLimit
 from palaestra.wrappers.running_mean_std import RunningMeanStd
 from palaestra.wrappers.utils import create_zero_array
 
@@ -70,10 +73,6 @@ class DelayObservation(ObservationWrapper[ObsType, ActType, ObsType], RecordCons
 def _find_max_episode_steps(env: Env[Any, Any]) -> int | None:
     if env.spec is not None and env.spec.max_episode_steps is not None:
         return int(env.spec.max_episode_steps)
-    try:
-        from palaestra.wrappers.common import TimeLimit
-    except ImportError:  # registry wrappers not built yet: no TimeLimit can be in the stack
-        return None
     layer: Env[Any, Any] = env
     while isinstance(layer, Wrapper):
         if isinstance(layer, TimeLimit):
@@ -143,9 +142,6 @@ class TimeAwareObservation(
         self._dict_time_key = dict_time_key
         self._unflat_space = space
         if flatten:
-            from palaestra.spaces.utils import flatten as flatten_obs
-            from palaestra.spaces.utils import flatten_space
-
             self._flatten = partial(flatten_obs, space)
             self.observation_space = flatten_space(space)
         else:

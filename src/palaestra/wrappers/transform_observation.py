@@ -14,6 +14,7 @@ import numpy as np
 
 from palaestra.core import ActType, Env, ObservationWrapper, ObsType, WrapperObsType
 from palaestra.spaces import Box, Dict, Discrete, MultiBinary, MultiDiscrete, Space, Tuple
+from palaestra.spaces.utils import flatten, flatten_space
 from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.wrappers.utils import rescale_box
 
@@ -136,8 +137,6 @@ class FlattenObservation(
     """Flatten observations (and the space) to a 1-D array with ``spaces.utils.flatten``."""
 
     def __init__(self, env: Env[ObsType, ActType]) -> None:
-        from palaestra.spaces.utils import flatten, flatten_space
-
         RecordConstructorArgs.__init__(self)
         space = env.observation_space
         TransformObservation.__init__(

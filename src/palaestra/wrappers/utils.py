@@ -27,6 +27,7 @@ from palaestra.spaces import (
     Text,
     Tuple,
 )
+from palaestra.spaces.batching import batch_space
 from palaestra.wrappers.running_mean_std import RunningMeanStd, update_mean_var_count_from_moments
 
 __all__ = [
@@ -98,8 +99,6 @@ def _zero_text(space: Text) -> str:
 @create_zero_array.register(Graph)
 def _zero_graph(space: Graph) -> GraphInstance:
     """One node (and, with an edge space, one self-edge of node 0), each at its zero."""
-    from palaestra.spaces.batching import batch_space
-
     nodes = create_zero_array(batch_space(space.node_space, 1))
     if space.edge_space is None:
         return GraphInstance(nodes=nodes, edges=None, edge_links=None)

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from palaestra import logger
+from palaestra.rendering.window import HumanWindow
 from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.vector.vector_env import AutoresetMode, VectorEnv, VectorWrapper
 from palaestra.wrappers.resize import resize_area
@@ -146,8 +147,6 @@ class HumanRendering(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         return merged
 
     def _render_frame(self) -> None:
-        from palaestra.rendering.window import HumanWindow
-
         merged = self.tiled_frame()
         if self.window is None:
             fps = int(self.env.metadata["render_fps"])
@@ -185,7 +184,10 @@ class RecordVideo(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         gc_trigger: Callable[[int], bool] | None = lambda episode: True,
         video_format: str | None = None,
     ) -> None:
-        from palaestra.utils.video import capped_cubic_video_schedule, mp4_available
+        from palaestra.utils.video import (  # lazy: import-time — utils.video
+            capped_cubic_video_schedule,
+            mp4_available,
+        )
 
         VectorWrapper.__init__(self, env)
         RecordConstructorArgs.__init__(
@@ -310,7 +312,7 @@ class RecordVideo(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
 
     def stop_recording(self) -> None:
         """Save the recorded frames (if any) and stop recording."""
-        from palaestra.utils.video import save_video
+        from palaestra.utils.video import save_video  # lazy: import-time — utils.video
 
         if not self.recorded_frames:
             logger.warn("Ignored saving a video as there were zero frames to save.")
