@@ -9,8 +9,9 @@ by :func:`algo_class`. :mod:`palaestra.runs.settings` re-exports the derived nam
 
 Adding an algorithm (QR-DQN, for example) is:
 
-1. a new package ``palaestra/algos/qrdqn/`` holding its class, policies and objective, the class
-   declaring its hyperparameter rules (see ``palaestra.algos.common.hyperparams``);
+1. a new package ``palaestra/algos/qrdqn/`` holding its class, policies and objective, and its
+   hyperparameter rules in ``qrdqn/hyperparams.py`` (a ``declare_rules("QRDQN", ...)`` call of
+   ``palaestra.algos.common.hyperparams``, imported by the package's ``__init__``);
 2. one registration line below: ``Algorithm("qrdqn", "palaestra.algos.qrdqn:QRDQN", replay=True)``;
 3. its presets and its own tests; the shared tests pick it up from :data:`REGISTRY`.
 
