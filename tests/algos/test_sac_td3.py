@@ -23,15 +23,22 @@ from palaestra.algos import (
     VectorizedActionNoise,
     evaluate_policy,
 )
+from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
 from palaestra.algos.learners import NumpyLearner, TorchLearner
 from palaestra.algos.learners.xp import numpy_ops
 from palaestra.algos.sac.objective import SACCriticObjective
 from palaestra.algos.td3.objective import TD3CriticObjective
+from palaestra.runs.algorithms import REGISTRY, algo_class
 from palaestra.vec_env import make_vec_env
 
 from .toys import Toy
 
-ALGOS = [SAC, TD3, DDPG]
+# The declared algorithms that are off-policy actor-critics (SAC, TD3, DDPG, ...)
+ALGOS = [
+    cls
+    for cls in (algo_class(entry.name) for entry in REGISTRY)
+    if issubclass(cls, ActorCriticOffPolicy)
+]
 SMALL = {"net_arch": [32, 32]}
 
 

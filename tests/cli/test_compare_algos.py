@@ -9,13 +9,21 @@ import json
 import re
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 from tests.cli.conftest import Result
 
+from palaestra.runs.algorithms import REGISTRY
 from palaestra.runs.curves import Episodes, variant_band
-from palaestra.runs.settings import ALGO_CLASSES, ALGOS, algo_class, hyperparameter_names
+from palaestra.runs.settings import (
+    ALGO_CLASSES,
+    ALGOS,
+    REPLAY_ALGOS,
+    algo_class,
+    hyperparameter_names,
+)
 
 
 def test_registry_is_one_list() -> None:
@@ -29,6 +37,19 @@ def test_registry_is_one_list() -> None:
         assert cls is getattr(palaestra.algos, cls_name) and cls.__name__ == cls_name
         assert "learning_rate" in hyperparameter_names(name)
     assert {"n_steps", "rms_prop_eps", "use_rms_prop"} <= set(hyperparameter_names("a2c"))
+
+
+@pytest.mark.parametrize("entry", REGISTRY, ids=lambda entry: entry.name)
+def test_declared_replay_kind_is_the_classes(entry: Any) -> None:
+    """A registration line's ``replay`` says what its class is: an off-policy algorithm (its
+    replay buffer saved with each checkpoint) or an on-policy one (rollouts)."""
+    from palaestra.algos.common.off_policy import OffPolicyAlgorithm
+    from palaestra.algos.common.on_policy import OnPolicyAlgorithm
+
+    cls = algo_class(entry.name)
+    assert entry.replay == issubclass(cls, OffPolicyAlgorithm)
+    assert entry.replay != issubclass(cls, OnPolicyAlgorithm)
+    assert (entry.name in REPLAY_ALGOS) == entry.replay
 
 
 def _png_width(path: Path) -> int:

@@ -91,3 +91,29 @@ def test_shipped_noise_presets_build(algo: str, env_id: str, name: str) -> None:
     model = algo_class(algo)("MlpPolicy", env_id, **presets.resolve(preset["hyperparams"]))
     assert model.action_noise is not None
     assert model.action_noise.shape == model.action_space.shape
+
+
+def test_presets_are_for_the_declared_algorithms() -> None:
+    """Every registered algorithm ships presets, and every preset names a registered one: a new
+    algorithm's registration line and its presets come together."""
+    from palaestra.runs.algorithms import ALGOS
+
+    assert sorted(presets.available()) == sorted(ALGOS)
+
+
+@pytest.mark.parametrize(
+    ("algo", "env_id", "name"),
+    [
+        (algo, env_id, name)
+        for algo, envs in presets.available().items()
+        for env_id, names in envs.items()
+        for name in names
+    ],
+)
+def test_shipped_presets_pass_their_algorithms_rules(algo: str, env_id: str, name: str) -> None:
+    """A preset's hyperparams are ones its algorithm's declared rules accept (what a run folder
+    written from it must pass on ``eval`` and ``train --resume``)."""
+    from palaestra.runs.algorithms import hyperparameter_names
+
+    hyperparams = presets.get_preset(algo, env_id, name)["hyperparams"]
+    check_run_hyperparams(algo, hyperparams, set(hyperparameter_names(algo)), f"{algo}/{env_id}")

@@ -18,6 +18,7 @@ from typing import Any
 import palaestra
 from palaestra import error
 from palaestra.envs.lookup import load_env_creator
+from palaestra.runs.algorithms import REPLAY_ALGOS
 from palaestra.runs.errors import RunError
 from palaestra.utils.atomic_write import atomic_write
 
@@ -50,8 +51,6 @@ NORMALIZE_FILE = "vecnormalize.npz"
 EVALUATIONS_FILE = "evaluations.csv"  # one row per periodic evaluation
 BEST_MODEL_FILE = "best_model.zip"  # SB3's EvalCallback name: the best evaluation's model
 BEST_NORMALIZE_FILE = "best_vecnormalize.npz"  # the normalization it was evaluated with
-# Off-policy algorithms: their replay buffer is saved with each checkpoint and the final model.
-REPLAY_ALGOS = ("dqn", "sac", "td3", "ddpg")
 
 
 def is_goal_env(env_id: str) -> bool:

@@ -1,6 +1,7 @@
 """A2C (Mnih et al. 2016) as SB3's ``stable_baselines3.a2c``: the algorithm and its objective
 (loss + VJP); its policies are ``palaestra.algos.policies``' actor-critic."""
 
+from palaestra.algos.a2c import hyperparams as hyperparams  # declares A2C's rules
 from palaestra.algos.a2c.a2c import A2C
 
 __all__ = ["A2C"]

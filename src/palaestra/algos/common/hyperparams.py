@@ -38,6 +38,7 @@ __all__ = [
     "MAX_N_STEPS",
     "check_model_file",
     "check_run_hyperparams",
+    "declare_rules",
 ]
 
 # Limits far above any published setting (SB3 and RL-Zoo use buffers of 10^4..10^6 rows,
@@ -166,74 +167,7 @@ _COMMON: dict[str, Check] = {
     "seed": _optional(_integer(0, 2**64 - 1)),  # torch.manual_seed's and numpy's range
     "stats_window_size": _integer(1, 1_000_000),
 }
-# Keys of each algorithm's ``_hyperparameters()``; a test keeps them equal.
-HYPERPARAMETERS: dict[str, dict[str, Check]] = {
-    "DQN": {
-        **_COMMON,
-        "buffer_size": _integer(1, MAX_BUFFER_SIZE),
-        "learning_starts": _integer(0, MAX_STEPS),
-        "batch_size": _integer(1, MAX_BATCH_SIZE),
-        "tau": _PROBABILITY,
-        "train_freq": _train_freq,
-        "gradient_steps": _integer(-1, MAX_BATCH_SIZE),  # -1: as many as env steps collected
-        "target_update_interval": _integer(1, MAX_STEPS),
-        "exploration_fraction": _PROBABILITY,
-        "exploration_initial_eps": _PROBABILITY,
-        "exploration_final_eps": _PROBABILITY,
-        "replay_buffer_kwargs": _mapping(
-            {
-                "handle_timeout_termination": _boolean,
-                "frame_margin": _number(0.0, 10.0),
-                "layout": lambda v: (
-                    None
-                    if isinstance(v, list)
-                    and len(v) == 2
-                    and _optional(_integer(0, 8))(v[0]) is None
-                    and _integer(1, MAX_NET_WIDTH)(v[1]) is None
-                    else "[axis or null, channels]"
-                ),
-            }
-        ),
-        "optimize_memory_usage": _boolean,
-    },
-    "PPO": {
-        **_COMMON,
-        "n_steps": _integer(1, MAX_N_STEPS),
-        "batch_size": _integer(1, MAX_BATCH_SIZE),
-        "n_epochs": _integer(1, 10_000),
-        "gae_lambda": _PROBABILITY,
-        "normalize_advantage": _boolean,
-        "ent_coef": _number(-1e6, 1e6),
-        "vf_coef": _number(0.0, 1e6),
-        "target_kl": _optional(_number(0.0, 1e6, low_open=True)),
-    },
-    "A2C": {
-        **_COMMON,
-        "n_steps": _integer(1, MAX_N_STEPS),
-        "gae_lambda": _PROBABILITY,
-        "ent_coef": _number(-1e6, 1e6),
-        "vf_coef": _number(0.0, 1e6),
-        "rms_prop_eps": _number(0.0, 1.0, low_open=True),
-        "use_rms_prop": _boolean,
-        "normalize_advantage": _boolean,
-    },
-}
-
-
-def _ent_coef(value: Any) -> str | None:
-    """SAC's ``"auto"``, ``"auto_<init>"`` or a fixed coefficient > 0."""
-    if isinstance(value, str):
-        head, _, init = value.partition("_")
-        try:
-            ok = head == "auto" and (not init or 0 < float(init) < 1e6)
-        except ValueError:
-            ok = False
-        return None if ok else '"auto", "auto_<value>" or a number > 0'
-    return _number(0.0, 1e6, low_open=True)(value)
-
-
-def _target_entropy(value: Any) -> str | None:
-    return None if value == "auto" else _number(-1e6, 1e6)(value)
+_COMMON_NO_CLIP = {k: v for k, v in _COMMON.items() if k != "max_grad_norm"}
 
 
 def _action_noise(value: Any) -> str | None:
@@ -246,53 +180,32 @@ def _action_noise(value: Any) -> str | None:
     return None
 
 
-_OFF_POLICY: dict[str, Check] = {
-    key: HYPERPARAMETERS["DQN"][key]
-    for key in (
-        "buffer_size",
-        "learning_starts",
-        "batch_size",
-        "tau",
-        "train_freq",
-        "gradient_steps",
-        "replay_buffer_kwargs",
-        "optimize_memory_usage",
-    )
+# What every off-policy algorithm saves (DQN, SAC, TD3, DDPG...), action_noise aside.
+_REPLAY: dict[str, Check] = {
+    "buffer_size": _integer(1, MAX_BUFFER_SIZE),
+    "learning_starts": _integer(0, MAX_STEPS),
+    "batch_size": _integer(1, MAX_BATCH_SIZE),
+    "tau": _PROBABILITY,
+    "train_freq": _train_freq,
+    "gradient_steps": _integer(-1, MAX_BATCH_SIZE),  # -1: as many as env steps collected
+    "replay_buffer_kwargs": _mapping(
+        {
+            "handle_timeout_termination": _boolean,
+            "frame_margin": _number(0.0, 10.0),
+            "layout": lambda v: (
+                None
+                if isinstance(v, list)
+                and len(v) == 2
+                and _optional(_integer(0, 8))(v[0]) is None
+                and _integer(1, MAX_NET_WIDTH)(v[1]) is None
+                else "[axis or null, channels]"
+            ),
+        }
+    ),
+    "optimize_memory_usage": _boolean,
 }
-_COMMON_NO_CLIP = {k: v for k, v in _COMMON.items() if k != "max_grad_norm"}
-_OFF_POLICY["action_noise"] = _action_noise
-HYPERPARAMETERS["SAC"] = {
-    **_COMMON_NO_CLIP,
-    **_OFF_POLICY,
-    "ent_coef": _ent_coef,
-    "target_update_interval": _integer(1, MAX_STEPS),
-    "target_entropy": _target_entropy,
-}
-HYPERPARAMETERS["TD3"] = {
-    **_COMMON_NO_CLIP,
-    **_OFF_POLICY,
-    "policy_delay": _integer(1, MAX_STEPS),
-    "target_policy_noise": _number(0.0, 1e6),
-    "target_noise_clip": _number(0.0, 1e6),
-}
-HYPERPARAMETERS["DDPG"] = {
-    k: v
-    for k, v in HYPERPARAMETERS["TD3"].items()
-    if k not in ("policy_delay", "target_policy_noise", "target_noise_clip")  # DDPG's fixes
-}
-# Each schedule's values: a learning rate, a clip range (>= 0; PPO refuses 0 for clip_range_vf).
-SCHEDULES: dict[str, dict[str, Check]] = {
-    "DQN": {"learning_rate": _number(0.0, 1e6)},
-    "SAC": {"learning_rate": _number(0.0, 1e6)},
-    "TD3": {"learning_rate": _number(0.0, 1e6)},
-    "DDPG": {"learning_rate": _number(0.0, 1e6)},
-    "PPO": {
-        "learning_rate": _number(0.0, 1e6),
-        "clip_range": _number(0.0, 1e6),
-        "clip_range_vf": _number(0.0, 1e6, low_open=True),
-    },
-    "A2C": {"learning_rate": _number(0.0, 1e6)},
-}
+_OFF_POLICY: dict[str, Check] = {**_REPLAY, "action_noise": _action_noise}
+_LEARNING_RATE: dict[str, Check] = {"learning_rate": _number(0.0, 1e6)}
 _OPTIMIZER_KWARGS: dict[str, Check] = {  # torch.optim's numeric options (lr: the schedule's)
     "eps": _number(0.0, 1.0),
     "betas": lambda v: (
@@ -324,11 +237,6 @@ _POLICY_COMMON: dict[str, Check] = {
     "share_features_extractor": _boolean,
     "backend": _backend,  # which learner trains the policy (learners.build_learner)
 }
-# The keyword arguments of QNetwork / ActorCritic, plus the optimizer's (a test keeps them equal).
-POLICY_KWARGS: dict[str, dict[str, Check]] = {
-    "DQN": _POLICY_COMMON,
-    "PPO": {**_POLICY_COMMON, "ortho_init": _boolean, "log_std_init": _number(-20.0, 20.0)},
-}
 _ACTOR_CRITIC = {
     **_POLICY_COMMON,
     "net_arch": _optional(
@@ -336,15 +244,31 @@ _ACTOR_CRITIC = {
     ),
     "n_critics": _integer(1, 64),
 }
-POLICY_KWARGS.update(TD3=_ACTOR_CRITIC, DDPG=_ACTOR_CRITIC)
-POLICY_KWARGS["SAC"] = {  # SACPolicy's gSDE keywords: stored, unused while use_sde is refused
-    **_ACTOR_CRITIC,
-    "use_sde": _boolean,
+_ON_POLICY_ACTOR_CRITIC = {  # PPO's and A2C's ActorCritic
+    **_POLICY_COMMON,
+    "ortho_init": _boolean,
     "log_std_init": _number(-20.0, 20.0),
-    "use_expln": _boolean,
-    "clip_mean": _number(0.0, 1e6),
 }
-POLICY_KWARGS["A2C"] = POLICY_KWARGS["PPO"]  # the same ActorCritic
+
+# Each algorithm's rules, declared by its package (``algos/<algo>/hyperparams.py``) through
+# declare_rules: the keys of its ``_hyperparameters()``, each schedule's values (a learning rate,
+# a clip range...), and the keyword arguments of its policy plus the optimizer's. Tests keep
+# them equal to what the algorithm saves and what its policy takes.
+HYPERPARAMETERS: dict[str, dict[str, Check]] = {}
+SCHEDULES: dict[str, dict[str, Check]] = {}
+POLICY_KWARGS: dict[str, dict[str, Check]] = {}
+
+
+def declare_rules(
+    algo: str,
+    hyperparameters: Mapping[str, Check],
+    schedules: Mapping[str, Check],
+    policy_kwargs: Mapping[str, Check],
+) -> None:
+    """Record the rules for the class named ``algo`` (``"DQN"``); its package calls this."""
+    HYPERPARAMETERS[algo] = dict(hyperparameters)
+    SCHEDULES[algo] = dict(schedules)
+    POLICY_KWARGS[algo] = dict(policy_kwargs)
 
 
 def _ours(ref: Any, packages: tuple[str, ...]) -> bool:

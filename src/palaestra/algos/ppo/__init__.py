@@ -1,6 +1,7 @@
 """PPO (Schulman et al. 2017) as SB3's ``stable_baselines3.ppo``: the algorithm and its
 objective (loss + VJP); its policies are ``palaestra.algos.policies``' actor-critic."""
 
+from palaestra.algos.ppo import hyperparams as hyperparams  # declares PPO's rules
 from palaestra.algos.ppo.ppo import PPO
 
 __all__ = ["PPO"]
