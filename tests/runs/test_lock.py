@@ -168,3 +168,22 @@ def test_the_lock_module_imports_without_fcntl() -> None:
     code = "import sys; sys.modules['fcntl'] = None; import palaestra.runs.lock, palaestra.runs"
     env = {**os.environ, "PYTHONPATH": SRC}
     subprocess.run([sys.executable, "-c", code], check=True, env=env, timeout=60)
+
+
+def test_an_eval_env_that_fails_to_build_releases_the_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from palaestra.runs import periodic_eval
+
+    def broken(*args: object) -> None:
+        raise RuntimeError("the eval env cannot be built")
+
+    monkeypatch.setattr(periodic_eval, "make_eval_env", broken)
+    folder = tmp_path / "run"
+    with pytest.raises(RuntimeError, match="cannot be built"):
+        train_run(tiny(steps=200), folder, eval_freq=40, eval_episodes=1)
+    status = json.loads((folder / "status.json").read_text())
+    assert status["status"] == "failed"
+    assert status["error"] == "RuntimeError: the eval env cannot be built"
+    with FolderLock(folder):  # released on the way out, not held until the process ends
+        pass

@@ -205,8 +205,6 @@ class Run:
         due = CheckpointDue(every, total)
         evaluation = CheckpointDue(evaluate_every if on_evaluate is not None else 0, total)
         periodic = [] if self.evaluation is None else [self.evaluation]
-        for each in periodic:
-            each.open(self.spec.to_config(), model)
         start_steps = model.num_timesteps
         saved = latest_checkpoint(run_dir)  # what a stop at once leaves to resume from
         stopped = False
@@ -221,6 +219,10 @@ class Run:
 
         try:
             try:
+                # Inside the try: an eval env that fails to build still releases the lock
+                # and leaves a "failed" status, as a failure in training does.
+                for each in periodic:
+                    each.open(self.spec.to_config(), model)
                 first = not self.resumed
                 while model.num_timesteps < total:
                     due.plan(model.num_timesteps)
