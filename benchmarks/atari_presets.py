@@ -40,10 +40,9 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from presets import machine, write_measured
-
 from palaestra import presets
 from palaestra.runs.recipe import atari_kwargs
+from presets import machine, write_measured
 
 PALAESTRA = str(Path(sys.executable).with_name("palaestra"))
 ENV_ID = "ALE/Breakout-v5"

@@ -14,11 +14,11 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
-from palaestra.algos.callbacks import CheckpointCallback, EvalCallback
 
 import palaestra as gym
 from palaestra.algos import A2C, PPO, ModelFileError, evaluate_policy
 from palaestra.algos.a2c.objective import a2c_loss, a2c_loss_vjp
+from palaestra.algos.callbacks import CheckpointCallback, EvalCallback
 from palaestra.algos.learners import NumpyLearner, TorchLearner
 from palaestra.algos.learners.losses import gae
 from palaestra.algos.learners.xp import numpy_ops, torch_ops

@@ -8,12 +8,12 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
-from palaestra.algos.networks import NatureCNN
 
 from palaestra import spaces
 from palaestra.algos import DQN, PPO
 from palaestra.algos.common.base import resolve_device
 from palaestra.algos.common.frame_replay_buffer import FrameReplayBuffer
+from palaestra.algos.networks import NatureCNN
 from palaestra.core import Env
 from palaestra.vec_env import DummyVecEnv, VecFrameStack
 from palaestra.wrappers import TimeLimit

@@ -13,7 +13,6 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
-from palaestra.algos.networks import BaseFeaturesExtractor, CombinedExtractor, NatureCNN
 from torch import nn
 
 from palaestra.algos import DDPG, DQN, SAC, TD3, ModelFileError
@@ -26,6 +25,7 @@ from palaestra.algos.common.continuous_policies import (
     SquashedGaussianActor,
 )
 from palaestra.algos.dqn import DQNPolicy, QNetwork
+from palaestra.algos.networks import BaseFeaturesExtractor, CombinedExtractor, NatureCNN
 from palaestra.algos.sac import SACPolicy
 from palaestra.algos.td3 import TD3Policy
 

@@ -8,11 +8,11 @@ from typing import Any
 
 import numpy as np
 import pytest
-from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 from tests.raised import raised
 
 from palaestra import error
 from palaestra.algos import DQN, PPO
+from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 
 HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
 

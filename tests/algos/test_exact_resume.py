@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
-from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 
 from palaestra.algos import A2C, DQN, PPO, SAC, TD3, NormalActionNoise
+from palaestra.algos.callbacks import BaseCallback, CheckpointCallback
 from palaestra.vec_env import make_vec_env
 
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from palaestra.algos.callbacks import BaseCallback
 
 from palaestra.algos import A2C, DQN, PPO
+from palaestra.algos.callbacks import BaseCallback
 from palaestra.algos.common.base import round_up_steps
 from palaestra.vec_env import make_vec_env
 

@@ -10,13 +10,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from palaestra.algos.policies import ActorCritic
 
 from palaestra.algos import A2C, DQN, PPO, ModelFileError
 from palaestra.algos.common import hyperparams as hp
 from palaestra.algos.common.model_io import read_archive, write_archive
 from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
 from palaestra.algos.dqn import DQNPolicy
+from palaestra.algos.policies import ActorCritic
 from palaestra.runs.algorithms import ALGO_CLASSES, REGISTRY, algo_class
 
 DECLARED = [algo_class(entry.name) for entry in REGISTRY]

@@ -5,6 +5,11 @@ import math
 import numpy as np
 import pytest
 import torch
+
+from palaestra.algos.dqn.objective import dqn_loss
+from palaestra.algos.learners.losses import explained_variance, gae, polyak
+from palaestra.algos.learners.xp import numpy_ops, torch_ops
+from palaestra.algos.ppo.objective import ppo_loss
 from palaestra.algos.schedules import (
     ConstantSchedule,
     LinearSchedule,
@@ -13,11 +18,6 @@ from palaestra.algos.schedules import (
     schedule_from_json,
     schedule_to_json,
 )
-
-from palaestra.algos.dqn.objective import dqn_loss
-from palaestra.algos.learners.losses import explained_variance, gae, polyak
-from palaestra.algos.learners.xp import numpy_ops, torch_ops
-from palaestra.algos.ppo.objective import ppo_loss
 
 
 def test_linear_schedule_matches_sb3_get_linear_fn() -> None:

@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 import torch
-from palaestra.algos.distributions import ActionHead
-from palaestra.algos.networks import CombinedExtractor, NatureCNN, preprocess_obs
-from palaestra.algos.policies import ActorCritic, extractor_class
 
 from palaestra import spaces
+from palaestra.algos.distributions import ActionHead
 from palaestra.algos.dqn import QNetwork
 from palaestra.algos.learners.xp import numpy_ops, torch_ops
+from palaestra.algos.networks import CombinedExtractor, NatureCNN, preprocess_obs
+from palaestra.algos.policies import ActorCritic, extractor_class
 
 BOX4 = spaces.Box(-1, 1, (4,))
 

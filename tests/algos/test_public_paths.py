@@ -76,9 +76,8 @@ def test_a_class_that_never_existed_is_still_refused() -> None:
 
 
 def test_new_files_name_classes_by_their_public_paths(tmp_path: Path) -> None:
-    from palaestra.algos.networks import FlattenExtractor
-
     from palaestra.algos.dqn import DQNPolicy
+    from palaestra.algos.networks import FlattenExtractor
 
     model = DQN(
         DQNPolicy,
@@ -120,7 +119,6 @@ def test_sb3_module_names_port_by_substitution() -> None:
     from palaestra.algos.running_mean_std import RunningMeanStd
     from palaestra.algos.torch_layers import NatureCNN
     from palaestra.algos.vec_env import DummyVecEnv
-
     from palaestra.vec_env import DummyVecEnv as Dummy
     from palaestra.vec_env import make_vec_env as make
     from palaestra.wrappers import Monitor as Mon

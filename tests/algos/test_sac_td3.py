@@ -11,7 +11,6 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
-from palaestra.algos.callbacks import CheckpointCallback, EvalCallback
 
 import palaestra as gym
 from palaestra.algos import (
@@ -23,6 +22,7 @@ from palaestra.algos import (
     VectorizedActionNoise,
     evaluate_policy,
 )
+from palaestra.algos.callbacks import CheckpointCallback, EvalCallback
 from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
 from palaestra.algos.learners import NumpyLearner, TorchLearner
 from palaestra.algos.learners.xp import numpy_ops

@@ -7,11 +7,11 @@ import math
 
 import numpy as np
 import pytest
-from palaestra.algos.schedules import LinearSchedule
 
 from palaestra import presets
 from palaestra.algos import TD3, NormalActionNoise, OrnsteinUhlenbeckActionNoise
 from palaestra.algos.common.hyperparams import check_run_hyperparams
+from palaestra.algos.schedules import LinearSchedule
 
 OU = {"type": "OrnsteinUhlenbeckActionNoise", "mean": [0.0], "sigma": [0.5]}
 

@@ -16,11 +16,11 @@ from pathlib import Path
 
 import numpy as np
 import torch
+
+from palaestra.algos import A2C, DDPG, DQN, PPO, SAC, TD3
 from palaestra.algos.networks import FlattenExtractor
 from palaestra.algos.off_policy_policies import DQNPolicy, SACPolicy, TD3Policy
 from palaestra.algos.policies import ActorCriticPolicy
-
-from palaestra.algos import A2C, DDPG, DQN, PPO, SAC, TD3
 
 HERE = Path(__file__).parent
 NET = {"net_arch": [8], "features_extractor_class": FlattenExtractor}
