@@ -14,9 +14,8 @@ import pytest
 from palaestra.algos import A2C, DQN, PPO, ModelFileError
 from palaestra.algos.common import hyperparams as hp
 from palaestra.algos.common.model_io import read_archive, write_archive
+from palaestra.algos.common.off_policy import OffPolicyAlgorithm
 from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
-from palaestra.algos.dqn import DQNPolicy
-from palaestra.algos.policies import ActorCritic
 from palaestra.runs.algorithms import ALGO_CLASSES, REGISTRY, algo_class
 
 DECLARED = [algo_class(entry.name) for entry in REGISTRY]
@@ -72,11 +71,12 @@ def test_every_saved_value_of_the_actor_critics_has_a_rule(cls: Any) -> None:
 def test_every_saved_value_has_a_rule(cls: Any) -> None:
     """The rules list exactly what the algorithm saves and what its policy takes: a new saved
     hyperparameter or policy keyword needs its rule, or loading its own files fails."""
-    model = cls("MlpPolicy", "CartPole-v1", **({"buffer_size": 100} if cls is DQN else {}))
+    replay = issubclass(cls, OffPolicyAlgorithm)
+    model = cls("MlpPolicy", "CartPole-v1", **({"buffer_size": 100} if replay else {}))
     name = cls.__name__
     assert set(model._hyperparameters()) == set(hp.HYPERPARAMETERS[name])
     assert set(model._schedules()) == set(hp.SCHEDULES[name])
-    network = DQNPolicy if cls is DQN else ActorCritic
+    network = type(model.policy)  # what policy_kwargs feed (DQNPolicy, ActorCriticPolicy...)
     taken = set(inspect.signature(network.__init__).parameters)
     taken -= {"self", "observation_space", "action_space", "lr_schedule"}
     taken |= {"optimizer_class", "optimizer_kwargs", "share_features_extractor", "backend"}
