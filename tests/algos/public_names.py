@@ -1,10 +1,11 @@
 """SB3's public modules and names against palaestra's public paths (``public_paths.json``),
-and the command that writes what is generated from that file:
+and the command that writes what is generated from that file. From the repository root,
 
     python -m tests.algos.public_names --write
 
-writes the README's import table (between its markers) and ``data/sb3_missing_names.json``,
-the SB3 names palaestra does not have yet at their substituted paths (needs SB3 installed).
+prints how much of SB3's public surface palaestra has and writes the README's import table
+(between its markers) and ``data/sb3_missing_names.json``, the SB3 names palaestra does not
+have yet at their substituted paths (needs SB3 installed; without ``--write`` it only prints).
 """
 
 from __future__ import annotations
