@@ -10,6 +10,10 @@ The hook imports a target only when its alias is first imported, as a plain impo
 ``MOVED_CLASSES`` is the other half of the promise: model files name classes by
 ``module:qualname`` (``model_io.encode_classes``), and a file written before a class moved
 keeps loading through it. Both tables only grow.
+
+The tables are data, in ``public_paths.json`` beside this file, with every public SB3 module
+(``SB3_MODULES``), the README's import table and the paths SPEC promises; the tests walk SB3's
+public modules and names against it (``tests/algos/test_sb3_public_names.py``).
 """
 
 from __future__ import annotations
@@ -17,76 +21,91 @@ from __future__ import annotations
 import importlib
 import importlib.abc
 import importlib.machinery
+import itertools
+import json
 import sys
 import types
 from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
 
 __all__ = [
+    "DATA_FILE",
     "MODULE_ALIASES",
     "MOVED_CLASSES",
     "MOVED_MODULES",
+    "README_TABLE",
+    "SB3_MODULES",
     "aliased",
     "install",
+    "markdown_table",
     "public_ref",
     "resolve_moved",
+    "sb3_path",
 ]
 
-# public path -> the module it is. Documented (README's import table, SPEC) or SB3's rule.
-MODULE_ALIASES: dict[str, str] = {
-    "palaestra.algos.action_noise": "palaestra.algos.common.action_noise",
-    "palaestra.algos.buffers": "palaestra.algos.common.buffers",
-    "palaestra.algos.callbacks": "palaestra.algos.common.callbacks",
-    "palaestra.algos.distributions": "palaestra.algos.common.distributions",
-    "palaestra.algos.env_checker": "palaestra.algos.common.env_checker",
-    "palaestra.algos.evaluation": "palaestra.algos.common.evaluation",
-    "palaestra.algos.logger": "palaestra.algos.common.logger",
-    "palaestra.algos.networks": "palaestra.algos.common.networks",
-    "palaestra.algos.policies": "palaestra.algos.common.policies",
-    "palaestra.algos.preprocessing": "palaestra.algos.common.preprocessing",
-    "palaestra.algos.results_plotter": "palaestra.algos.common.results_plotter",
-    "palaestra.algos.schedules": "palaestra.algos.common.schedules",
-    "palaestra.algos.utils": "palaestra.algos.common.utils",
-    # SB3's module names where palaestra's differ, so the substitution has no exceptions
-    "palaestra.algos.base_class": "palaestra.algos.common.base",
-    "palaestra.algos.noise": "palaestra.algos.common.action_noise",
-    "palaestra.algos.off_policy_algorithm": "palaestra.algos.common.off_policy",
-    "palaestra.algos.on_policy_algorithm": "palaestra.algos.common.on_policy",
-    "palaestra.algos.torch_layers": "palaestra.algos.common.networks",
-    # SB3's env-side common modules, which live with the envs here (a package's submodules
-    # come with it: palaestra.algos.vec_env.normalize is palaestra.vec_env.normalize)
-    "palaestra.algos.env_util": "palaestra.vec_env.env_util",
-    "palaestra.algos.monitor": "palaestra.wrappers.monitor",
-    "palaestra.algos.running_mean_std": "palaestra.wrappers.running_mean_std",
-    "palaestra.algos.vec_env": "palaestra.vec_env",
-    # never documented; palaestra.compat.sb3 imports it by this path (move it to
-    # palaestra.algos.common.model_io there, then this line may go)
-    "palaestra.algos.model_io": "palaestra.algos.common.model_io",
-}
+# One data file holds every public path (its "about" says what each table is); the README's
+# import table is generated from it (``python -m tests.algos.public_names --write``).
+DATA_FILE = Path(__file__).with_name("public_paths.json")
+_DATA: dict[str, Any] = json.loads(DATA_FILE.read_text(encoding="utf-8"))
 
+# SB3's module -> the palaestra module at its substituted path (``sb3_path``); None: not here yet.
+SB3_MODULES: dict[str, str | None] = _DATA["sb3_modules"]
 # "old.module:Qualname" a model file may name -> where that class lives now. Modules that
 # moved whole map every class through MOVED_MODULES; classes that left a module are listed.
-MOVED_MODULES: dict[str, str] = {
-    "palaestra.algos.continuous_policies": "palaestra.algos.common.continuous_policies",
-}
-MOVED_CLASSES: dict[str, str] = {
-    "palaestra.algos.off_policy_policies:DQNPolicy": "palaestra.algos.dqn:DQNPolicy",
-    "palaestra.algos.off_policy_policies:SACPolicy": "palaestra.algos.sac:SACPolicy",
-    "palaestra.algos.off_policy_policies:TD3Policy": "palaestra.algos.td3:TD3Policy",
-    "palaestra.algos.policies:QNetwork": "palaestra.algos.dqn:QNetwork",
-}
+MOVED_MODULES: dict[str, str] = _DATA["moved_modules"]
+MOVED_CLASSES: dict[str, str] = _DATA["moved_classes"]
+# rows of the README's import table: Gymnasium/SB3 paths or statements ("theirs") -> palaestra's
+# ("ours"), with the names a ``.*`` row promises and a note
+README_TABLE: list[dict[str, Any]] = _DATA["readme_table"]
 
 
-def aliased(name: str) -> str | None:
-    """The module the public path ``name`` stands for, or None where it is no alias."""
-    if name in MODULE_ALIASES:
-        return MODULE_ALIASES[name]
+def sb3_path(module: str) -> str:
+    """The palaestra path of SB3's module ``module``, by the one porting substitution.
+
+    >>> sb3_path("stable_baselines3.common.vec_env.vec_normalize")
+    'palaestra.algos.vec_env.vec_normalize'
+    >>> sb3_path("stable_baselines3.dqn.policies"), sb3_path("stable_baselines3.common")
+    ('palaestra.algos.dqn.policies', 'palaestra.algos.common')
+    """
+    parts = module.split(".")
+    if parts[0] != "stable_baselines3":
+        raise ValueError(f"not a stable_baselines3 module: {module!r}")
+    if parts[1:2] == ["common"] and len(parts) > 2:
+        parts = parts[1:]
+    return ".".join(["palaestra", "algos", *parts[1:]])
+
+
+def _module_aliases() -> dict[str, str]:
+    """palaestra's own aliases first (``public_ref`` records a class by the first alias of its
+    module), then each SB3 path that is another module and no alias above it already makes so."""
+    aliases: dict[str, str] = dict(_DATA["aliases"])
+    for theirs, real in SB3_MODULES.items():
+        path = sb3_path(theirs)
+        if real is not None and path != real and _resolve_alias(aliases, path) != real:
+            aliases[path] = real
+    return aliases
+
+
+def _resolve_alias(aliases: dict[str, str], name: str) -> str | None:
+    if name in aliases:
+        return aliases[name]
     package = name.rpartition(".")[0]
     while package:
-        target = MODULE_ALIASES.get(package)
+        target = aliases.get(package)
         if target is not None:
             return f"{target}.{name[len(package) + 1 :]}"
         package = package.rpartition(".")[0]
     return None
+
+
+# public path -> the module it is (see _module_aliases)
+MODULE_ALIASES: dict[str, str] = _module_aliases()
+
+
+def aliased(name: str) -> str | None:
+    """The module the public path ``name`` stands for, or None where it is no alias."""
+    return _resolve_alias(MODULE_ALIASES, name)
 
 
 def resolve_moved(ref: str) -> str:
@@ -96,6 +115,35 @@ def resolve_moved(ref: str) -> str:
     module, sep, qualname = ref.partition(":")
     module = MOVED_MODULES.get(module) or aliased(module) or module
     return f"{module}{sep}{qualname}"
+
+
+def markdown_table() -> str:
+    """The README's import table, generated from ``README_TABLE``."""
+    lines = ["| Gymnasium / SB3 | palaestra |", "|---|---|"]
+    for row in README_TABLE:
+        theirs = ", ".join(f"`{path}`" for path in _shortened(row["theirs"]))
+        if row.get("names"):
+            theirs += " (" + ", ".join(f"`{name}`" for name in row["names"]) + ")"
+        ours = ", ".join(f"`{path}`" for path in row["ours"])
+        if row.get("note"):
+            ours += f" ({row['note']})"
+        lines.append(f"| {theirs} | {ours} |")
+    return "\n".join(lines) + "\n"
+
+
+def _shortened(paths: list[str]) -> list[str]:
+    """Each path after the first without the packages it shares with the one before
+    (``…get_monitor_files`` after ``stable_baselines3.common.monitor.load_results``)."""
+    out = paths[:1]
+    for before, path in itertools.pairwise(paths):
+        shared = 0
+        if " " not in before + path:  # statements stay whole
+            for a, b in zip(before.split(".")[:-1], path.split(".")[:-1]):
+                if a != b:
+                    break
+                shared += 1
+        out.append("…" + path.split(".", shared)[-1] if shared else path)
+    return out
 
 
 def public_ref(cls: type) -> str:
