@@ -130,26 +130,6 @@ class A2C(OnPolicyAlgorithm):
         if self._head.kind == "gaussian":
             log.record("train/std", float(np.exp(self.learner.extra("log_std")).mean()))
 
-    # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return {
-            "n_steps": self.n_steps,
-            "gamma": self.gamma,
-            "gae_lambda": self.gae_lambda,
-            "ent_coef": self.ent_coef,
-            "vf_coef": self.vf_coef,
-            "max_grad_norm": self.max_grad_norm,
-            "rms_prop_eps": self.rms_prop_eps,
-            "use_rms_prop": self.use_rms_prop,
-            "normalize_advantage": self.normalize_advantage,
-            "verbose": self.verbose,
-            "seed": self.seed,
-            "stats_window_size": self._stats_window_size,
-        }
-
-    def _schedules(self) -> dict[str, Any]:
-        return {"learning_rate": self.lr_schedule}
-
 
 def _positive_number(value: Any) -> bool:
     ok = isinstance(value, (int, float)) and not isinstance(value, bool)

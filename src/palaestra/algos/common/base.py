@@ -20,6 +20,7 @@ starts new episodes, as in SB3.
 from __future__ import annotations
 
 import contextlib
+import inspect
 import os
 import sys
 import time
@@ -76,6 +77,15 @@ class BaseAlgorithm:
     # SB3's ``policy_aliases``: the class each policy name stands for (off-policy algorithms).
     policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {}
     _extra_counters: tuple[str, ...] = ()
+    # Constructor arguments a model file does not keep (schedules are kept apart, in
+    # ``_schedules``): the policy and its kwargs have entries of their own; where to log, the
+    # device and the thread count are the loading machine's, never the file's.
+    _not_saved: ClassVar[frozenset[str]] = frozenset(
+        {"policy", "env", "policy_kwargs", "_init_setup_model"}
+        | {"tensorboard_log", "device", "num_threads"}
+    )
+    # Saved constructor arguments whose value lives in an attribute of another name.
+    _saved_from: ClassVar[dict[str, str]] = {"stats_window_size": "_stats_window_size"}
     lr_schedule: Schedule
     learner: Learner
     _policy: torch.nn.Module
@@ -535,6 +545,23 @@ class BaseAlgorithm:
         """Rebuild a saved model; never unpickles. ``custom_objects`` overrides stored values."""
         return saving.load_model(cls, path, env, device, custom_objects or {}, kwargs)
 
+    def _hyperparameters(self) -> dict[str, Any]:
+        """What a model file keeps of the constructor's arguments, at their current values (so
+        one changed on the model before ``save`` is saved as changed): every argument of this
+        class's constructor but ``_not_saved`` and the schedules."""
+        skip = self._not_saved | set(self._schedules())
+        names = _constructor_arguments(type(self))
+        return {name: self._saved_value(name) for name in names if name not in skip}
+
+    def _saved_value(self, name: str) -> Any:
+        """The value of the constructor argument ``name`` a model file keeps."""
+        value = getattr(self, self._saved_from.get(name, name))
+        return list(value) if isinstance(value, tuple) else value  # as JSON gives it back
+
+    def _schedules(self) -> dict[str, Any]:
+        """The schedules a model file keeps, by constructor argument."""
+        return {"learning_rate": self.lr_schedule}
+
     def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
         """Each optimizer by its model-file key, with SB3's ``get_parameters`` key."""
         return {"optimizer": ("policy.optimizer", self.optimizer)}
@@ -561,6 +588,22 @@ class BaseAlgorithm:
     def _uses_images(self) -> bool:
         sub = getattr(self.observation_space, "spaces", {"": self.observation_space})
         return any(is_image_space(s) for s in sub.values())
+
+
+def _constructor_arguments(cls: type) -> list[str]:
+    """The argument names ``cls(...)`` takes: its ``__init__``'s, and where that passes on
+    ``**kwargs`` (a subclass changing a few defaults), those of the class above it too."""
+    names: list[str] = []
+    named = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+    for klass in cls.__mro__:
+        init = vars(klass).get("__init__")
+        if init is None:
+            continue
+        params = list(inspect.signature(init).parameters.values())[1:]  # without self
+        names += [p.name for p in params if p.kind in named and p.name not in names]
+        if all(p.kind is not inspect.Parameter.VAR_KEYWORD for p in params):
+            break
+    return names
 
 
 def round_up_steps(start: int, now: int, total: int, chunk: int) -> int:

@@ -50,6 +50,8 @@ class OffPolicyAlgorithm(BaseAlgorithm):
     # The collection counters make a run stopped mid-collection train at the same steps
     # after a resume as without the stop.
     _extra_counters: tuple[str, ...] = ("_n_calls", "_collected_steps", "_collected_episodes")
+    # Only their defaults are accepted (NotImplementedError otherwise): nothing to keep.
+    _not_saved = BaseAlgorithm._not_saved | {"replay_buffer_class", "n_steps"}
     replay_buffer: TransitionRing | FrameReplayBuffer | None
 
     def _build_policy(self, policy_kwargs: dict[str, Any]) -> Any:
@@ -132,26 +134,6 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         if self.replay_buffer is not None and self.replay_buffer.size() > 0:
             warnings.warn("n_envs changed: starting a new, empty replay buffer", stacklevel=3)
         self._make_replay_buffer()
-
-    def _off_policy_hyperparameters(self) -> dict[str, Any]:
-        """What every off-policy model file stores (subclasses add their own keys)."""
-        return {
-            "buffer_size": self.buffer_size,
-            "learning_starts": self.learning_starts,
-            "batch_size": self.batch_size,
-            "tau": self.tau,
-            "gamma": self.gamma,
-            "train_freq": list(self.train_freq),
-            "gradient_steps": self.gradient_steps,
-            "verbose": self.verbose,
-            "seed": self.seed,
-            "stats_window_size": self._stats_window_size,
-            "replay_buffer_kwargs": self.replay_buffer_kwargs,
-            "optimize_memory_usage": self.optimize_memory_usage,
-        }
-
-    def _schedules(self) -> dict[str, Any]:
-        return {"learning_rate": self.lr_schedule}
 
     def _sample_actions(self) -> tuple[np.ndarray, np.ndarray]:
         """``(actions for the env, actions for the buffer)`` at the current observations."""

@@ -185,9 +185,10 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
             "critic_optimizer": ("critic.optimizer", groups["critic"].optimizer),
         }
 
-    def _noise_json(self) -> dict[str, Any] | None:
-        """The exploration noise with its state, for the model file."""
-        return noise_to_json(self.action_noise)
+    def _saved_value(self, name: str) -> Any:
+        if name == "action_noise":  # the exploration noise with its state
+            return noise_to_json(self.action_noise)
+        return super()._saved_value(name)
 
     def _sample_batch(self, batch_size: int) -> dict[str, Any]:
         assert self.replay_buffer is not None

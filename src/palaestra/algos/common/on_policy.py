@@ -38,6 +38,13 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         spaces.MultiBinary,
     )
     _policy_class_base = ActorCriticPolicy
+    # SB3's arguments for gSDE and custom rollout buffers: refused, or without effect here.
+    _not_saved = BaseAlgorithm._not_saved | {
+        "use_sde",
+        "sde_sample_freq",
+        "rollout_buffer_class",
+        "rollout_buffer_kwargs",
+    }
     policy: ActorCritic
     n_steps: int
     gamma: float

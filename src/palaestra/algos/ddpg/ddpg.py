@@ -50,8 +50,3 @@ class DDPG(TD3):
         self._configure(
             locals() | {"policy_delay": 1, "target_policy_noise": 0.1, "target_noise_clip": 0.0}
         )
-
-    def _hyperparameters(self) -> dict[str, Any]:
-        """TD3's keys without the three DDPG fixes (a file cannot change them)."""
-        fixed = ("policy_delay", "target_policy_noise", "target_noise_clip")
-        return {k: v for k, v in super()._hyperparameters().items() if k not in fixed}

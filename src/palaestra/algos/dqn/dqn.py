@@ -185,13 +185,3 @@ class DQN(OffPolicyAlgorithm):
         self._n_updates += gradient_steps
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
         self.logger.record("train/loss", float(np.mean(losses)))
-
-    # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return self._off_policy_hyperparameters() | {
-            "target_update_interval": self.target_update_interval,
-            "exploration_fraction": self.exploration_fraction,
-            "exploration_initial_eps": self.exploration_initial_eps,
-            "exploration_final_eps": self.exploration_final_eps,
-            "max_grad_norm": self.max_grad_norm,
-        }

@@ -173,23 +173,6 @@ class PPO(OnPolicyAlgorithm):
             log.record("train/clip_range_vf", clip_range_vf)
 
     # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return {
-            "n_steps": self.n_steps,
-            "batch_size": self.batch_size,
-            "n_epochs": self.n_epochs,
-            "gamma": self.gamma,
-            "gae_lambda": self.gae_lambda,
-            "normalize_advantage": self.normalize_advantage,
-            "ent_coef": self.ent_coef,
-            "vf_coef": self.vf_coef,
-            "max_grad_norm": self.max_grad_norm,
-            "target_kl": self.target_kl,
-            "verbose": self.verbose,
-            "seed": self.seed,
-            "stats_window_size": self._stats_window_size,
-        }
-
     def _schedules(self) -> dict[str, Any]:
         return {
             "learning_rate": self.lr_schedule,

@@ -66,6 +66,14 @@ class SAC(ActorCriticOffPolicy):
         "MultiInputPolicy": MultiInputPolicy,
     }
     _policy_class_base = SACPolicy
+    # gSDE: refused, or without effect here
+    _not_saved = ActorCriticOffPolicy._not_saved | {
+        "use_sde",
+        "sde_sample_freq",
+        "use_sde_at_warmup",
+    }
+    # target_entropy: the argument ("auto" or a number), not the number it resolves to
+    _saved_from = ActorCriticOffPolicy._saved_from | {"target_entropy": "target_entropy_setting"}
 
     def __init__(
         self,
@@ -228,12 +236,3 @@ class SAC(ActorCriticOffPolicy):
         for key in ("ent_coef", "actor_loss", "critic_loss", "ent_coef_loss"):
             if key in logs:
                 self.logger.record(f"train/{key}", float(np.mean(logs[key])))
-
-    # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return self._off_policy_hyperparameters() | {
-            "action_noise": self._noise_json(),
-            "ent_coef": self.ent_coef,
-            "target_update_interval": self.target_update_interval,
-            "target_entropy": self.target_entropy_setting,
-        }

@@ -168,12 +168,3 @@ class TD3(ActorCriticOffPolicy):
         if actor_losses:
             self.logger.record("train/actor_loss", float(np.mean(actor_losses)))
         self.logger.record("train/critic_loss", float(np.mean(critic_losses)))
-
-    # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return self._off_policy_hyperparameters() | {
-            "action_noise": self._noise_json(),
-            "policy_delay": self.policy_delay,
-            "target_policy_noise": self.target_policy_noise,
-            "target_noise_clip": self.target_noise_clip,
-        }
