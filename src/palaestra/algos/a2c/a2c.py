@@ -30,8 +30,6 @@ class A2C(OnPolicyAlgorithm):
     learner with a flat RMSprop. ``num_threads``: torch CPU threads (default 1 for MlpPolicy).
     """
 
-    _extra_counters: tuple[str, ...] = ()
-
     def __init__(
         self,
         policy: str | type,

@@ -28,8 +28,6 @@ class PPO(OnPolicyAlgorithm):
     (default 1 for MlpPolicy).
     """
 
-    _extra_counters: tuple[str, ...] = ()
-
     def __init__(
         self,
         policy: str | type,
