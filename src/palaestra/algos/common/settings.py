@@ -5,7 +5,26 @@ An algorithm's ``__init__`` is SB3's public signature followed by ``self._config
 Each layer of the class (the algorithm, the off-policy or on-policy loop, the base) then takes
 the arguments it uses from one ``Settings`` by name, so no argument is passed on by position,
 a name a layer needs and the constructor lacks is a ``TypeError`` naming it, and so is an
-argument no layer took (a new hyperparameter nobody reads, or a stray local variable).
+argument no layer took (a new hyperparameter nobody reads, or a stray local variable). A new
+algorithm (or a subclass adding an argument) reads::
+
+    def __init__(self, policy, env, learning_rate=1e-4, ..., my_arg=0.5, ...,
+                 _init_setup_model=True):
+        self._configure(locals())
+
+    def _take_settings(self, settings):
+        if not settings["my_arg"] > 0:  # its own checks first
+            raise ValueError(...)
+        self.my_arg = settings["my_arg"]
+        super()._take_settings(settings)  # the layers below take theirs
+        ...  # what needs the env (self.env, self.n_envs)
+
+A subclass that only changes defaults passes its arguments on whole:
+``super().__init__(**{k: v for k, v in locals().items() if k not in ("self", "__class__")})``.
+A model file keeps the same arguments: ``BaseAlgorithm._hyperparameters`` reads the
+constructor's signature (less ``_not_saved`` and the schedules) and the attributes of those
+names, so ``self.my_arg`` is saved and handed back on ``load`` (once the package's
+``hyperparams.py`` declares its rule: what a file may hand the constructor).
 """
 
 from __future__ import annotations
