@@ -159,25 +159,3 @@ def test_ppo_target_kl_and_value_clipping(capsys: pytest.CaptureFixture[str]) ->
     out = capsys.readouterr().out
     assert "Early stopping at step 0 due to reaching max kl" in out
     assert "clip_range_vf" in out and model._n_updates == 2  # one epoch per train() call
-
-
-def test_constructor_plumbing_takes_its_settings_by_name_only() -> None:
-    """Past the public SB3 signature every setting is passed by keyword, so reordering one
-    is a TypeError, never a silent swap."""
-    import inspect
-
-    from palaestra.algos.common.base import BaseAlgorithm
-    from palaestra.algos.common.off_policy import OffPolicyAlgorithm
-    from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
-
-    for helper in (
-        BaseAlgorithm._init_common,
-        OffPolicyAlgorithm._init_off_policy,
-        ActorCriticOffPolicy._init_model,
-    ):
-        params = list(inspect.signature(helper).parameters.values())
-        assert params[0].name == "self", helper.__qualname__
-        assert {p.kind for p in params[1:]} <= {
-            inspect.Parameter.KEYWORD_ONLY,
-            inspect.Parameter.VAR_KEYWORD,
-        }, helper.__qualname__

@@ -11,7 +11,8 @@ import torch
 
 from palaestra.algos.a2c.objective import A2CObjective
 from palaestra.algos.common.on_policy import OnPolicyAlgorithm, default_adam
-from palaestra.algos.common.schedules import Schedule, as_schedule
+from palaestra.algos.common.schedules import Schedule
+from palaestra.algos.common.settings import Settings
 from palaestra.algos.learners.losses import explained_variance
 
 __all__ = ["A2C"]
@@ -28,8 +29,6 @@ class A2C(OnPolicyAlgorithm):
     bootstrapped with the value of their terminal observation. Small MLPs train on the numpy
     learner with a flat RMSprop. ``num_threads``: torch CPU threads (default 1 for MlpPolicy).
     """
-
-    _extra_counters: tuple[str, ...] = ()
 
     def __init__(
         self,
@@ -58,38 +57,27 @@ class A2C(OnPolicyAlgorithm):
         num_threads: int | None = None,
         _init_setup_model: bool = True,
     ) -> None:
-        if use_sde:
+        self._configure(locals())
+
+    def _take_settings(self, settings: Settings) -> None:
+        if settings["use_sde"]:
             raise NotImplementedError("A2C does not support use_sde (gSDE) yet")
-        if rollout_buffer_class is not None:
+        if settings["rollout_buffer_class"] is not None:
             raise NotImplementedError("A2C does not support rollout_buffer_class yet")
+        n_steps, rms_prop_eps = settings["n_steps"], settings["rms_prop_eps"]
         if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or n_steps < 1:
             raise ValueError(f"n_steps must be a positive integer, got {n_steps!r}")
         if not _positive_number(rms_prop_eps):
             raise ValueError(f"rms_prop_eps must be a positive finite number, got {rms_prop_eps!r}")
-        for name, value in (("gamma", gamma), ("gae_lambda", gae_lambda)):
+        for name in ("gamma", "gae_lambda"):
+            value = settings[name]
             if not (isinstance(value, (int, float)) and 0.0 <= value <= 1.0):
                 raise ValueError(f"{name} must be a number in [0, 1], got {value!r}")
-        self.learning_rate, self.lr_schedule = learning_rate, as_schedule(learning_rate)
-        self.n_steps, self.gamma, self.gae_lambda = int(n_steps), gamma, gae_lambda
-        self.ent_coef, self.vf_coef, self.max_grad_norm = ent_coef, vf_coef, max_grad_norm
-        self.rms_prop_eps, self.use_rms_prop = rms_prop_eps, use_rms_prop
-        self.normalize_advantage = normalize_advantage
-        self._init_common(
-            policy=policy,
-            env=env,
-            policy_kwargs=policy_kwargs,
-            verbose=verbose,
-            seed=seed,
-            device=device,
-            tensorboard_log=tensorboard_log,
-            num_threads=num_threads,
-            stats_window_size=stats_window_size,
-        )
-        if self.env is not None:
-            self._check_rollout_size()
-        self._setup_model_if(_init_setup_model)
+        self.rms_prop_eps, self.use_rms_prop = rms_prop_eps, settings["use_rms_prop"]
+        super()._take_settings(settings)
+        self.n_steps = int(n_steps)
 
-    def _check_rollout_size(self) -> None:
+    def _check_rollout_size(self, stacklevel: int = 3) -> None:
         if self.normalize_advantage and self.n_steps * self.n_envs <= 1:
             raise ValueError(
                 "normalize_advantage=True needs more than one sample per rollout, got "
@@ -139,26 +127,6 @@ class A2C(OnPolicyAlgorithm):
         log.record("train/value_loss", metrics["value_loss"])
         if self._head.kind == "gaussian":
             log.record("train/std", float(np.exp(self.learner.extra("log_std")).mean()))
-
-    # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return {
-            "n_steps": self.n_steps,
-            "gamma": self.gamma,
-            "gae_lambda": self.gae_lambda,
-            "ent_coef": self.ent_coef,
-            "vf_coef": self.vf_coef,
-            "max_grad_norm": self.max_grad_norm,
-            "rms_prop_eps": self.rms_prop_eps,
-            "use_rms_prop": self.use_rms_prop,
-            "normalize_advantage": self.normalize_advantage,
-            "verbose": self.verbose,
-            "seed": self.seed,
-            "stats_window_size": self._stats_window_size,
-        }
-
-    def _schedules(self) -> dict[str, Any]:
-        return {"learning_rate": self.lr_schedule}
 
 
 def _positive_number(value: Any) -> bool:

@@ -20,12 +20,13 @@ starts new episodes, as in SB3.
 from __future__ import annotations
 
 import contextlib
+import inspect
 import os
 import sys
 import time
 import warnings
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from typing import Any, ClassVar
 
 import numpy as np
@@ -44,6 +45,7 @@ from palaestra.algos.common.logger import HumanOutputFormat, Logger, configure
 from palaestra.algos.common.policies import extractor_class
 from palaestra.algos.common.preprocessing import check_for_nested_spaces
 from palaestra.algos.common.schedules import Schedule
+from palaestra.algos.common.settings import Settings
 from palaestra.algos.common.spaces_util import is_image_space, is_vectorized_observation
 from palaestra.algos.learners import Group, Learner, Net, build_learner
 from palaestra.core import Env, Wrapper
@@ -75,6 +77,15 @@ class BaseAlgorithm:
     # SB3's ``policy_aliases``: the class each policy name stands for (off-policy algorithms).
     policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {}
     _extra_counters: tuple[str, ...] = ()
+    # Constructor arguments a model file does not keep (schedules are kept apart, in
+    # ``_schedules``): the policy and its kwargs have entries of their own; where to log, the
+    # device and the thread count are the loading machine's, never the file's.
+    _not_saved: ClassVar[frozenset[str]] = frozenset(
+        {"policy", "env", "policy_kwargs", "_init_setup_model"}
+        | {"tensorboard_log", "device", "num_threads"}
+    )
+    # Saved constructor arguments whose value lives in an attribute of another name.
+    _saved_from: ClassVar[dict[str, str]] = {"stats_window_size": "_stats_window_size"}
     lr_schedule: Schedule
     learner: Learner
     _policy: torch.nn.Module
@@ -111,19 +122,21 @@ class BaseAlgorithm:
         if self.verbose >= 1:
             print(f"Training with the {self.learner.describe()}")
 
-    def _init_common(
-        self,
-        *,
-        policy: str | type,
-        env: Any,
-        policy_kwargs: dict[str, Any] | None,
-        verbose: int,
-        seed: int | None,
-        device: torch.device | str,
-        tensorboard_log: str | None,
-        num_threads: int | None,
-        stats_window_size: int = 100,
-    ) -> None:
+    def _configure(self, arguments: Mapping[str, Any]) -> None:
+        """An algorithm's whole constructor body: ``self._configure(locals())``. Each class
+        takes its own arguments in ``_take_settings``; one that none takes is a ``TypeError``
+        (see ``settings``). Then the networks are built, unless ``_init_setup_model`` is False."""
+        settings = Settings(type(self).__name__, arguments)
+        self._take_settings(settings)
+        init_setup_model = settings["_init_setup_model"]
+        settings.check_all_taken()
+        self._setup_model_if(init_setup_model)
+
+    def _take_settings(self, settings: Settings) -> None:
+        """Take this class's constructor arguments by name and set itself up from them.
+        Subclasses take theirs (checks first), call ``super()``, then do what needs the env
+        (``self.env``, ``self.n_envs``). Here: the policy, env, device, threads, logging."""
+        policy = settings["policy"]
         if isinstance(policy, type):
             base = self._policy_class_base
             if base is None or not issubclass(policy, base):
@@ -142,15 +155,17 @@ class BaseAlgorithm:
                 )
         else:
             extractor_class(policy)  # unknown names fail here, before any env work
-        self.policy_name, self.policy_kwargs = policy, dict(policy_kwargs or {})
+        self.policy_name, self.policy_kwargs = policy, dict(settings["policy_kwargs"] or {})
         # The name an alias class stands for (DQN's MlpPolicy is DQNPolicy): it gets the
         # same device and threads as the name; a user's subclass keeps torch's defaults.
         policy = next((name for name, cls in self.policy_aliases.items() if cls is policy), policy)
-        self.verbose, self.seed, self.tensorboard_log = verbose, seed, tensorboard_log
-        self.device = self._resolve_device(device, policy)
-        if verbose >= 1:
+        self.verbose, self.seed = settings["verbose"], settings["seed"]
+        self.tensorboard_log = settings["tensorboard_log"]
+        self.device = self._resolve_device(settings["device"], policy)
+        if self.verbose >= 1:
             print(f"Using {self.device} device")
         # Small nets are fastest on one thread; torch's default (all cores) only adds overhead.
+        num_threads = settings["num_threads"]
         threads = num_threads if num_threads is not None else (1 if policy == "MlpPolicy" else None)
         if threads is not None and self.device.type == "cpu":
             torch.set_num_threads(threads)
@@ -159,10 +174,10 @@ class BaseAlgorithm:
         self._progress_remaining = 1.0
         self._torch_rng_to_restore: torch.Tensor | None = None
         self._learning = False  # inside learn's loop (see _learning_session)
-        self._stats_window_size = stats_window_size
-        self.ep_info_buffer: deque[dict[str, Any]] = deque(maxlen=stats_window_size)
-        self.ep_success_buffer: deque[bool] = deque(maxlen=stats_window_size)
-        self._rng = np.random.default_rng(seed)
+        self._stats_window_size = settings["stats_window_size"]
+        self.ep_info_buffer: deque[dict[str, Any]] = deque(maxlen=self._stats_window_size)
+        self.ep_success_buffer: deque[bool] = deque(maxlen=self._stats_window_size)
+        self._rng = np.random.default_rng(self.seed)
         self._logger: Logger | None = None
         self._custom_logger = False
         self._last_obs: Any = None
@@ -170,6 +185,7 @@ class BaseAlgorithm:
         self.start_time = 0
         self.env: Any = None
         self.n_envs = 1
+        env = settings["env"]
         if env is not None:
             self.env = self._wrap_env(env)
             self.observation_space, self.action_space = (
@@ -529,6 +545,23 @@ class BaseAlgorithm:
         """Rebuild a saved model; never unpickles. ``custom_objects`` overrides stored values."""
         return saving.load_model(cls, path, env, device, custom_objects or {}, kwargs)
 
+    def _hyperparameters(self) -> dict[str, Any]:
+        """What a model file keeps of the constructor's arguments, at their current values (so
+        one changed on the model before ``save`` is saved as changed): every argument of this
+        class's constructor but ``_not_saved`` and the schedules."""
+        skip = self._not_saved | set(self._schedules())
+        names = _constructor_arguments(type(self))
+        return {name: self._saved_value(name) for name in names if name not in skip}
+
+    def _saved_value(self, name: str) -> Any:
+        """The value of the constructor argument ``name`` a model file keeps."""
+        value = getattr(self, self._saved_from.get(name, name))
+        return list(value) if isinstance(value, tuple) else value  # as JSON gives it back
+
+    def _schedules(self) -> dict[str, Any]:
+        """The schedules a model file keeps, by constructor argument."""
+        return {"learning_rate": self.lr_schedule}
+
     def _optimizers(self) -> dict[str, tuple[str, torch.optim.Optimizer]]:
         """Each optimizer by its model-file key, with SB3's ``get_parameters`` key."""
         return {"optimizer": ("policy.optimizer", self.optimizer)}
@@ -555,6 +588,22 @@ class BaseAlgorithm:
     def _uses_images(self) -> bool:
         sub = getattr(self.observation_space, "spaces", {"": self.observation_space})
         return any(is_image_space(s) for s in sub.values())
+
+
+def _constructor_arguments(cls: type) -> list[str]:
+    """The argument names ``cls(...)`` takes: its ``__init__``'s, and where that passes on
+    ``**kwargs`` (a subclass changing a few defaults), those of the class above it too."""
+    names: list[str] = []
+    named = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+    for klass in cls.__mro__:
+        init = vars(klass).get("__init__")
+        if init is None:
+            continue
+        params = list(inspect.signature(init).parameters.values())[1:]  # without self
+        names += [p.name for p in params if p.kind in named and p.name not in names]
+        if all(p.kind is not inspect.Parameter.VAR_KEYWORD for p in params):
+            break
+    return names
 
 
 def round_up_steps(start: int, now: int, total: int, chunk: int) -> int:

@@ -20,7 +20,8 @@ import torch
 from palaestra.algos.common import model_io
 from palaestra.algos.common.base import BaseAlgorithm, round_up_steps
 from palaestra.algos.common.frame_replay_buffer import FrameReplayBuffer, frame_layout
-from palaestra.algos.common.schedules import Schedule, as_schedule
+from palaestra.algos.common.schedules import as_schedule
+from palaestra.algos.common.settings import Settings
 from palaestra.algos.common.transition_ring import TransitionRing
 
 __all__ = ["OffPolicyAlgorithm", "train_freq_pair"]
@@ -49,6 +50,8 @@ class OffPolicyAlgorithm(BaseAlgorithm):
     # The collection counters make a run stopped mid-collection train at the same steps
     # after a resume as without the stop.
     _extra_counters: tuple[str, ...] = ("_n_calls", "_collected_steps", "_collected_episodes")
+    # Only their defaults are accepted (NotImplementedError otherwise): nothing to keep.
+    _not_saved = BaseAlgorithm._not_saved | {"replay_buffer_class", "n_steps"}
     replay_buffer: TransitionRing | FrameReplayBuffer | None
 
     def _build_policy(self, policy_kwargs: dict[str, Any]) -> Any:
@@ -78,35 +81,24 @@ class OffPolicyAlgorithm(BaseAlgorithm):
             return ""
         return f"the policy is a custom {type(policy).__name__}"
 
-    def _init_off_policy(
-        self,
-        *,
-        learning_rate: float | Schedule,
-        buffer_size: int,
-        learning_starts: int,
-        batch_size: int,
-        tau: float,
-        gamma: float,
-        train_freq: int | tuple[int, str],
-        gradient_steps: int,
-        replay_buffer_class: Any,
-        replay_buffer_kwargs: dict[str, Any] | None,
-        optimize_memory_usage: bool,
-        n_steps: int,
-    ) -> None:
+    def _take_settings(self, settings: Settings) -> None:
         """The settings every off-policy algorithm takes (SB3's names and meanings)."""
-        if replay_buffer_class is not None or n_steps != 1:
+        if settings["replay_buffer_class"] is not None or settings["n_steps"] != 1:
             raise NotImplementedError("replay_buffer_class and n_steps > 1 are not supported yet")
-        self.optimize_memory_usage = bool(optimize_memory_usage)
-        self.learning_rate, self.lr_schedule = learning_rate, as_schedule(learning_rate)
-        self.buffer_size, self.learning_starts = buffer_size, learning_starts
-        self.batch_size, self.tau, self.gamma = batch_size, tau, gamma
-        self.train_freq = train_freq_pair(train_freq)
-        self.gradient_steps = gradient_steps
-        self.replay_buffer_kwargs = dict(replay_buffer_kwargs or {})
+        self.optimize_memory_usage = bool(settings["optimize_memory_usage"])
+        self.learning_rate = settings["learning_rate"]
+        self.lr_schedule = as_schedule(self.learning_rate)
+        self.buffer_size = settings["buffer_size"]
+        self.learning_starts = settings["learning_starts"]
+        self.batch_size = settings["batch_size"]
+        self.tau, self.gamma = settings["tau"], settings["gamma"]
+        self.train_freq = train_freq_pair(settings["train_freq"])
+        self.gradient_steps = settings["gradient_steps"]
+        self.replay_buffer_kwargs: dict[str, Any] = dict(settings["replay_buffer_kwargs"] or {})
         self._n_calls = 0
         self._collected_steps = self._collected_episodes = 0  # of the collection under way
         self.replay_buffer = None
+        super()._take_settings(settings)
 
     def _make_replay_buffer(self) -> None:
         self._no_timeouts = np.zeros(self.n_envs, dtype=bool)
@@ -142,26 +134,6 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         if self.replay_buffer is not None and self.replay_buffer.size() > 0:
             warnings.warn("n_envs changed: starting a new, empty replay buffer", stacklevel=3)
         self._make_replay_buffer()
-
-    def _off_policy_hyperparameters(self) -> dict[str, Any]:
-        """What every off-policy model file stores (subclasses add their own keys)."""
-        return {
-            "buffer_size": self.buffer_size,
-            "learning_starts": self.learning_starts,
-            "batch_size": self.batch_size,
-            "tau": self.tau,
-            "gamma": self.gamma,
-            "train_freq": list(self.train_freq),
-            "gradient_steps": self.gradient_steps,
-            "verbose": self.verbose,
-            "seed": self.seed,
-            "stats_window_size": self._stats_window_size,
-            "replay_buffer_kwargs": self.replay_buffer_kwargs,
-            "optimize_memory_usage": self.optimize_memory_usage,
-        }
-
-    def _schedules(self) -> dict[str, Any]:
-        return {"learning_rate": self.lr_schedule}
 
     def _sample_actions(self) -> tuple[np.ndarray, np.ndarray]:
         """``(actions for the env, actions for the buffer)`` at the current observations."""

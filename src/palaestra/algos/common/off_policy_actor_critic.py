@@ -21,6 +21,7 @@ from palaestra.algos.common.action_noise import (
 from palaestra.algos.common.continuous_policies import ContinuousCritic
 from palaestra.algos.common.off_policy import OffPolicyAlgorithm
 from palaestra.algos.common.policies import _numpy_input_problem
+from palaestra.algos.common.settings import Settings
 from palaestra.algos.learners import Net
 
 __all__ = ["ActorCriticOffPolicy"]
@@ -32,8 +33,10 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
     supported_action_spaces = (spaces.Box,)
     action_noise: ActionNoise | None
 
-    def _init_actor_critic(self, tau: float, action_noise: Any) -> None:
-        """Checks SB3 leaves to a crash later: ``tau`` in [0, 1], an ``ActionNoise``."""
+    def _take_settings(self, settings: Settings) -> None:
+        """Checks SB3 leaves to a crash later: ``tau`` in [0, 1], an ``ActionNoise``; then the
+        replay loop's settings and the common ones."""
+        tau, action_noise = settings["tau"], settings["action_noise"]
         if isinstance(tau, bool) or not isinstance(tau, (int, float)) or not 0.0 <= tau <= 1.0:
             raise ValueError(f"tau must be a number in [0, 1], got {tau!r}")
         if isinstance(action_noise, dict):  # from a model file
@@ -44,40 +47,7 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
                 f"{type(action_noise).__name__}"
             )
         self.action_noise = action_noise
-
-    def _init_model(
-        self,
-        *,
-        action_noise: Any,
-        init_setup_model: bool,
-        policy: str | type,
-        env: Any,
-        policy_kwargs: dict[str, Any] | None,
-        verbose: int,
-        seed: int | None,
-        device: torch.device | str,
-        tensorboard_log: str | None,
-        num_threads: int | None,
-        stats_window_size: int,
-        **off_policy: Any,
-    ) -> None:
-        """The constructor plumbing SAC, TD3 and DDPG share, once their own arguments are
-        checked and set: the replay loop's settings (``off_policy``: ``_init_off_policy``'s
-        keywords, passed on by name), the common ones, then the networks."""
-        self._init_actor_critic(off_policy["tau"], action_noise)
-        self._init_off_policy(**off_policy)
-        self._init_common(
-            policy=policy,
-            env=env,
-            policy_kwargs=policy_kwargs,
-            verbose=verbose,
-            seed=seed,
-            device=device,
-            tensorboard_log=tensorboard_log,
-            num_threads=num_threads,
-            stats_window_size=stats_window_size,
-        )
-        self._setup_model_if(init_setup_model)
+        super()._take_settings(settings)
 
     def _check_action_space(self) -> None:
         box = self.action_space
@@ -215,9 +185,10 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
             "critic_optimizer": ("critic.optimizer", groups["critic"].optimizer),
         }
 
-    def _noise_json(self) -> dict[str, Any] | None:
-        """The exploration noise with its state, for the model file."""
-        return noise_to_json(self.action_noise)
+    def _saved_value(self, name: str) -> Any:
+        if name == "action_noise":  # the exploration noise with its state
+            return noise_to_json(self.action_noise)
+        return super()._saved_value(name)
 
     def _sample_batch(self, batch_size: int) -> dict[str, Any]:
         assert self.replay_buffer is not None

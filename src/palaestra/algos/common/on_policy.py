@@ -18,6 +18,8 @@ from palaestra import spaces
 from palaestra.algos.common.base import BaseAlgorithm, round_up_steps
 from palaestra.algos.common.policies import ActorCritic, ActorCriticPolicy, extractor_class
 from palaestra.algos.common.rollout_store import RolloutStore
+from palaestra.algos.common.schedules import as_schedule
+from palaestra.algos.common.settings import Settings
 from palaestra.algos.learners import Group, Net
 
 __all__ = ["OnPolicyAlgorithm"]
@@ -26,9 +28,8 @@ __all__ = ["OnPolicyAlgorithm"]
 class OnPolicyAlgorithm(BaseAlgorithm):
     """Rollouts of ``n_steps`` per env into a ``RolloutStore``, then ``train()``.
 
-    Subclasses set ``n_steps``, ``gamma``, ``gae_lambda`` and ``lr_schedule`` before
-    ``_init_common`` and implement ``_optimizer_choice``, ``train`` and
-    ``_check_rollout_size``."""
+    Subclasses take their own settings (``_take_settings``) and implement
+    ``_optimizer_choice``, ``train`` and ``_check_rollout_size``."""
 
     supported_action_spaces = (
         spaces.Discrete,
@@ -37,16 +38,40 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         spaces.MultiBinary,
     )
     _policy_class_base = ActorCriticPolicy
+    # SB3's arguments for gSDE and custom rollout buffers: refused, or without effect here.
+    _not_saved = BaseAlgorithm._not_saved | {
+        "use_sde",
+        "sde_sample_freq",
+        "rollout_buffer_class",
+        "rollout_buffer_kwargs",
+    }
     policy: ActorCritic
     n_steps: int
     gamma: float
     gae_lambda: float
 
+    def _take_settings(self, settings: Settings) -> None:
+        """SB3's ``OnPolicyAlgorithm`` arguments, once the algorithm has checked its own; the
+        rollout's size is checked when the env is known."""
+        self.learning_rate = settings["learning_rate"]
+        self.lr_schedule = as_schedule(self.learning_rate)
+        self.n_steps = settings["n_steps"]
+        self.gamma, self.gae_lambda = settings["gamma"], settings["gae_lambda"]
+        self.ent_coef, self.vf_coef = settings["ent_coef"], settings["vf_coef"]
+        self.max_grad_norm = settings["max_grad_norm"]
+        self.normalize_advantage = settings["normalize_advantage"]
+        settings.unused("sde_sample_freq", "rollout_buffer_kwargs")
+        super()._take_settings(settings)
+        if self.env is not None:
+            # warnings point at the user's PPO(...): __init__, _configure, 2 _take_settings
+            self._check_rollout_size(stacklevel=6)
+
     def _optimizer_choice(self, kwargs: dict[str, Any]) -> tuple[type, dict[str, Any]]:
         """The optimizer class and its kwargs, taking them out of ``kwargs`` (the policy's)."""
         raise NotImplementedError
 
-    def _check_rollout_size(self) -> None:
+    def _check_rollout_size(self, stacklevel: int = 3) -> None:
+        """Refuse (or warn about, at ``stacklevel``) a rollout size that cannot train."""
         raise NotImplementedError
 
     def train(self) -> None:

@@ -46,36 +46,7 @@ class DDPG(TD3):
         num_threads: int | None = None,
         _init_setup_model: bool = True,
     ) -> None:
-        super().__init__(
-            policy=policy,
-            env=env,
-            learning_rate=learning_rate,
-            buffer_size=buffer_size,
-            learning_starts=learning_starts,
-            batch_size=batch_size,
-            tau=tau,
-            gamma=gamma,
-            train_freq=train_freq,
-            gradient_steps=gradient_steps,
-            action_noise=action_noise,
-            replay_buffer_class=replay_buffer_class,
-            replay_buffer_kwargs=replay_buffer_kwargs,
-            optimize_memory_usage=optimize_memory_usage,
-            n_steps=n_steps,
-            policy_delay=1,
-            target_policy_noise=0.1,
-            target_noise_clip=0.0,
-            stats_window_size=stats_window_size,
-            tensorboard_log=tensorboard_log,
-            policy_kwargs=policy_kwargs,
-            verbose=verbose,
-            seed=seed,
-            device=device,
-            num_threads=num_threads,
-            _init_setup_model=_init_setup_model,
+        # TD3 with these fixed (SB3's DDPG): not arguments, so a model file does not keep them
+        self._configure(
+            locals() | {"policy_delay": 1, "target_policy_noise": 0.1, "target_noise_clip": 0.0}
         )
-
-    def _hyperparameters(self) -> dict[str, Any]:
-        """TD3's keys without the three DDPG fixes (a file cannot change them)."""
-        fixed = ("policy_delay", "target_policy_noise", "target_noise_clip")
-        return {k: v for k, v in super()._hyperparameters().items() if k not in fixed}

@@ -11,6 +11,7 @@ import torch
 from palaestra import spaces
 from palaestra.algos.common.off_policy import OffPolicyAlgorithm
 from palaestra.algos.common.schedules import LinearSchedule, Schedule
+from palaestra.algos.common.settings import Settings
 from palaestra.algos.dqn.objective import DQNObjective
 from palaestra.algos.dqn.policies import CnnPolicy, DQNPolicy, MlpPolicy, MultiInputPolicy, QNetwork
 from palaestra.algos.learners import Group, Net
@@ -74,50 +75,26 @@ class DQN(OffPolicyAlgorithm):
         num_threads: int | None = None,
         _init_setup_model: bool = True,
     ) -> None:
-        self._init_off_policy(
-            learning_rate=learning_rate,
-            buffer_size=buffer_size,
-            learning_starts=learning_starts,
-            batch_size=batch_size,
-            tau=tau,
-            gamma=gamma,
-            train_freq=train_freq,
-            gradient_steps=gradient_steps,
-            replay_buffer_class=replay_buffer_class,
-            replay_buffer_kwargs=replay_buffer_kwargs,
-            optimize_memory_usage=optimize_memory_usage,
-            n_steps=n_steps,
-        )
-        self.target_update_interval = target_update_interval
-        self.exploration_fraction = exploration_fraction
-        self.exploration_initial_eps, self.exploration_final_eps = (
-            exploration_initial_eps,
-            exploration_final_eps,
-        )
-        self.max_grad_norm = max_grad_norm
+        self._configure(locals())
+
+    def _take_settings(self, settings: Settings) -> None:
+        self.target_update_interval = settings["target_update_interval"]
+        self.exploration_fraction = settings["exploration_fraction"]
+        self.exploration_initial_eps = settings["exploration_initial_eps"]
+        self.exploration_final_eps = settings["exploration_final_eps"]
+        self.max_grad_norm = settings["max_grad_norm"]
         self.exploration_schedule = LinearSchedule(
-            exploration_initial_eps, exploration_final_eps, exploration_fraction
+            self.exploration_initial_eps, self.exploration_final_eps, self.exploration_fraction
         )
         self.exploration_rate = 0.0
-        self._init_common(
-            policy=policy,
-            env=env,
-            policy_kwargs=policy_kwargs,
-            verbose=verbose,
-            seed=seed,
-            device=device,
-            tensorboard_log=tensorboard_log,
-            num_threads=num_threads,
-            stats_window_size=stats_window_size,
-        )
-        if self.env is not None and self.n_envs > target_update_interval:
+        super()._take_settings(settings)
+        if self.env is not None and self.n_envs > self.target_update_interval:
             warnings.warn(
                 f"The number of environments ({self.n_envs}) exceeds "
-                f"target_update_interval ({target_update_interval}): the target network "
+                f"target_update_interval ({self.target_update_interval}): the target network "
                 "is updated every step",
-                stacklevel=2,
+                stacklevel=4,  # the user's DQN(...): __init__, _configure, here
             )
-        self._setup_model_if(_init_setup_model)
 
     def _setup_model(self) -> None:
         if not isinstance(self.action_space, spaces.Discrete):
@@ -208,13 +185,3 @@ class DQN(OffPolicyAlgorithm):
         self._n_updates += gradient_steps
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
         self.logger.record("train/loss", float(np.mean(losses)))
-
-    # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return self._off_policy_hyperparameters() | {
-            "target_update_interval": self.target_update_interval,
-            "exploration_fraction": self.exploration_fraction,
-            "exploration_initial_eps": self.exploration_initial_eps,
-            "exploration_final_eps": self.exploration_final_eps,
-            "max_grad_norm": self.max_grad_norm,
-        }

@@ -10,6 +10,7 @@ import torch
 
 from palaestra.algos.common.on_policy import OnPolicyAlgorithm, default_adam
 from palaestra.algos.common.schedules import Schedule, as_schedule
+from palaestra.algos.common.settings import Settings
 from palaestra.algos.learners.losses import explained_variance
 from palaestra.algos.ppo.objective import PPOObjective
 
@@ -26,8 +27,6 @@ class PPO(OnPolicyAlgorithm):
     clipped to the bounds only when sent to the env. ``num_threads``: torch CPU threads
     (default 1 for MlpPolicy).
     """
-
-    _extra_counters: tuple[str, ...] = ()
 
     def __init__(
         self,
@@ -59,44 +58,28 @@ class PPO(OnPolicyAlgorithm):
         num_threads: int | None = None,
         _init_setup_model: bool = True,
     ) -> None:
-        if use_sde or rollout_buffer_class is not None:
+        self._configure(locals())
+
+    def _take_settings(self, settings: Settings) -> None:
+        if settings["use_sde"] or settings["rollout_buffer_class"] is not None:
             raise NotImplementedError("use_sde and rollout_buffer_class are not supported yet")
-        if normalize_advantage and batch_size <= 1:
+        if settings["normalize_advantage"] and settings["batch_size"] <= 1:
             raise ValueError(
                 "`batch_size` must be greater than 1 when normalize_advantage=True "
                 "(see https://github.com/DLR-RM/stable-baselines3/issues/440)"
             )
+        clip_range_vf = settings["clip_range_vf"]
         if isinstance(clip_range_vf, (int, float)) and clip_range_vf <= 0:
             raise ValueError(
                 "`clip_range_vf` must be positive, pass `None` to deactivate vf clipping"
             )
-        self.learning_rate, self.lr_schedule = learning_rate, as_schedule(learning_rate)
-        self.n_steps, self.batch_size, self.n_epochs = n_steps, batch_size, n_epochs
-        self.gamma, self.gae_lambda = gamma, gae_lambda
-        self.clip_range = as_schedule(clip_range)
+        self.batch_size, self.n_epochs = settings["batch_size"], settings["n_epochs"]
+        self.target_kl = settings["target_kl"]
+        self.clip_range = as_schedule(settings["clip_range"])
         self.clip_range_vf = None if clip_range_vf is None else as_schedule(clip_range_vf)
-        self.normalize_advantage, self.ent_coef, self.vf_coef = (
-            normalize_advantage,
-            ent_coef,
-            vf_coef,
-        )
-        self.max_grad_norm, self.target_kl = max_grad_norm, target_kl
-        self._init_common(
-            policy=policy,
-            env=env,
-            policy_kwargs=policy_kwargs,
-            verbose=verbose,
-            seed=seed,
-            device=device,
-            tensorboard_log=tensorboard_log,
-            num_threads=num_threads,
-            stats_window_size=stats_window_size,
-        )
-        if self.env is not None:
-            self._check_rollout_size()
-        self._setup_model_if(_init_setup_model)
+        super()._take_settings(settings)
 
-    def _check_rollout_size(self) -> None:
+    def _check_rollout_size(self, stacklevel: int = 3) -> None:
         size = self.n_steps * self.n_envs
         if size <= 1:
             raise ValueError(
@@ -109,7 +92,7 @@ class PPO(OnPolicyAlgorithm):
                 f"the rollout buffer is of size `n_steps * n_envs = {size}`, after every "
                 f"{size // self.batch_size} untruncated mini-batches, there will be a "
                 f"truncated mini-batch of size {size % self.batch_size}",
-                stacklevel=3,
+                stacklevel=stacklevel,
             )
 
     def _optimizer_choice(self, kwargs: dict[str, Any]) -> tuple[type, dict[str, Any]]:
@@ -188,23 +171,6 @@ class PPO(OnPolicyAlgorithm):
             log.record("train/clip_range_vf", clip_range_vf)
 
     # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return {
-            "n_steps": self.n_steps,
-            "batch_size": self.batch_size,
-            "n_epochs": self.n_epochs,
-            "gamma": self.gamma,
-            "gae_lambda": self.gae_lambda,
-            "normalize_advantage": self.normalize_advantage,
-            "ent_coef": self.ent_coef,
-            "vf_coef": self.vf_coef,
-            "max_grad_norm": self.max_grad_norm,
-            "target_kl": self.target_kl,
-            "verbose": self.verbose,
-            "seed": self.seed,
-            "stats_window_size": self._stats_window_size,
-        }
-
     def _schedules(self) -> dict[str, Any]:
         return {
             "learning_rate": self.lr_schedule,

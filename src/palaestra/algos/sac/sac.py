@@ -12,6 +12,7 @@ from palaestra.algos.common.continuous_policies import ContinuousCritic, Squashe
 from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
 from palaestra.algos.common.policies import _numpy_input_problem
 from palaestra.algos.common.schedules import Schedule
+from palaestra.algos.common.settings import Settings
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.learners.heads import squashed_gaussian_rsample
 from palaestra.algos.learners.xp import numpy_ops
@@ -65,6 +66,14 @@ class SAC(ActorCriticOffPolicy):
         "MultiInputPolicy": MultiInputPolicy,
     }
     _policy_class_base = SACPolicy
+    # gSDE: refused, or without effect here
+    _not_saved = ActorCriticOffPolicy._not_saved | {
+        "use_sde",
+        "sde_sample_freq",
+        "use_sde_at_warmup",
+    }
+    # target_entropy: the argument ("auto" or a number), not the number it resolves to
+    _saved_from = ActorCriticOffPolicy._saved_from | {"target_entropy": "target_entropy_setting"}
 
     def __init__(
         self,
@@ -98,41 +107,22 @@ class SAC(ActorCriticOffPolicy):
         num_threads: int | None = None,
         _init_setup_model: bool = True,
     ) -> None:
-        if use_sde or use_sde_at_warmup:
+        self._configure(locals())
+
+    def _take_settings(self, settings: Settings) -> None:
+        if settings["use_sde"] or settings["use_sde_at_warmup"]:
             raise NotImplementedError("use_sde (gSDE) is not supported by palaestra's SAC yet")
+        settings.unused("sde_sample_freq")
+        ent_coef, target_entropy = settings["ent_coef"], settings["target_entropy"]
         self._learn_ent_coef, self._ent_coef_init = _ent_coef_init(ent_coef)
         if isinstance(target_entropy, str) and target_entropy != "auto":
             raise ValueError(f'target_entropy must be "auto" or a number, got {target_entropy!r}')
-        interval = target_update_interval
+        interval = settings["target_update_interval"]
         if isinstance(interval, bool) or not isinstance(interval, int) or interval < 1:
             raise ValueError(f"target_update_interval must be a positive int, got {interval!r}")
         self.ent_coef, self.target_entropy_setting = ent_coef, target_entropy
         self.target_update_interval = interval
-        self._init_model(
-            policy=policy,
-            env=env,
-            learning_rate=learning_rate,
-            buffer_size=buffer_size,
-            learning_starts=learning_starts,
-            batch_size=batch_size,
-            tau=tau,
-            gamma=gamma,
-            train_freq=train_freq,
-            gradient_steps=gradient_steps,
-            action_noise=action_noise,
-            replay_buffer_class=replay_buffer_class,
-            replay_buffer_kwargs=replay_buffer_kwargs,
-            optimize_memory_usage=optimize_memory_usage,
-            n_steps=n_steps,
-            stats_window_size=stats_window_size,
-            tensorboard_log=tensorboard_log,
-            policy_kwargs=policy_kwargs,
-            verbose=verbose,
-            seed=seed,
-            device=device,
-            num_threads=num_threads,
-            init_setup_model=_init_setup_model,
-        )
+        super()._take_settings(settings)
 
     def _setup_model(self) -> None:
         self._check_action_space()
@@ -246,12 +236,3 @@ class SAC(ActorCriticOffPolicy):
         for key in ("ent_coef", "actor_loss", "critic_loss", "ent_coef_loss"):
             if key in logs:
                 self.logger.record(f"train/{key}", float(np.mean(logs[key])))
-
-    # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return self._off_policy_hyperparameters() | {
-            "action_noise": self._noise_json(),
-            "ent_coef": self.ent_coef,
-            "target_update_interval": self.target_update_interval,
-            "target_entropy": self.target_entropy_setting,
-        }

@@ -12,6 +12,7 @@ from palaestra.algos.common.continuous_policies import ContinuousCritic, Determi
 from palaestra.algos.common.off_policy_actor_critic import ActorCriticOffPolicy
 from palaestra.algos.common.policies import _numpy_input_problem
 from palaestra.algos.common.schedules import Schedule
+from palaestra.algos.common.settings import Settings
 from palaestra.algos.learners import Group, Net
 from palaestra.algos.td3.objective import TD3ActorObjective, TD3CriticObjective
 from palaestra.algos.td3.policies import CnnPolicy, MlpPolicy, MultiInputPolicy, TD3Policy
@@ -66,41 +67,20 @@ class TD3(ActorCriticOffPolicy):
         num_threads: int | None = None,
         _init_setup_model: bool = True,
     ) -> None:
+        self._configure(locals())
+
+    def _take_settings(self, settings: Settings) -> None:
+        policy_delay = settings["policy_delay"]
         if isinstance(policy_delay, bool) or not isinstance(policy_delay, int) or policy_delay < 1:
             raise ValueError(f"policy_delay must be a positive int, got {policy_delay!r}")
-        for name, value in [
-            ("target_policy_noise", target_policy_noise),
-            ("target_noise_clip", target_noise_clip),
-        ]:
+        for name in ("target_policy_noise", "target_noise_clip"):
+            value = settings[name]
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
                 raise ValueError(f"{name} must be a number >= 0, got {value!r}")
         self.policy_delay = policy_delay
-        self.target_policy_noise, self.target_noise_clip = target_policy_noise, target_noise_clip
-        self._init_model(
-            policy=policy,
-            env=env,
-            learning_rate=learning_rate,
-            buffer_size=buffer_size,
-            learning_starts=learning_starts,
-            batch_size=batch_size,
-            tau=tau,
-            gamma=gamma,
-            train_freq=train_freq,
-            gradient_steps=gradient_steps,
-            action_noise=action_noise,
-            replay_buffer_class=replay_buffer_class,
-            replay_buffer_kwargs=replay_buffer_kwargs,
-            optimize_memory_usage=optimize_memory_usage,
-            n_steps=n_steps,
-            stats_window_size=stats_window_size,
-            tensorboard_log=tensorboard_log,
-            policy_kwargs=policy_kwargs,
-            verbose=verbose,
-            seed=seed,
-            device=device,
-            num_threads=num_threads,
-            init_setup_model=_init_setup_model,
-        )
+        self.target_policy_noise = settings["target_policy_noise"]
+        self.target_noise_clip = settings["target_noise_clip"]
+        super()._take_settings(settings)
 
     def _setup_model(self) -> None:
         self._check_action_space()
@@ -188,12 +168,3 @@ class TD3(ActorCriticOffPolicy):
         if actor_losses:
             self.logger.record("train/actor_loss", float(np.mean(actor_losses)))
         self.logger.record("train/critic_loss", float(np.mean(critic_losses)))
-
-    # -- persistence ---------------------------------------------------------------------------
-    def _hyperparameters(self) -> dict[str, Any]:
-        return self._off_policy_hyperparameters() | {
-            "action_noise": self._noise_json(),
-            "policy_delay": self.policy_delay,
-            "target_policy_noise": self.target_policy_noise,
-            "target_noise_clip": self.target_noise_clip,
-        }
