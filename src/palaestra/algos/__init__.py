@@ -65,6 +65,7 @@ from palaestra.algos.common.action_noise import (
     VectorizedActionNoise,
 )
 from palaestra.algos.ppo import PPO
+from palaestra.algos.qrdqn import QRDQN
 from palaestra.algos.common.evaluation import evaluate_policy
 from palaestra.algos.common.model_io import ModelFileError
 from palaestra.algos.common.schedules import ConstantSchedule, LinearSchedule
@@ -74,6 +75,7 @@ __all__ = [
     "DDPG",
     "DQN",
     "PPO",
+    "QRDQN",
     "SAC",
     "TD3",
     "ConstantSchedule",

@@ -61,6 +61,7 @@ REGISTRY: tuple[Algorithm, ...] = (
     Algorithm("sac", "palaestra.algos.sac:SAC", replay=True),
     Algorithm("td3", "palaestra.algos.td3:TD3", replay=True),
     Algorithm("ddpg", "palaestra.algos.ddpg:DDPG", replay=True),
+    Algorithm("qrdqn", "palaestra.algos.qrdqn:QRDQN", replay=True),
 )
 _BY_NAME = {entry.name: entry for entry in REGISTRY}
 # name -> class name in palaestra.algos
