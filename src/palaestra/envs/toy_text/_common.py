@@ -15,6 +15,7 @@ import numpy as np
 
 from palaestra import error
 from palaestra.envs.action_checks import check_discrete_batch
+from palaestra.envs.batch_args import row_mask, row_seeds
 from palaestra.envs.rendered import RenderedEnv
 from palaestra.envs.toy_text._streams import RowStreams
 from palaestra.spaces import Discrete, Space
@@ -74,16 +75,6 @@ class ToyTextBatch:
         self._all = np.arange(n)  # [N] every row, for the streams' gathers
         self._infos: Any = None
 
-    def _row_seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
-        if seed is None:
-            return [None] * self.num_envs
-        if isinstance(seed, (int, np.integer)):
-            return [int(seed) + i for i in range(self.num_envs)]
-        seeds = list(seed)
-        if len(seeds) != self.num_envs:
-            raise ValueError(f"Expected {self.num_envs} seeds, got {len(seeds)}")
-        return seeds
-
     def reset(
         self,
         *,
@@ -100,11 +91,9 @@ class ToyTextBatch:
         if mask is None:
             rows = self._all
         else:
-            mask = np.asarray(mask)
-            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
-                raise ValueError(f"mask must be a bool array of shape ({self.num_envs},)")
+            mask = row_mask(mask, self.num_envs, "mask")
             rows = mask.nonzero()[0]
-        seeds = self._row_seeds(seed)
+        seeds = row_seeds(seed, self.num_envs)
         fresh = [
             i for i in rows.tolist() if seeds[i] is not None or self._rngs[i] is None
         ]  # rows that get a new generator
@@ -131,9 +120,7 @@ class ToyTextBatch:
         if reset_mask is None:
             stepping, resetting = self._all, None
         else:
-            mask = np.asarray(reset_mask)
-            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
-                raise ValueError(f"reset_mask must be a bool array of shape ({self.num_envs},)")
+            mask = row_mask(reset_mask, self.num_envs, "reset_mask")
             resetting = mask
         fused = self._step_all(act, resetting)
         if fused is not None:

@@ -1,0 +1,28 @@
+"""What every native batch checks in the arguments of its ``reset`` and ``step``: the seeds,
+one per row, and the bool masks that pick rows."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+
+def row_seeds(seed: int | Sequence[int | None] | None, num_envs: int) -> list[int | None]:
+    """One seed per row: None for every row, an int ``s`` (row i gets ``s + i``) or N seeds."""
+    if seed is None:
+        return [None] * num_envs
+    if isinstance(seed, (int, np.integer)):
+        return [int(seed) + i for i in range(num_envs)]
+    seeds = list(seed)
+    if len(seeds) != num_envs:
+        raise ValueError(f"Expected {num_envs} seeds, got {len(seeds)}")
+    return seeds
+
+
+def row_mask(mask: np.ndarray, num_envs: int, name: str) -> np.ndarray:
+    """``mask`` as a bool ``[num_envs]`` array, else ``ValueError`` naming the argument."""
+    mask = np.asarray(mask)
+    if mask.shape != (num_envs,) or mask.dtype != np.bool_:
+        raise ValueError(f"{name} must be a bool array of shape ({num_envs},)")
+    return mask
