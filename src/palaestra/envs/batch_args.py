@@ -7,17 +7,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from palaestra.vector import engine
+
 
 def row_seeds(seed: int | Sequence[int | None] | None, num_envs: int) -> list[int | None]:
     """One seed per row: None for every row, an int ``s`` (row i gets ``s + i``) or N seeds."""
-    if seed is None:
-        return [None] * num_envs
-    if isinstance(seed, (int, np.integer)):
-        return [int(seed) + i for i in range(num_envs)]
-    seeds = list(seed)
-    if len(seeds) != num_envs:
-        raise ValueError(f"Expected {num_envs} seeds, got {len(seeds)}")
-    return seeds
+    return engine.row_seeds(seed, num_envs, "Expected {num_envs} seeds, got {length}")
 
 
 def row_mask(mask: np.ndarray, num_envs: int, name: str) -> np.ndarray:

@@ -82,18 +82,26 @@ class Engine(Protocol):
         ...
 
 
-def row_seeds(seed: Any, num_envs: int) -> list[int | None]:
-    """One seed per row: None, an int ``s`` (row i gets ``s + i``), or a list of N seeds."""
+# Gymnasium's message for a list of seeds of the wrong length
+_WRONG_LENGTH = (
+    "If seeds are passed as a list the length must match num_envs={num_envs} but got "
+    "length={length}."
+)
+
+
+def row_seeds(seed: Any, num_envs: int, wrong_length: str = _WRONG_LENGTH) -> list[int | None]:
+    """One seed per row: None, an int ``s`` (row i gets ``s + i``), or a list of N seeds.
+
+    A list of another length raises ``ValueError(wrong_length)``, formatted with ``num_envs``
+    and ``length``.
+    """
     if seed is None:
         return [None] * num_envs
     if isinstance(seed, (int, np.integer)):
         return [int(seed) + i for i in range(num_envs)]
     seeds = list(seed)
     if len(seeds) != num_envs:
-        raise ValueError(
-            "If seeds are passed as a list the length must match "
-            f"num_envs={num_envs} but got length={len(seeds)}."
-        )
+        raise ValueError(wrong_length.format(num_envs=num_envs, length=len(seeds)))
     return seeds
 
 
