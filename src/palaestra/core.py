@@ -15,7 +15,7 @@ import numpy as np
 from palaestra import logger
 from palaestra.env_spec import EnvSpec, WrapperSpec
 from palaestra.utils.record_constructor import RecordConstructorArgs
-from palaestra.utils.seeding import LazyRandom
+from palaestra.utils.seeding import ForwardedRandom, LazyRandom
 from palaestra.utils.seeding import np_random as _make_rng
 
 if TYPE_CHECKING:
@@ -145,7 +145,9 @@ class OwnOrInner(Generic[T]):
 
 
 class Wrapper(
-    Env[WrapperObsType, WrapperActType], Generic[WrapperObsType, WrapperActType, ObsType, ActType]
+    ForwardedRandom,
+    Env[WrapperObsType, WrapperActType],
+    Generic[WrapperObsType, WrapperActType, ObsType, ActType],
 ):
     """Base of all wrappers: by default every call goes straight to ``self.env``.
 
@@ -200,20 +202,6 @@ class Wrapper(
     def render_mode(self) -> str | None:  # type: ignore[override]
         """The inner environment's render mode."""
         return self.env.render_mode
-
-    @property
-    def np_random(self) -> np.random.Generator:
-        """The inner environment's generator."""
-        return self.env.np_random
-
-    @np_random.setter
-    def np_random(self, value: np.random.Generator) -> None:
-        self.env.np_random = value
-
-    @property
-    def np_random_seed(self) -> int:
-        """The inner environment's seed."""
-        return self.env.np_random_seed
 
     @property
     def _np_random(self) -> np.random.Generator:  # type: ignore[override]

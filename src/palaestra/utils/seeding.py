@@ -57,3 +57,29 @@ class LazyRandom:
         if self._np_random_seed is None:
             self._np_random, self._np_random_seed = np_random()
         return self._np_random_seed
+
+
+class ForwardedRandom:
+    """``np_random`` / ``np_random_seed`` of the env this one wraps (the attribute named by
+    ``_wrapped_attr``).
+
+    Shared by the wrapper bases and the compat adapters: a stack has one generator, the
+    innermost env's, so code that reads or replaces it at any layer sees the stream the env
+    actually draws from.
+    """
+
+    _wrapped_attr: str = "env"
+
+    @property
+    def np_random(self) -> np.random.Generator:
+        """The wrapped env's generator."""
+        return getattr(self, self._wrapped_attr).np_random
+
+    @np_random.setter
+    def np_random(self, value: np.random.Generator) -> None:
+        getattr(self, self._wrapped_attr).np_random = value
+
+    @property
+    def np_random_seed(self) -> int:
+        """The wrapped env's seed."""
+        return getattr(self, self._wrapped_attr).np_random_seed

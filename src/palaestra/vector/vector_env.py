@@ -14,7 +14,7 @@ import numpy as np
 
 from palaestra import logger
 from palaestra.core import OwnOrInner
-from palaestra.utils.seeding import LazyRandom
+from palaestra.utils.seeding import ForwardedRandom, LazyRandom
 from palaestra.utils.seeding import np_random as _make_rng
 
 if TYPE_CHECKING:
@@ -124,7 +124,7 @@ class VectorEnv(LazyRandom, Generic[ObsType, ActType, ArrayType]):
         return f"{type(self).__name__}({self.spec.id}, num_envs={num_envs})"
 
 
-class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
+class VectorWrapper(ForwardedRandom, VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     """Base of vector wrappers: every call goes to ``self.env`` unless overridden.
 
     Spaces and metadata fall through to the inner env until the wrapper assigns its own.
@@ -192,20 +192,6 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     def num_envs(self) -> int:  # type: ignore[override]
         """The inner env's number of sub-envs."""
         return self.env.num_envs
-
-    @property
-    def np_random(self) -> np.random.Generator:
-        """The inner env's generator."""
-        return self.env.np_random
-
-    @np_random.setter
-    def np_random(self, value: np.random.Generator) -> None:
-        self.env.np_random = value
-
-    @property
-    def np_random_seed(self) -> int:
-        """The inner env's seed."""
-        return self.env.np_random_seed
 
     metadata: OwnOrInner[dict[str, Any]] = OwnOrInner("The wrapper's metadata, or the inner one.")
 
