@@ -7,12 +7,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from palaestra.vector import engine
+from palaestra.utils import seeding
 
 
 def row_seeds(seed: int | Sequence[int | None] | None, num_envs: int) -> list[int | None]:
     """One seed per row: None for every row, an int ``s`` (row i gets ``s + i``) or N seeds."""
-    return engine.row_seeds(seed, num_envs, "Expected {num_envs} seeds, got {length}")
+    return seeding.row_seeds(seed, num_envs, "Expected {num_envs} seeds, got {length}")
 
 
 def row_mask(mask: np.ndarray, num_envs: int, name: str) -> np.ndarray:

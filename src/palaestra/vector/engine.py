@@ -82,29 +82,6 @@ class Engine(Protocol):
         ...
 
 
-# Gymnasium's message for a list of seeds of the wrong length
-_WRONG_LENGTH = (
-    "If seeds are passed as a list the length must match num_envs={num_envs} but got "
-    "length={length}."
-)
-
-
-def row_seeds(seed: Any, num_envs: int, wrong_length: str = _WRONG_LENGTH) -> list[int | None]:
-    """One seed per row: None, an int ``s`` (row i gets ``s + i``), or a list of N seeds.
-
-    A list of another length raises ``ValueError(wrong_length)``, formatted with ``num_envs``
-    and ``length``.
-    """
-    if seed is None:
-        return [None] * num_envs
-    if isinstance(seed, (int, np.integer)):
-        return [int(seed) + i for i in range(num_envs)]
-    seeds = list(seed)
-    if len(seeds) != num_envs:
-        raise ValueError(wrong_length.format(num_envs=num_envs, length=len(seeds)))
-    return seeds
-
-
 def check_actions_batch(space: Space[Any], actions: Any, num_envs: int) -> None:
     """A clear error for a batch of array actions of the wrong shape or kind.
 
