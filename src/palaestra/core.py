@@ -8,14 +8,14 @@ Gymnasium 1.x.
 from __future__ import annotations
 
 from copy import deepcopy
-from typing import TYPE_CHECKING, Any, Generic, Literal, SupportsFloat, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, Literal, SupportsFloat, TypeVar, overload
 
 import numpy as np
 
 from palaestra import logger
 from palaestra.env_spec import EnvSpec, WrapperSpec
 from palaestra.utils.record_constructor import RecordConstructorArgs
-from palaestra.utils.seeding import LazyRandom
+from palaestra.utils.seeding import ForwardedRandom, LazyRandom
 from palaestra.utils.seeding import np_random as _make_rng
 
 if TYPE_CHECKING:
@@ -27,6 +27,7 @@ ObsType = TypeVar("ObsType")
 ActType = TypeVar("ActType")
 WrapperObsType = TypeVar("WrapperObsType")
 WrapperActType = TypeVar("WrapperActType")
+T = TypeVar("T")
 
 RenderFrame = Any  # np.ndarray frame, ANSI string, or a list of either
 
@@ -114,8 +115,39 @@ class Env(LazyRandom, Generic[ObsType, ActType]):
         return False
 
 
+class OwnOrInner(Generic[T]):
+    """A wrapper attribute that reads as the inner env's (``self.env``) until the wrapper
+    assigns its own, which is kept in ``_<name>`` (``None``: not assigned).
+
+    The wrapper bases (single and vector) declare their spaces and metadata with it.
+    """
+
+    def __init__(self, doc: str) -> None:
+        self.__doc__ = doc
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name, self.own = name, "_" + name
+
+    @overload
+    def __get__(self, obj: None, objtype: type | None = None) -> Self: ...
+
+    @overload
+    def __get__(self, obj: object, objtype: type | None = None) -> T: ...
+
+    def __get__(self, obj: object | None, objtype: type | None = None) -> T | Self:
+        if obj is None:
+            return self
+        own = getattr(obj, self.own)
+        return getattr(obj.env, self.name) if own is None else own  # type: ignore[attr-defined]
+
+    def __set__(self, obj: object, value: T) -> None:
+        setattr(obj, self.own, value)
+
+
 class Wrapper(
-    Env[WrapperObsType, WrapperActType], Generic[WrapperObsType, WrapperActType, ObsType, ActType]
+    ForwardedRandom,
+    Env[WrapperObsType, WrapperActType],
+    Generic[WrapperObsType, WrapperActType, ObsType, ActType],
 ):
     """Base of all wrappers: by default every call goes straight to ``self.env``.
 
@@ -156,53 +188,20 @@ class Wrapper(
         """The innermost environment."""
         return self.env.unwrapped
 
-    @property
-    def action_space(self) -> Space[Any]:
-        """The wrapper's action space, or the inner one if the wrapper set none."""
-        return self.env.action_space if self._action_space is None else self._action_space
-
-    @action_space.setter
-    def action_space(self, space: Space[Any]) -> None:
-        self._action_space = space
-
-    @property
-    def observation_space(self) -> Space[Any]:
-        """The wrapper's observation space, or the inner one if the wrapper set none."""
-        if self._observation_space is None:
-            return self.env.observation_space
-        return self._observation_space
-
-    @observation_space.setter
-    def observation_space(self, space: Space[Any]) -> None:
-        self._observation_space = space
-
-    @property
-    def metadata(self) -> dict[str, Any]:
-        """The wrapper's metadata, or the inner one if the wrapper set none."""
-        return self.env.metadata if self._metadata is None else self._metadata
-
-    @metadata.setter
-    def metadata(self, value: dict[str, Any]) -> None:
-        self._metadata = value
+    action_space: OwnOrInner[Space[Any]] = OwnOrInner(
+        "The wrapper's action space, or the inner one if the wrapper set none."
+    )
+    observation_space: OwnOrInner[Space[Any]] = OwnOrInner(
+        "The wrapper's observation space, or the inner one if the wrapper set none."
+    )
+    metadata: OwnOrInner[dict[str, Any]] = OwnOrInner(
+        "The wrapper's metadata, or the inner one if the wrapper set none."
+    )
 
     @property
     def render_mode(self) -> str | None:  # type: ignore[override]
         """The inner environment's render mode."""
         return self.env.render_mode
-
-    @property
-    def np_random(self) -> np.random.Generator:
-        """The inner environment's generator."""
-        return self.env.np_random
-
-    @np_random.setter
-    def np_random(self, value: np.random.Generator) -> None:
-        self.env.np_random = value
-
-    @property
-    def np_random_seed(self) -> int:
-        """The inner environment's seed."""
-        return self.env.np_random_seed
 
     @property
     def _np_random(self) -> np.random.Generator:  # type: ignore[override]

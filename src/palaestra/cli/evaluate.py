@@ -11,7 +11,7 @@ import numpy as np
 from palaestra.cli.common import CLIError, add_allow_import
 from palaestra.runs import evaluate_run
 from palaestra.runs.files import is_goal_env
-from palaestra.runs.recipe import env_id_module, import_user_module
+from palaestra.runs.recipe import import_env_module
 
 __all__ = ["GAMES_NOTE", "add_parser", "ascii_histogram", "run", "summary_lines"]
 
@@ -105,9 +105,8 @@ def run(args: argparse.Namespace) -> int:
     """The ``eval`` command."""
     if args.episodes < 1:
         raise CLIError(f"--episodes must be at least 1, got {args.episodes}", "e.g. --episodes 10")
-    module = env_id_module(args.env) if args.env else None
-    if module and not args.env.startswith("gymnasium:"):  # --env mygrid:Grid-v0: the user's own
-        import_user_module(module, f"--env {args.env!r}")
+    if args.env:  # --env mygrid:Grid-v0: the user's own module
+        import_env_module(args.env, f"--env {args.env!r}")
     played = evaluate_run(
         args.model,
         args.episodes,

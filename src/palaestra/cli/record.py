@@ -9,7 +9,7 @@ from typing import Any
 from palaestra.cli.common import CLIError, add_allow_import
 from palaestra.error import dependency_not_installed
 from palaestra.runs import evaluate_run
-from palaestra.runs.recipe import env_id_module, import_user_module
+from palaestra.runs.recipe import import_env_module
 from palaestra.utils import video
 
 __all__ = ["add_parser", "run"]
@@ -69,9 +69,8 @@ def run(args: argparse.Namespace) -> int:
         if not video.mp4_available():  # before playing, not after
             raise dependency_not_installed("imageio-ffmpeg", "video", "writing MP4 files")
 
-    module = env_id_module(args.env) if args.env else None
-    if module and not args.env.startswith("gymnasium:"):  # --env mygrid:Grid-v0: the user's own
-        import_user_module(module, f"--env {args.env!r}")
+    if args.env:  # --env mygrid:Grid-v0: the user's own module
+        import_env_module(args.env, f"--env {args.env!r}")
 
     played = evaluate_run(
         args.model,

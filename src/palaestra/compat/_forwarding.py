@@ -14,14 +14,17 @@ from typing import Any, SupportsFloat
 
 import numpy as np
 
+from palaestra.utils.seeding import ForwardedRandom
+
 Convert = Callable[[Any], Any] | None  # None: the value passes as it is
 
 
-class Forwarding:
+class Forwarding(ForwardedRandom):
     """Mixin for the adapters: ``_inner`` is the wrapped env, ``_act_in`` converts an action
     for it and ``_obs_out`` converts its observations back (each ``None`` when not needed)."""
 
     _inner: Any
+    _wrapped_attr = "_inner"
     _act_in: Convert
     _obs_out: Convert
 
@@ -60,20 +63,6 @@ class Forwarding:
     def metadata(self) -> dict[str, Any]:
         """The wrapped env's metadata (``render_modes``, ``render_fps``)."""
         return self._inner.metadata
-
-    @property
-    def np_random(self) -> np.random.Generator:
-        """The wrapped env's generator."""
-        return self._inner.np_random
-
-    @np_random.setter
-    def np_random(self, value: np.random.Generator) -> None:
-        self._inner.np_random = value
-
-    @property
-    def np_random_seed(self) -> int:
-        """The wrapped env's seed."""
-        return self._inner.np_random_seed
 
     @property
     def _np_random(self) -> np.random.Generator | None:

@@ -22,7 +22,7 @@ import functools
 from typing import Any
 
 from palaestra.compat._forwarding import Forwarding
-from palaestra.compat._optional import GYMNASIUM_PREFIX, gymnasium_missing
+from palaestra.compat._optional import GYMNASIUM_PREFIX, gymnasium_missing, shared_spec_fields
 from palaestra.compat.spaces import (
     from_gymnasium_space,
     from_gymnasium_value,
@@ -32,6 +32,7 @@ from palaestra.compat.spaces import (
 )
 from palaestra.core import Env
 from palaestra.env_spec import EnvSpec
+from palaestra.envs.registration import bare_spec
 
 try:
     import gymnasium
@@ -96,28 +97,10 @@ def _gymnasium_spec(spec: EnvSpec | None) -> Any:
     """
     if spec is None or spec.entry_point is None:
         return None
-    bare = EnvSpec(
-        id=spec.id,
-        entry_point=spec.entry_point,
-        reward_threshold=spec.reward_threshold,
-        nondeterministic=spec.nondeterministic,
-        max_episode_steps=None,
-        order_enforce=False,
-        disable_env_checker=True,
-        kwargs={},
-        additional_wrappers=spec.additional_wrappers,
-        vector_entry_point=spec.vector_entry_point,
-    )
-    return gymnasium.envs.registration.EnvSpec(
-        id=spec.id,
-        entry_point=functools.partial(_make_adapted, bare),
-        reward_threshold=spec.reward_threshold,
-        nondeterministic=spec.nondeterministic,
-        max_episode_steps=spec.max_episode_steps,
-        order_enforce=spec.order_enforce,
-        disable_env_checker=spec.disable_env_checker,
-        kwargs=dict(spec.kwargs),
-    )
+    bare = bare_spec(spec, {}, spec.additional_wrappers)
+    fields = shared_spec_fields(spec)
+    fields["entry_point"] = functools.partial(_make_adapted, bare)
+    return gymnasium.envs.registration.EnvSpec(id=spec.id, **fields)
 
 
 def _make_adapted(bare: EnvSpec, **kwargs: Any) -> GymnasiumEnvAdapter:
@@ -178,13 +161,4 @@ def from_gymnasium(env: Any) -> Env[Any, Any]:
 def _palaestra_spec(spec: Any) -> EnvSpec | None:
     if spec is None:
         return None
-    return EnvSpec(
-        id=GYMNASIUM_PREFIX + spec.id,
-        entry_point=spec.entry_point,
-        reward_threshold=spec.reward_threshold,
-        nondeterministic=spec.nondeterministic,
-        max_episode_steps=spec.max_episode_steps,
-        order_enforce=spec.order_enforce,
-        disable_env_checker=spec.disable_env_checker,
-        kwargs=dict(spec.kwargs),
-    )
+    return EnvSpec(id=GYMNASIUM_PREFIX + spec.id, **shared_spec_fields(spec))

@@ -14,10 +14,11 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from palaestra import error
-from palaestra.compat._optional import GYMNASIUM_PREFIX, gymnasium_missing
+from palaestra.compat._optional import GYMNASIUM_PREFIX, gymnasium_missing, shared_spec_fields
 from palaestra.core import Env
 from palaestra.env_spec import EnvSpec, VectorizeMode
-from palaestra.envs.lookup import ForeignRegistry, foreign_registries, load_env_creator
+from palaestra.envs.lookup import ForeignRegistry, foreign_registries
+from palaestra.envs.registration import apply_wrapper_specs
 
 __all__ = ["GYMNASIUM_PREFIX", "gymnasium_spec", "make_gymnasium", "make_vec_gymnasium"]
 
@@ -55,7 +56,8 @@ def make_gymnasium(
         )
     env = from_gymnasium(gym_env)
     if spec is not None:
-        env = _apply_wrappers(env, spec)
+        # the palaestra wrappers recorded in the spec (Wrapper.spec adds one per layer)
+        env = apply_wrapper_specs(env, spec.additional_wrappers)
     return env
 
 
@@ -95,29 +97,7 @@ def gymnasium_spec(id: str) -> EnvSpec:
 def _gymnasium_spec(gymnasium: Any, spec: EnvSpec, gym_id: str) -> Any:
     if spec.entry_point is None:
         return gym_id  # look it up in Gymnasium's registry
-    return gymnasium.envs.registration.EnvSpec(
-        id=gym_id,
-        entry_point=spec.entry_point,
-        reward_threshold=spec.reward_threshold,
-        nondeterministic=spec.nondeterministic,
-        max_episode_steps=spec.max_episode_steps,
-        order_enforce=spec.order_enforce,
-        disable_env_checker=spec.disable_env_checker,
-        kwargs=dict(spec.kwargs),
-    )
-
-
-def _apply_wrappers(env: Env[Any, Any], spec: EnvSpec) -> Env[Any, Any]:
-    """The palaestra wrappers recorded in ``spec`` (``Wrapper.spec`` adds one per layer)."""
-    for wrapper_spec in spec.additional_wrappers:
-        if wrapper_spec.kwargs is None:
-            raise ValueError(
-                f"{wrapper_spec.name} wrapper does not inherit from "
-                "`palaestra.utils.RecordConstructorArgs`, therefore, the wrapper cannot be "
-                "recreated."
-            )
-        env = load_env_creator(wrapper_spec.entry_point)(env=env, **wrapper_spec.kwargs)
-    return env
+    return gymnasium.envs.registration.EnvSpec(id=gym_id, **shared_spec_fields(spec))
 
 
 def _make_one(

@@ -11,6 +11,7 @@ Random generators are not carried over: a converted space seeds itself afresh.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -51,7 +52,7 @@ def _bound(values: np.ndarray, bounded: np.ndarray, infinity: float) -> Any:
     return np.where(bounded, values.astype(np.float64), infinity)
 
 
-# -- palaestra -> Gymnasium ------------------------------------------------------------------
+# -- palaestra <-> Gymnasium -----------------------------------------------------------------
 @functools.singledispatch
 def to_gymnasium_space(space: Any) -> Any:
     """The Gymnasium space with the same elements as palaestra ``space``.
@@ -65,64 +66,6 @@ def to_gymnasium_space(space: Any) -> Any:
     raise _unsupported(space, "to_gymnasium_space", "palaestra")
 
 
-@to_gymnasium_space.register
-def _(space: spaces.Box) -> gym_spaces.Box:
-    low = _bound(space.low, space.bounded_below, -np.inf)
-    high = _bound(space.high, space.bounded_above, np.inf)
-    return gym_spaces.Box(low, high, space.shape, space.dtype)
-
-
-@to_gymnasium_space.register
-def _(space: spaces.Discrete) -> gym_spaces.Discrete:
-    return gym_spaces.Discrete(int(space.n), start=int(space.start), dtype=space.dtype)
-
-
-@to_gymnasium_space.register
-def _(space: spaces.MultiDiscrete) -> gym_spaces.MultiDiscrete:
-    return gym_spaces.MultiDiscrete(space.nvec.copy(), dtype=space.dtype, start=space.start.copy())
-
-
-@to_gymnasium_space.register
-def _(space: spaces.MultiBinary) -> gym_spaces.MultiBinary:
-    return gym_spaces.MultiBinary(space.n)
-
-
-@to_gymnasium_space.register
-def _(space: spaces.Text) -> gym_spaces.Text:
-    # A string charset keeps the character order, which decides what a seeded sample draws.
-    return gym_spaces.Text(
-        space.max_length, min_length=space.min_length, charset="".join(space.character_list)
-    )
-
-
-@to_gymnasium_space.register
-def _(space: spaces.Tuple) -> gym_spaces.Tuple:
-    return gym_spaces.Tuple([to_gymnasium_space(s) for s in space.spaces])
-
-
-@to_gymnasium_space.register
-def _(space: spaces.Dict) -> gym_spaces.Dict:
-    # A list of pairs keeps palaestra's key order (a mapping would be re-sorted).
-    return gym_spaces.Dict([(k, to_gymnasium_space(s)) for k, s in space.spaces.items()])
-
-
-@to_gymnasium_space.register
-def _(space: spaces.Sequence) -> gym_spaces.Sequence:
-    return gym_spaces.Sequence(to_gymnasium_space(space.feature_space), stack=space.stack)
-
-
-@to_gymnasium_space.register
-def _(space: spaces.Graph) -> gym_spaces.Graph:
-    edge = None if space.edge_space is None else to_gymnasium_space(space.edge_space)
-    return gym_spaces.Graph(to_gymnasium_space(space.node_space), edge)
-
-
-@to_gymnasium_space.register
-def _(space: spaces.OneOf) -> gym_spaces.OneOf:
-    return gym_spaces.OneOf([to_gymnasium_space(s) for s in space.spaces])
-
-
-# -- Gymnasium -> palaestra ------------------------------------------------------------------
 @functools.singledispatch
 def from_gymnasium_space(space: Any) -> spaces.Space[Any]:
     """The palaestra space with the same elements as Gymnasium ``space``.
@@ -134,59 +77,78 @@ def from_gymnasium_space(space: Any) -> spaces.Space[Any]:
     raise _unsupported(space, "from_gymnasium_space", "Gymnasium")
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.Box) -> spaces.Box:
+# The two libraries' space classes share their names and constructor arguments, so one recipe
+# per kind rebuilds a space in either direction: ``lib`` is the target library's ``spaces``
+# module, ``convert`` the conversion (the same direction) for subspaces.
+def _box(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
     low = _bound(space.low, space.bounded_below, -np.inf)
     high = _bound(space.high, space.bounded_above, np.inf)
-    return spaces.Box(low, high, space.shape, space.dtype)
+    return lib.Box(low, high, space.shape, space.dtype)
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.Discrete) -> spaces.Discrete:
-    return spaces.Discrete(int(space.n), start=int(space.start), dtype=space.dtype)
+def _discrete(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
+    return lib.Discrete(int(space.n), start=int(space.start), dtype=space.dtype)
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.MultiDiscrete) -> spaces.MultiDiscrete:
-    return spaces.MultiDiscrete(space.nvec.copy(), dtype=space.dtype, start=space.start.copy())
+def _multi_discrete(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
+    return lib.MultiDiscrete(space.nvec.copy(), dtype=space.dtype, start=space.start.copy())
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.MultiBinary) -> spaces.MultiBinary:
-    return spaces.MultiBinary(space.n)
+def _multi_binary(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
+    return lib.MultiBinary(space.n)
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.Text) -> spaces.Text:
-    return spaces.Text(
+def _text(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
+    # A string charset keeps the character order, which decides what a seeded sample draws.
+    return lib.Text(
         space.max_length, min_length=space.min_length, charset="".join(space.character_list)
     )
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.Tuple) -> spaces.Tuple:
-    return spaces.Tuple([from_gymnasium_space(s) for s in space.spaces])
+def _tuple(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
+    return lib.Tuple([convert(s) for s in space.spaces])
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.Dict) -> spaces.Dict:
-    return spaces.Dict([(k, from_gymnasium_space(s)) for k, s in space.spaces.items()])
+def _dict(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
+    # A list of pairs keeps the key order (a mapping would be re-sorted).
+    return lib.Dict([(k, convert(s)) for k, s in space.spaces.items()])
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.Sequence) -> spaces.Sequence:
-    return spaces.Sequence(from_gymnasium_space(space.feature_space), stack=space.stack)
+def _sequence(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
+    return lib.Sequence(convert(space.feature_space), stack=space.stack)
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.Graph) -> spaces.Graph:
-    edge = None if space.edge_space is None else from_gymnasium_space(space.edge_space)
-    return spaces.Graph(from_gymnasium_space(space.node_space), edge)
+def _graph(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
+    edge = None if space.edge_space is None else convert(space.edge_space)
+    return lib.Graph(convert(space.node_space), edge)
 
 
-@from_gymnasium_space.register
-def _(space: gym_spaces.OneOf) -> spaces.OneOf:
-    return spaces.OneOf([from_gymnasium_space(s) for s in space.spaces])
+def _one_of(space: Any, lib: Any, convert: Callable[[Any], Any]) -> Any:
+    return lib.OneOf([convert(s) for s in space.spaces])
+
+
+_REBUILD = {
+    "Box": _box,
+    "Discrete": _discrete,
+    "MultiDiscrete": _multi_discrete,
+    "MultiBinary": _multi_binary,
+    "Text": _text,
+    "Tuple": _tuple,
+    "Dict": _dict,
+    "Sequence": _sequence,
+    "Graph": _graph,
+    "OneOf": _one_of,
+}
+for _name, _rebuild in _REBUILD.items():
+    to_gymnasium_space.register(
+        getattr(spaces, _name),
+        functools.partial(_rebuild, lib=gym_spaces, convert=to_gymnasium_space),
+    )
+    from_gymnasium_space.register(
+        getattr(gym_spaces, _name),
+        functools.partial(_rebuild, lib=spaces, convert=from_gymnasium_space),
+    )
+del _name, _rebuild
 
 
 # -- values ----------------------------------------------------------------------------------

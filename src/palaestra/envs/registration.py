@@ -203,18 +203,7 @@ def make(
 
     # The innermost spec records only how the env itself was built; each wrapper below adds
     # its own part (TimeLimit its max_episode_steps, ...), so env.spec describes the stack.
-    env.unwrapped.spec = EnvSpec(
-        id=env_spec.id,
-        entry_point=env_spec.entry_point,
-        reward_threshold=env_spec.reward_threshold,
-        nondeterministic=env_spec.nondeterministic,
-        max_episode_steps=None,
-        order_enforce=False,
-        disable_env_checker=True,
-        kwargs=env_kwargs,
-        additional_wrappers=(),
-        vector_entry_point=env_spec.vector_entry_point,
-    )
+    env.unwrapped.spec = bare_spec(env_spec, env_kwargs, ())
     num_prior = _check_prior_wrappers(env, env_spec)
 
     if disable_env_checker is False or (
@@ -227,7 +216,39 @@ def make(
         limit = env_spec.max_episode_steps if max_episode_steps is None else max_episode_steps
         if limit is not None:
             env = TimeLimit(env, limit)
-    for wrapper_spec in env_spec.additional_wrappers[num_prior:]:
+    env = apply_wrapper_specs(env, env_spec.additional_wrappers[num_prior:])
+
+    if render_wrapper is not None:
+        # Written by the rendering owner; imported only when a render mode needs it.
+        from palaestra.wrappers import rendering  # lazy: import-time — render wrappers
+
+        env = getattr(rendering, render_wrapper)(env)
+    return env
+
+
+def bare_spec(
+    spec: EnvSpec, kwargs: dict[str, Any], additional_wrappers: tuple[WrapperSpec, ...]
+) -> EnvSpec:
+    """``spec`` without what ``make()`` puts around the env (checker, order enforcing, time
+    limit): the spec of the env built with ``kwargs``, inside ``additional_wrappers``."""
+    return EnvSpec(
+        id=spec.id,
+        entry_point=spec.entry_point,
+        reward_threshold=spec.reward_threshold,
+        nondeterministic=spec.nondeterministic,
+        max_episode_steps=None,
+        order_enforce=False,
+        disable_env_checker=True,
+        kwargs=kwargs,
+        additional_wrappers=additional_wrappers,
+        vector_entry_point=spec.vector_entry_point,
+    )
+
+
+def apply_wrapper_specs(env: Env[Any, Any], wrapper_specs: Sequence[WrapperSpec]) -> Env[Any, Any]:
+    """``env`` inside the wrappers ``wrapper_specs`` describe (innermost first); a wrapper that
+    did not record its arguments cannot be rebuilt: ``ValueError`` naming it."""
+    for wrapper_spec in wrapper_specs:
         if wrapper_spec.kwargs is None:
             raise ValueError(
                 f"{wrapper_spec.name} wrapper does not inherit from "
@@ -235,12 +256,6 @@ def make(
                 "recreated."
             )
         env = load_env_creator(wrapper_spec.entry_point)(env=env, **wrapper_spec.kwargs)
-
-    if render_wrapper is not None:
-        # Written by the rendering owner; imported only when a render mode needs it.
-        from palaestra.wrappers import rendering  # lazy: import-time — render wrappers
-
-        env = getattr(rendering, render_wrapper)(env)
     return env
 
 

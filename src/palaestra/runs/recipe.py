@@ -57,6 +57,7 @@ __all__ = [
     "choose_policy",
     "env_id_module",
     "env_wrapper",
+    "import_env_module",
     "import_user_module",
     "is_atari_id",
     "locate_module",
@@ -123,6 +124,16 @@ def import_user_module(module_name: str, what: str) -> Any:
             f"cannot import module {module_name!r} of {what}: {exc}",
             "run from the folder that holds it, or fix the name",
         ) from None
+
+
+def import_env_module(env_id: str, what: str) -> str | None:
+    """Import the user's module that ``env_id`` (``module:Name-v0``) names, for ``what``, as
+    ``palaestra.make`` would; return its name (None when the id names none). A
+    ``gymnasium:`` id imports nothing here: Gymnasium imports its own ``module:``."""
+    module = env_id_module(env_id)
+    if module and not env_id.startswith("gymnasium:"):
+        import_user_module(module, what)
+    return module
 
 
 def locate_module(module_name: str) -> str | None:

@@ -192,9 +192,7 @@ def resolve_spec(
 def _check_env_id(env_id: str) -> None:
     """``RunError`` for an id no registry holds, with Gymnasium's "did you mean"; an id
     ``module:Name-v0`` imports ``module`` first (the current folder first on the path)."""
-    module = recipe.env_id_module(env_id)
-    if module and not env_id.startswith("gymnasium:"):
-        recipe.import_user_module(module, f"env id {env_id!r}")
+    module = recipe.import_env_module(env_id, f"env id {env_id!r}")
     try:
         palaestra.spec(recipe.registered_id(env_id))
     except (error.UnregisteredEnv, error.DeprecatedEnv) as exc:

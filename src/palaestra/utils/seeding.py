@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from palaestra import error
@@ -26,6 +28,29 @@ def np_random(seed: int | None = None) -> tuple[np.random.Generator, int]:
         raise error.Error(f"Seed must be greater or equal to zero, actual value: {seed}")
     seed_seq = np.random.SeedSequence(seed)
     return np.random.Generator(np.random.PCG64(seed_seq)), int(seed_seq.entropy)  # type: ignore[arg-type]
+
+
+# Gymnasium's message for a list of seeds of the wrong length
+_WRONG_LENGTH = (
+    "If seeds are passed as a list the length must match num_envs={num_envs} but got "
+    "length={length}."
+)
+
+
+def row_seeds(seed: Any, num_envs: int, wrong_length: str = _WRONG_LENGTH) -> list[int | None]:
+    """One seed per row: None, an int ``s`` (row i gets ``s + i``), or a list of N seeds.
+
+    A list of another length raises ``ValueError(wrong_length)``, formatted with ``num_envs``
+    and ``length``.
+    """
+    if seed is None:
+        return [None] * num_envs
+    if isinstance(seed, (int, np.integer)):
+        return [int(seed) + i for i in range(num_envs)]
+    seeds = list(seed)
+    if len(seeds) != num_envs:
+        raise ValueError(wrong_length.format(num_envs=num_envs, length=len(seeds)))
+    return seeds
 
 
 class LazyRandom:
@@ -57,3 +82,29 @@ class LazyRandom:
         if self._np_random_seed is None:
             self._np_random, self._np_random_seed = np_random()
         return self._np_random_seed
+
+
+class ForwardedRandom:
+    """``np_random`` / ``np_random_seed`` of the env this one wraps (the attribute named by
+    ``_wrapped_attr``).
+
+    Shared by the wrapper bases and the compat adapters: a stack has one generator, the
+    innermost env's, so code that reads or replaces it at any layer sees the stream the env
+    actually draws from.
+    """
+
+    _wrapped_attr: str = "env"
+
+    @property
+    def np_random(self) -> np.random.Generator:
+        """The wrapped env's generator."""
+        return getattr(self, self._wrapped_attr).np_random
+
+    @np_random.setter
+    def np_random(self, value: np.random.Generator) -> None:
+        getattr(self, self._wrapped_attr).np_random = value
+
+    @property
+    def np_random_seed(self) -> int:
+        """The wrapped env's seed."""
+        return getattr(self, self._wrapped_attr).np_random_seed

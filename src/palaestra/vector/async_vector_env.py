@@ -12,7 +12,7 @@ from palaestra import logger
 from palaestra.core import Env
 from palaestra.error import AlreadyPendingCallError, NoAsyncCallError
 from palaestra.vector.engine_env import EngineVectorEnv
-from palaestra.vector.infos import stack_infos, stack_transition_infos
+from palaestra.vector.infos import stack_infos
 from palaestra.vector.process_engine import ProcessEngine
 from palaestra.vector.vector_env import AutoresetMode, StepReturn
 
@@ -117,14 +117,7 @@ class AsyncVectorEnv(EngineVectorEnv):
         """Collect the step sent by :meth:`step_async` (``multiprocessing.TimeoutError`` after
         ``timeout`` seconds)."""
         self._finish("step")
-        t = self._driver.finish_step(timeout)
-        return (
-            self._out(t.obs),
-            t.rewards.copy(),
-            t.terminated.copy(),
-            t.truncated.copy(),
-            stack_transition_infos(t, self.num_envs),
-        )
+        return self._step_return(self._driver.finish_step(timeout))
 
     def call_async(self, name: str, *args: Any, **kwargs: Any) -> None:
         """Start calling ``name`` in every worker."""

@@ -15,7 +15,8 @@ import numpy as np
 from palaestra import error
 from palaestra.spaces import Box
 from palaestra.spaces.batched_samples import iterate
-from palaestra.vector.engine import Engine, Infos, copy_obs, row_seeds
+from palaestra.utils.seeding import row_seeds
+from palaestra.vector.engine import Engine, Infos, copy_obs
 from palaestra.vector.vector_env import AutoresetMode
 
 

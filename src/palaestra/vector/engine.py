@@ -82,21 +82,6 @@ class Engine(Protocol):
         ...
 
 
-def row_seeds(seed: Any, num_envs: int) -> list[int | None]:
-    """One seed per row: None, an int ``s`` (row i gets ``s + i``), or a list of N seeds."""
-    if seed is None:
-        return [None] * num_envs
-    if isinstance(seed, (int, np.integer)):
-        return [int(seed) + i for i in range(num_envs)]
-    seeds = list(seed)
-    if len(seeds) != num_envs:
-        raise ValueError(
-            "If seeds are passed as a list the length must match "
-            f"num_envs={num_envs} but got length={len(seeds)}."
-        )
-    return seeds
-
-
 def check_actions_batch(space: Space[Any], actions: Any, num_envs: int) -> None:
     """A clear error for a batch of array actions of the wrong shape or kind.
 

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from palaestra import error
-from palaestra.vector.autoreset import Autoresetter
+from palaestra.vector.autoreset import Autoresetter, Transition
 from palaestra.vector.engine import Engine
 from palaestra.vector.infos import stack_infos, stack_transition_infos
 from palaestra.vector.vector_env import AutoresetMode, StepReturn, VectorEnv
@@ -57,6 +57,16 @@ class EngineVectorEnv(VectorEnv[Any, Any, np.ndarray]):
             return obs
         return obs.copy() if isinstance(obs, np.ndarray) else deepcopy(obs)
 
+    def _step_return(self, t: Transition) -> StepReturn:
+        """The 5-tuple ``step`` returns for a driver's transition ``t`` (fresh arrays)."""
+        return (
+            self._out(t.obs),
+            t.rewards.copy(),
+            t.terminated.copy(),
+            t.truncated.copy(),
+            stack_transition_infos(t, self.num_envs),
+        )
+
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
@@ -68,14 +78,7 @@ class EngineVectorEnv(VectorEnv[Any, Any, np.ndarray]):
     def step(self, actions: Any) -> StepReturn:
         """Step all sub-envs, autoresetting as ``metadata["autoreset_mode"]`` says."""
         self._check_open()
-        t = self._driver.step(actions)
-        return (
-            self._out(t.obs),
-            t.rewards.copy(),
-            t.terminated.copy(),
-            t.truncated.copy(),
-            stack_transition_infos(t, self.num_envs),
-        )
+        return self._step_return(self._driver.step(actions))
 
     def render(self) -> tuple[Any, ...]:
         """Every sub-env's frame."""

@@ -13,7 +13,8 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 import numpy as np
 
 from palaestra import logger
-from palaestra.utils.seeding import LazyRandom
+from palaestra.core import OwnOrInner
+from palaestra.utils.seeding import ForwardedRandom, LazyRandom
 from palaestra.utils.seeding import np_random as _make_rng
 
 if TYPE_CHECKING:
@@ -123,7 +124,7 @@ class VectorEnv(LazyRandom, Generic[ObsType, ActType, ArrayType]):
         return f"{type(self).__name__}({self.spec.id}, num_envs={num_envs})"
 
 
-class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
+class VectorWrapper(ForwardedRandom, VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     """Base of vector wrappers: every call goes to ``self.env`` unless overridden.
 
     Spaces and metadata fall through to the inner env until the wrapper assigns its own.
@@ -174,75 +175,25 @@ class VectorWrapper(VectorEnv[WrapperObsType, WrapperActType, ArrayType]):
     def __repr__(self) -> str:
         return f"<{type(self).__name__}, {self.env}>"
 
-    @property
-    def observation_space(self) -> Space[Any]:
-        """The wrapper's batched observation space, or the inner one."""
-        if self._observation_space is None:
-            return self.env.observation_space
-        return self._observation_space
-
-    @observation_space.setter
-    def observation_space(self, space: Space[Any]) -> None:
-        self._observation_space = space
-
-    @property
-    def action_space(self) -> Space[Any]:
-        """The wrapper's batched action space, or the inner one."""
-        return self.env.action_space if self._action_space is None else self._action_space
-
-    @action_space.setter
-    def action_space(self, space: Space[Any]) -> None:
-        self._action_space = space
-
-    @property
-    def single_observation_space(self) -> Space[Any]:
-        """The wrapper's per-env observation space, or the inner one."""
-        if self._single_observation_space is None:
-            return self.env.single_observation_space
-        return self._single_observation_space
-
-    @single_observation_space.setter
-    def single_observation_space(self, space: Space[Any]) -> None:
-        self._single_observation_space = space
-
-    @property
-    def single_action_space(self) -> Space[Any]:
-        """The wrapper's per-env action space, or the inner one."""
-        if self._single_action_space is None:
-            return self.env.single_action_space
-        return self._single_action_space
-
-    @single_action_space.setter
-    def single_action_space(self, space: Space[Any]) -> None:
-        self._single_action_space = space
+    observation_space: OwnOrInner[Space[Any]] = OwnOrInner(
+        "The wrapper's batched observation space, or the inner one."
+    )
+    action_space: OwnOrInner[Space[Any]] = OwnOrInner(
+        "The wrapper's batched action space, or the inner one."
+    )
+    single_observation_space: OwnOrInner[Space[Any]] = OwnOrInner(
+        "The wrapper's per-env observation space, or the inner one."
+    )
+    single_action_space: OwnOrInner[Space[Any]] = OwnOrInner(
+        "The wrapper's per-env action space, or the inner one."
+    )
 
     @property
     def num_envs(self) -> int:  # type: ignore[override]
         """The inner env's number of sub-envs."""
         return self.env.num_envs
 
-    @property
-    def np_random(self) -> np.random.Generator:
-        """The inner env's generator."""
-        return self.env.np_random
-
-    @np_random.setter
-    def np_random(self, value: np.random.Generator) -> None:
-        self.env.np_random = value
-
-    @property
-    def np_random_seed(self) -> int:
-        """The inner env's seed."""
-        return self.env.np_random_seed
-
-    @property
-    def metadata(self) -> dict[str, Any]:
-        """The wrapper's metadata, or the inner one."""
-        return self.env.metadata if self._metadata is None else self._metadata
-
-    @metadata.setter
-    def metadata(self, value: dict[str, Any]) -> None:
-        self._metadata = value
+    metadata: OwnOrInner[dict[str, Any]] = OwnOrInner("The wrapper's metadata, or the inner one.")
 
     @property
     def spec(self) -> EnvSpec | None:  # type: ignore[override]

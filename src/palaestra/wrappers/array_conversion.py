@@ -83,7 +83,33 @@ def torch_to_numpy(value: Any, device: Any = None) -> Any:
     return array_conversion(value, np)
 
 
-class ArrayConversion(Wrapper[Any, Any, Any, Any], RecordConstructorArgs):
+class ConvertsArrays(RecordConstructorArgs):
+    """What the single and vector ``ArrayConversion`` share: the two array modules (and
+    devices), checked and recorded, and the conversions each way."""
+
+    def _init_conversion(
+        self, env_xp: ModuleType, target_xp: ModuleType, env_device: Any, target_device: Any
+    ) -> None:
+        RecordConstructorArgs.__init__(
+            self,
+            _disable_deepcopy=True,  # modules cannot be deep-copied
+            env_xp=env_xp,
+            target_xp=target_xp,
+            env_device=env_device,
+            target_device=target_device,
+        )
+        self._env_xp = _module(env_xp, "env_xp")
+        self._target_xp = _module(target_xp, "target_xp")
+        self._env_device, self._target_device = env_device, target_device
+
+    def _in(self, value: Any) -> Any:
+        return array_conversion(value, self._env_xp, self._env_device)
+
+    def _out(self, value: Any) -> Any:
+        return array_conversion(value, self._target_xp, self._target_device)
+
+
+class ArrayConversion(Wrapper[Any, Any, Any, Any], ConvertsArrays):
     """Actions in ``target_xp`` arrays are converted to ``env_xp`` for the env; observations,
     infos and frames come back as ``target_xp`` arrays; the reward as a float and the flags
     as bools (Gymnasium's single-env wrapper)."""
@@ -96,32 +122,18 @@ class ArrayConversion(Wrapper[Any, Any, Any, Any], RecordConstructorArgs):
         env_device: Any = None,
         target_device: Any = None,
     ) -> None:
-        RecordConstructorArgs.__init__(
-            self,
-            _disable_deepcopy=True,  # modules cannot be deep-copied
-            env_xp=env_xp,
-            target_xp=target_xp,
-            env_device=env_device,
-            target_device=target_device,
-        )
         Wrapper.__init__(self, env)
-        self._env_xp = _module(env_xp, "env_xp")
-        self._target_xp = _module(target_xp, "target_xp")
-        self._env_device, self._target_device = env_device, target_device
-
-    def _out(self, value: Any) -> Any:
-        return array_conversion(value, self._target_xp, self._target_device)
+        self._init_conversion(env_xp, target_xp, env_device, target_device)
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        action = array_conversion(action, self._env_xp, self._env_device)
-        obs, reward, terminated, truncated, info = self.env.step(action)
+        obs, reward, terminated, truncated, info = self.env.step(self._in(action))
         return self._out(obs), float(reward), bool(terminated), bool(truncated), self._out(info)
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
         if options:
-            options = array_conversion(options, self._env_xp, self._env_device)
+            options = self._in(options)
         obs, info = self.env.reset(seed=seed, options=options)
         return self._out(obs), self._out(info)
 

@@ -76,6 +76,26 @@ class RenderCollection(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstr
         return frames
 
 
+def check_human_rendering(wrapper: Any) -> None:
+    """What both ``HumanRendering`` wrappers (single and vector) check of the env they wrap:
+    a render mode in ``wrapper.ACCEPTED_RENDER_MODES`` and a ``render_fps`` to pace the
+    window; ``"human"`` is then added to the wrapper's render modes."""
+    env = wrapper.env
+    if env.render_mode not in wrapper.ACCEPTED_RENDER_MODES:
+        raise ValueError(
+            f"Expected env.render_mode to be one of {list(wrapper.ACCEPTED_RENDER_MODES)} "
+            f"but got '{env.render_mode}'"
+        )
+    if "render_fps" not in env.metadata:
+        raise ValueError(
+            "The base environment must specify 'render_fps' to be used with the "
+            "HumanRendering wrapper"
+        )
+    if "human" not in wrapper.metadata.get("render_modes", []):
+        wrapper.metadata = deepcopy(env.metadata)
+        wrapper.metadata.setdefault("render_modes", []).append("human")
+
+
 class HumanRendering(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstructorArgs):
     """Show an ``rgb_array`` env in a window after every ``reset`` and ``step``.
 
@@ -91,19 +111,7 @@ class HumanRendering(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstruc
         self.window: Any = None  # set first: close() may run on a half-built wrapper
         self.screen_size: tuple[int, int] | None = None
         self._backend = backend
-        if self.env.render_mode not in self.ACCEPTED_RENDER_MODES:
-            raise ValueError(
-                f"Expected env.render_mode to be one of {list(self.ACCEPTED_RENDER_MODES)} "
-                f"but got '{self.env.render_mode}'"
-            )
-        if "render_fps" not in self.env.metadata:
-            raise ValueError(
-                "The base environment must specify 'render_fps' to be used with the "
-                "HumanRendering wrapper"
-            )
-        if "human" not in self.metadata.get("render_modes", []):
-            self.metadata = deepcopy(self.env.metadata)
-            self.metadata.setdefault("render_modes", []).append("human")
+        check_human_rendering(self)
 
     @property
     def render_mode(self) -> str:  # type: ignore[override]

@@ -17,8 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra import error, logger
-from palaestra.core import Env
+from palaestra import error
 from palaestra.envs.action_checks import check_discrete_action, invalid_action
 from palaestra.envs.atari.actions import direction_table, keys_for
 from palaestra.envs.atari.checks import (
@@ -29,14 +28,14 @@ from palaestra.envs.atari.checks import (
     import_ale_py,
 )
 from palaestra.envs.atari.games import check_game
-from palaestra.rendering import window
+from palaestra.envs.rendered import RenderedEnv
 from palaestra.spaces import Box, Dict, Discrete
 from palaestra.utils.seeding import np_random as make_rng
 
 EMULATOR_FPS = 60  # the 2600's NTSC frame rate: human mode plays at 60 / frameskip steps/s
 
 
-class AtariEnv(Env[Any, Any]):
+class AtariEnv(RenderedEnv[Any, Any]):
     """An Atari 2600 game (``ALE/<Game>-v5``); arguments and defaults are ale-py's.
 
     ``game`` is the snake_case ROM id (``"breakout"``); ``obs_type`` ``"rgb"`` gives
@@ -248,32 +247,15 @@ class AtariEnv(Env[Any, Any]):
         vertical = int(y > threshold) - int(y < -threshold)
         return self._directions[horizontal, vertical, bool(arr[2] > threshold)], arr[0]
 
-    def render(self) -> np.ndarray | None:
-        """The screen as ``(210, 160, 3) uint8`` (``"rgb_array"``), or shown in a window."""
-        if self.render_mode is None:
-            name = self.spec.id if self.spec is not None else type(self).__name__
-            logger.warn(
-                "You are calling render method without specifying any render mode. "
-                "You can specify the render_mode at initialization, "
-                f'e.g. gym.make("{name}", render_mode="rgb_array")'
-            )
-            return None
-        frame = self.ale.getScreenRGB()
-        if self.render_mode == "rgb_array":
-            return frame
-        if self._window is None:  # created lazily: no display needed until the first frame
-            title = self.spec.id if self.spec is not None else f"Atari {self.game}"
-            skip = self._frameskip
-            mean_skip = skip if isinstance(skip, int) else (skip[0] + skip[1] - 1) / 2
-            self._window = window.HumanWindow(title, max(1, math.floor(EMULATOR_FPS / mean_skip)))
-        self._window.show(frame)
-        return None
+    def _frame(self) -> np.ndarray:
+        """The screen as ``(210, 160, 3) uint8``."""
+        return self.ale.getScreenRGB()
 
-    def close(self) -> None:
-        """Close the human-mode window if one was opened."""
-        if self._window is not None:
-            self._window.close()
-            self._window = None
+    def _window_settings(self) -> tuple[str, int]:
+        title = self.spec.id if self.spec is not None else f"Atari {self.game}"
+        skip = self._frameskip
+        mean_skip = skip if isinstance(skip, int) else (skip[0] + skip[1] - 1) / 2
+        return title, max(1, math.floor(EMULATOR_FPS / mean_skip))
 
     # --- ale-py's extras ---------------------------------------------------------------------
 

@@ -10,9 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from palaestra import error, logger
-from palaestra.core import Env
-from palaestra.rendering import window
+from palaestra import error
+from palaestra.envs.rendered import RenderedEnv
 
 RENDER_MODES = ["human", "rgb_array"]
 
@@ -76,48 +75,12 @@ def parse_reset_bounds(
     return low, high
 
 
-class ClassicControlEnv(Env[np.ndarray, Any]):
-    """Rendering and render-mode handling shared by the single classic-control envs.
+class ClassicControlEnv(RenderedEnv[np.ndarray, Any]):
+    """The single classic-control (and Box2D) envs' base, rendering as every
+    :class:`~palaestra.envs.rendered.RenderedEnv` does.
 
     Subclasses implement ``_frame()`` (the scene from ``palaestra.rendering.scenes``).
     """
-
-    _window: Any = None
-
-    def _init_render(self, render_mode: str | None) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise error.UnsupportedMode(
-                f"render_mode={render_mode!r} is not one of {self.metadata['render_modes']}"
-            )
-        self.render_mode = render_mode
-
-    def _frame(self) -> np.ndarray:
-        raise NotImplementedError
-
-    def render(self) -> np.ndarray | None:
-        """The current frame (``"rgb_array"``) or show it in a window (``"human"``)."""
-        if self.render_mode is None:
-            name = self.spec.id if self.spec is not None else type(self).__name__
-            logger.warn(
-                "You are calling render method without specifying any render mode. "
-                "You can specify the render_mode at initialization, "
-                f'e.g. gym.make("{name}", render_mode="rgb_array")'
-            )
-            return None
-        frame = self._frame()
-        if self.render_mode == "rgb_array":
-            return frame
-        if self._window is None:  # created lazily: rgb_array users never need a display
-            title = self.spec.id if self.spec is not None else type(self).__name__
-            self._window = window.HumanWindow(title, self.metadata["render_fps"])
-        self._window.show(frame)
-        return None
-
-    def close(self) -> None:
-        """Close the human-mode window if one was opened."""
-        if self._window is not None:
-            self._window.close()
-            self._window = None
 
 
 def expose_params(cls: type, names: Sequence[str]) -> None:

@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from palaestra.envs.action_checks import check_box_batch, check_discrete_batch
+from palaestra.envs.batch_args import row_mask, row_seeds
 from palaestra.envs.classic_control._draws import PreDrawn
 from palaestra.envs.classic_control._ops import ARRAY
 from palaestra.error import ResetNeeded
@@ -97,16 +98,6 @@ class BatchedEnv:
         reps = (self.num_envs, 1)
         return Box(np.tile(space.low, reps), np.tile(space.high, reps), dtype=space.dtype)
 
-    def _row_seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
-        if seed is None:
-            return [None] * self.num_envs
-        if isinstance(seed, (int, np.integer)):
-            return [int(seed) + i for i in range(self.num_envs)]
-        seeds = list(seed)
-        if len(seeds) != self.num_envs:
-            raise ValueError(f"Expected {self.num_envs} seeds, got {len(seeds)}")
-        return seeds
-
     def reset(
         self,
         *,
@@ -123,9 +114,7 @@ class BatchedEnv:
         if mask is None:
             rows = np.arange(self.num_envs)
         else:
-            mask = np.asarray(mask)
-            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
-                raise ValueError(f"mask must be a bool array of shape ({self.num_envs},)")
+            mask = row_mask(mask, self.num_envs, "mask")
             rows = mask.nonzero()[0]  # [R] (np.flatnonzero, without its wrappers)
         bounds = self._parse_options(options)  # once for all rows, so bad options fail early
         self._reset_rows(rows, seed, bounds)
@@ -135,7 +124,7 @@ class BatchedEnv:
     def _reset_rows(self, rows: np.ndarray, seed: Any, bounds: Any) -> None:
         """Re-sample the state of ``rows`` (sorted indices); observations are left to the caller."""
         if seed is not None or not self._all_seeded:
-            self._seed_rows(rows, self._row_seeds(seed))
+            self._seed_rows(rows, row_seeds(seed, self.num_envs))
         fresh = self._reset_state(self._draws.take(rows), bounds)  # [R, k]
         self._state_rows[rows] = np.ascontiguousarray(fresh, dtype=np.float64).view(self._row)[:, 0]
         if not self._all_reset:
@@ -174,9 +163,7 @@ class BatchedEnv:
         if reset_mask is None:
             self._observe(None)
             return self._obs, reward, terminated
-        mask = np.asarray(reset_mask)
-        if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
-            raise ValueError(f"reset_mask must be a bool array of shape ({self.num_envs},)")
+        mask = row_mask(reset_mask, self.num_envs, "reset_mask")
         rows = mask.nonzero()[0]
         self._reset_rows(rows, None, self._parse_options(None))
         self._observe(None)

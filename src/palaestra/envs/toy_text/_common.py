@@ -13,63 +13,31 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from palaestra import error, logger
-from palaestra.core import Env
+from palaestra import error
 from palaestra.envs.action_checks import check_discrete_batch
+from palaestra.envs.batch_args import row_mask, row_seeds
+from palaestra.envs.rendered import RenderedEnv
 from palaestra.envs.toy_text._streams import RowStreams
-from palaestra.rendering import window
 from palaestra.spaces import Discrete, Space
 from palaestra.utils.seeding import np_random
 
 
-class ToyTextEnv(Env[Any, Any]):
-    """Render-mode handling for the single toy-text envs.
+class ToyTextEnv(RenderedEnv[Any, Any]):
+    """The single toy-text envs' base: :class:`~palaestra.envs.rendered.RenderedEnv` plus the
+    ``ansi`` mode.
 
     Subclasses implement ``_frame()`` (an ``rgb_array`` picture) and, where Gymnasium has
     one, ``_text()`` (the ``ansi`` string).
     """
-
-    _window: Any = None
-
-    def _init_render(self, render_mode: str | None) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise error.UnsupportedMode(
-                f"render_mode={render_mode!r} is not one of {self.metadata['render_modes']}"
-            )
-        self.render_mode = render_mode
-
-    def _frame(self) -> np.ndarray:
-        raise NotImplementedError
 
     def _text(self) -> str:
         raise NotImplementedError
 
     def render(self) -> Any:
         """The frame (``rgb_array``), the text (``ansi``), or show the frame (``human``)."""
-        if self.render_mode is None:
-            name = self.spec.id if self.spec is not None else type(self).__name__
-            logger.warn(
-                "You are calling render method without specifying any render mode. "
-                "You can specify the render_mode at initialization, "
-                f'e.g. gym.make("{name}", render_mode="rgb_array")'
-            )
-            return None
         if self.render_mode == "ansi":
             return self._text()
-        frame = self._frame()
-        if self.render_mode == "rgb_array":
-            return frame
-        if self._window is None:  # created lazily: rgb_array users never need a display
-            title = self.spec.id if self.spec is not None else type(self).__name__
-            self._window = window.HumanWindow(title, self.metadata["render_fps"])
-        self._window.show(frame)
-        return None
-
-    def close(self) -> None:
-        """Close the human-mode window if one was opened."""
-        if self._window is not None:
-            self._window.close()
-            self._window = None
+        return super().render()
 
 
 class ToyTextBatch:
@@ -107,16 +75,6 @@ class ToyTextBatch:
         self._all = np.arange(n)  # [N] every row, for the streams' gathers
         self._infos: Any = None
 
-    def _row_seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
-        if seed is None:
-            return [None] * self.num_envs
-        if isinstance(seed, (int, np.integer)):
-            return [int(seed) + i for i in range(self.num_envs)]
-        seeds = list(seed)
-        if len(seeds) != self.num_envs:
-            raise ValueError(f"Expected {self.num_envs} seeds, got {len(seeds)}")
-        return seeds
-
     def reset(
         self,
         *,
@@ -133,11 +91,9 @@ class ToyTextBatch:
         if mask is None:
             rows = self._all
         else:
-            mask = np.asarray(mask)
-            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
-                raise ValueError(f"mask must be a bool array of shape ({self.num_envs},)")
+            mask = row_mask(mask, self.num_envs, "mask")
             rows = mask.nonzero()[0]
-        seeds = self._row_seeds(seed)
+        seeds = row_seeds(seed, self.num_envs)
         fresh = [
             i for i in rows.tolist() if seeds[i] is not None or self._rngs[i] is None
         ]  # rows that get a new generator
@@ -164,9 +120,7 @@ class ToyTextBatch:
         if reset_mask is None:
             stepping, resetting = self._all, None
         else:
-            mask = np.asarray(reset_mask)
-            if mask.shape != (self.num_envs,) or mask.dtype != np.bool_:
-                raise ValueError(f"reset_mask must be a bool array of shape ({self.num_envs},)")
+            mask = row_mask(reset_mask, self.num_envs, "reset_mask")
             resetting = mask
         fused = self._step_all(act, resetting)
         if fused is not None:

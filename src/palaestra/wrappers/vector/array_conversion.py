@@ -11,12 +11,12 @@ import numpy as np
 
 from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.vector.vector_env import VectorEnv, VectorWrapper
-from palaestra.wrappers.array_conversion import _module, array_conversion
+from palaestra.wrappers.array_conversion import ConvertsArrays
 
 __all__ = ["ArrayConversion", "NumpyToTorch"]
 
 
-class ArrayConversion(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
+class ArrayConversion(VectorWrapper[Any, Any, Any], ConvertsArrays):
     """A vector env stepped with ``target_xp`` arrays and answering in them."""
 
     def __init__(
@@ -27,25 +27,11 @@ class ArrayConversion(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         env_device: Any = None,
         target_device: Any = None,
     ) -> None:
-        RecordConstructorArgs.__init__(
-            self,
-            _disable_deepcopy=True,
-            env_xp=env_xp,
-            target_xp=target_xp,
-            env_device=env_device,
-            target_device=target_device,
-        )
         VectorWrapper.__init__(self, env)
-        self._env_xp = _module(env_xp, "env_xp")
-        self._target_xp = _module(target_xp, "target_xp")
-        self._env_device, self._target_device = env_device, target_device
-
-    def _out(self, value: Any) -> Any:
-        return array_conversion(value, self._target_xp, self._target_device)
+        self._init_conversion(env_xp, target_xp, env_device, target_device)
 
     def step(self, actions: Any) -> tuple[Any, Any, Any, Any, dict[str, Any]]:
-        env_actions = array_conversion(actions, self._env_xp, self._env_device)
-        obs, rewards, terminated, truncated, infos = self.env.step(env_actions)
+        obs, rewards, terminated, truncated, infos = self.env.step(self._in(actions))
         return (
             self._out(obs),
             self._out(rewards),
@@ -58,7 +44,7 @@ class ArrayConversion(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
         if options:
-            options = array_conversion(options, self._env_xp, self._env_device)
+            options = self._in(options)
         obs, infos = self.env.reset(seed=seed, options=options)
         return self._out(obs), self._out(infos)
 

@@ -12,10 +12,7 @@ no OpenCV is needed and the window never blocks the caller.
 
 from __future__ import annotations
 
-import gc
-import os
 from collections.abc import Callable
-from copy import deepcopy
 from typing import Any
 
 import numpy as np
@@ -24,6 +21,8 @@ from palaestra import logger
 from palaestra.rendering.window import HumanWindow
 from palaestra.utils.record_constructor import RecordConstructorArgs
 from palaestra.vector.vector_env import AutoresetMode, VectorEnv, VectorWrapper
+from palaestra.wrappers.record_video import VideoRecording, check_video_settings
+from palaestra.wrappers.rendering import check_human_rendering
 from palaestra.wrappers.resize import resize_area
 
 __all__ = ["HumanRendering", "RecordVideo"]
@@ -77,19 +76,7 @@ class HumanRendering(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         self.num_rows: int | None = None
         self.num_cols: int | None = None
         self._backend = backend
-        if self.env.render_mode not in self.ACCEPTED_RENDER_MODES:
-            raise ValueError(
-                f"Expected env.render_mode to be one of {list(self.ACCEPTED_RENDER_MODES)} "
-                f"but got '{self.env.render_mode}'"
-            )
-        if "render_fps" not in self.env.metadata:
-            raise ValueError(
-                "The base environment must specify 'render_fps' to be used with the "
-                "HumanRendering wrapper"
-            )
-        if "human" not in self.metadata.get("render_modes", []):
-            self.metadata = deepcopy(self.env.metadata)
-            self.metadata.setdefault("render_modes", []).append("human")
+        check_human_rendering(self)
 
     @property
     def render_mode(self) -> str:  # type: ignore[override]
@@ -161,7 +148,7 @@ class HumanRendering(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         self.env.close(**kwargs)
 
 
-class RecordVideo(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
+class RecordVideo(VideoRecording, VectorWrapper[Any, Any, Any], RecordConstructorArgs):
     """Save videos of the tiled frames (``record_first_only``: env 0's alone) of the
     episodes of env 0 that ``episode_trigger`` picks, or of the step windows ``step_trigger``
     starts; with neither, episodes 0, 1, 8, 27, ... (Gymnasium's schedule). A recording stops
@@ -184,11 +171,6 @@ class RecordVideo(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         gc_trigger: Callable[[int], bool] | None = lambda episode: True,
         video_format: str | None = None,
     ) -> None:
-        from palaestra.utils.video import (  # lazy: import-time — utils.video
-            capped_cubic_video_schedule,
-            mp4_available,
-        )
-
         VectorWrapper.__init__(self, env)
         RecordConstructorArgs.__init__(
             self,
@@ -199,17 +181,9 @@ class RecordVideo(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
             name_prefix=name_prefix,
             disable_logger=disable_logger,
         )
-        if env.render_mode in {None, "human", "ansi"}:
-            raise ValueError(
-                f"Render mode is {env.render_mode}, which is incompatible with RecordVideo. "
-                "Initialize your environment with a render_mode that returns an image, "
-                "such as rgb_array."
-            )
-        video_format = video_format or ("mp4" if mp4_available() else "gif")
-        if video_format not in ("mp4", "gif"):
-            raise ValueError(f"video_format must be 'mp4' or 'gif', got {video_format!r}")
-        if episode_trigger is None and step_trigger is None:
-            episode_trigger = capped_cubic_video_schedule
+        video_format, episode_trigger = check_video_settings(
+            env.render_mode, video_format or None, episode_trigger, step_trigger
+        )
         self.autoreset_mode = env.metadata.get("autoreset_mode", AutoresetMode.NEXT_STEP)
         if self.autoreset_mode == AutoresetMode.SAME_STEP:  # Gymnasium's warning
             logger.warn(
@@ -223,19 +197,7 @@ class RecordVideo(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         self.record_first_only, self.video_aspect_ratio = record_first_only, video_aspect_ratio
         self.video_format = video_format
         self.frame_rows = self.frame_cols = -1
-        self.video_folder = os.path.abspath(video_folder)
-        if os.path.isdir(self.video_folder):
-            logger.warn(
-                f"Overwriting existing videos at {self.video_folder} folder (try specifying a "
-                "different `video_folder` for the `RecordVideo` wrapper if this is not desired)"
-            )
-        os.makedirs(self.video_folder, exist_ok=True)
-        self.frames_per_sec: int = fps if fps is not None else self.metadata.get("render_fps", 30)
-        self.name_prefix = name_prefix
-        self.video_length: float = video_length if video_length != 0 else float("inf")
-        self._video_name: str | None = None
-        self.recording = False
-        self.recorded_frames: list[np.ndarray] = []
+        self._init_recording(video_folder, fps, name_prefix, video_length)
         self.step_id = self.episode_id = -1
 
     def _grid(self, n: int, height: int, width: int) -> None:
@@ -264,19 +226,6 @@ class RecordVideo(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
             grid[row * height : (row + 1) * height, col * width : (col + 1) * width] = frame
         self.recorded_frames.append(grid)
 
-    def _episode_started(self) -> None:
-        self.episode_id += 1
-        if self.recording and self.video_length == float("inf"):
-            self.stop_recording()
-        if self.episode_trigger and self.episode_trigger(self.episode_id):
-            self.start_recording(f"{self.name_prefix}-episode-{self.episode_id}")
-
-    def _after(self) -> None:
-        if self.recording:
-            self._capture_frame()
-            if len(self.recorded_frames) > self.video_length:
-                self.stop_recording()
-
     def reset(
         self, *, seed: Any = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
@@ -284,7 +233,7 @@ class RecordVideo(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         if options is None or "reset_mask" not in options or options["reset_mask"][0]:
             self._episode_started()
         result = self.env.reset(seed=seed, options=options)
-        self._after()
+        self._capture_if_recording()
         self.has_autoreset = False
         return result
 
@@ -299,31 +248,9 @@ class RecordVideo(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
             self.has_autoreset = ended
         elif self.autoreset_mode == AutoresetMode.SAME_STEP and ended:
             self._episode_started()
-        if self.step_trigger and self.step_trigger(self.step_id):
-            self.start_recording(f"{self.name_prefix}-step-{self.step_id}")
-        self._after()
+        self._step_trigger()
+        self._capture_if_recording()
         return obs, rewards, terminations, truncations, infos
-
-    def start_recording(self, video_name: str) -> None:
-        """Start recording to ``video_name`` (a recording in progress is saved first)."""
-        if self.recording:
-            self.stop_recording()
-        self.recording, self._video_name = True, video_name
-
-    def stop_recording(self) -> None:
-        """Save the recorded frames (if any) and stop recording."""
-        from palaestra.utils.video import save_video  # lazy: import-time — utils.video
-
-        if not self.recorded_frames:
-            logger.warn("Ignored saving a video as there were zero frames to save.")
-        else:
-            path = os.path.join(self.video_folder, f"{self._video_name}.{self.video_format}")
-            save_video(self.recorded_frames, path, fps=self.frames_per_sec)
-            if not self.disable_logger:
-                print(f"Saved {len(self.recorded_frames)} frames to {path}")
-        self.recorded_frames, self.recording, self._video_name = [], False, None
-        if self.gc_trigger and self.gc_trigger(self.episode_id):
-            gc.collect()
 
     def close(self, **kwargs: Any) -> None:
         """Close the env and save a recording in progress."""

@@ -1,0 +1,69 @@
+"""``RenderedEnv``: an env that draws its own frames, in every render mode Gymnasium knows.
+
+The classic-control, Box2D, toy-text and Atari envs render alike: a render mode checked at
+construction, ``render()`` warning (as Gymnasium does) when there is none, returning the frame
+for ``rgb_array`` and showing it in a window, opened on the first
+``human`` frame, otherwise. Each family says only how a frame is drawn.
+"""
+
+from __future__ import annotations
+
+from typing import Any, TypeVar
+
+import numpy as np
+
+from palaestra import error, logger
+from palaestra.core import Env
+from palaestra.rendering import window
+
+ObsType = TypeVar("ObsType")
+ActType = TypeVar("ActType")
+
+
+class RenderedEnv(Env[ObsType, ActType]):
+    """Render-mode handling and the human window for the single envs that draw themselves.
+
+    Subclasses implement ``_frame()`` (the ``rgb_array`` picture); ``_window_settings()``
+    gives the window's title and frame rate.
+    """
+
+    _window: Any = None
+
+    def _init_render(self, render_mode: str | None) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise error.UnsupportedMode(
+                f"render_mode={render_mode!r} is not one of {self.metadata['render_modes']}"
+            )
+        self.render_mode = render_mode
+
+    def _frame(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def _window_settings(self) -> tuple[str, int]:
+        """The human window's title and frames per second (read when it opens)."""
+        title = self.spec.id if self.spec is not None else type(self).__name__
+        return title, self.metadata["render_fps"]
+
+    def render(self) -> Any:
+        """The current frame (``"rgb_array"``) or show it in a window (``"human"``)."""
+        if self.render_mode is None:
+            name = self.spec.id if self.spec is not None else type(self).__name__
+            logger.warn(
+                "You are calling render method without specifying any render mode. "
+                "You can specify the render_mode at initialization, "
+                f'e.g. gym.make("{name}", render_mode="rgb_array")'
+            )
+            return None
+        frame = self._frame()
+        if self.render_mode == "rgb_array":
+            return frame
+        if self._window is None:  # created lazily: rgb_array users never need a display
+            self._window = window.HumanWindow(*self._window_settings())
+        self._window.show(frame)
+        return None
+
+    def close(self) -> None:
+        """Close the human-mode window if one was opened."""
+        if self._window is not None:
+            self._window.close()
+            self._window = None
