@@ -38,7 +38,8 @@ def test_train_ppo_on_lunar_lander(tmp_path: Path, monkeypatch: pytest.MonkeyPat
     pytest.importorskip("torch")
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", os.environ.get("MPLBACKEND", "Agg"))
-    code, out = _run("train", "ppo", "LunarLander-v3", "--timesteps", "2048")
+    # The preset collects 16 envs x 1024 steps per rollout; 2 envs make one rollout 2,048.
+    code, out = _run("train", "ppo", "LunarLander-v3", "--n-envs", "2", "--timesteps", "2048")
     assert code == 0, out
     assert "trained ppo on LunarLander-v3: 2,048 steps" in out
     (run,) = (tmp_path / "runs").iterdir()
