@@ -24,6 +24,8 @@ from palaestra.algos.td3.objective import TD3CriticObjective
 from palaestra.core import Env
 from palaestra.vec_env import make_vec_env
 
+from .toys import Toy
+
 OBS = spaces.Box(-10, 10, (2,), np.float32)
 ACT = spaces.Box(-1, 1, (1,), np.float32)
 
@@ -274,6 +276,33 @@ def test_the_models_sampled_batch_holds_hand_computed_sums(cls: Any, action: str
     np.testing.assert_array_equal(batch["next_observations"][:, 1], batch["observations"][:, 1])
     assert {1.0, 0.0} <= set(batch["terminated"].tolist())
     assert len(set(np.round(batch["discounts"], 4).tolist())) == 3  # cut windows are sampled
+
+
+def test_dict_observations_take_the_windows_last_next_observation() -> None:
+    """SB3 asserts ``n_steps == 1`` for Dict observations; here each key is sampled as a
+    Box is (``docs/differences.md``)."""
+    space = spaces.Dict({"pos": OBS, "mode": spaces.Discrete(3)})
+    ring = TransitionRing(16, space, ACT, 1, n_steps=3, gamma=0.9)
+    plain = _hand_ring()
+    rows = np.arange(12)
+    for t in range(12):
+        ring.add(
+            {"pos": plain.observations[t], "mode": np.array([t % 3])},
+            {"pos": plain.next_observations[t], "mode": np.array([(t + 1) % 3])},
+            plain.actions[t],
+            plain.rewards[t],
+            plain.ended[t].astype(bool),
+            np.array([t == 7]),
+        )
+    got, want = ring.get(rows, rows * 0), plain.get(rows, rows * 0)
+    np.testing.assert_array_equal(got[2]["pos"], want[2])
+    np.testing.assert_array_equal(got[2]["mode"], (want[2][:, 0].astype(int) + 1) % 3)
+    for x, y in zip(got[3:], want[3:]):
+        np.testing.assert_array_equal(x, y)
+    model = DQN(
+        "MultiInputPolicy", Toy("dict"), n_steps=3, learning_starts=40, buffer_size=500, seed=0
+    )
+    assert model.learn(80)._n_updates > 0
 
 
 # -- the objectives discount each sample by its own ---------------------------------------------
