@@ -45,6 +45,19 @@ CASES: dict[str, tuple[Any, dict[str, Any], str, int]] = {
         "CartPole-v1",
         900,
     ),
+    # n-step returns: the buffer file records where episodes ended, the windows resume
+    "dqn-nstep": (
+        DQN,
+        dict(learning_starts=100, train_freq=4, n_steps=3, buffer_size=5000),
+        "CartPole-v1",
+        900,
+    ),
+    "sac-nstep": (
+        SAC,
+        dict(learning_starts=100, batch_size=32, n_steps=3, policy_kwargs={"net_arch": [32]}),
+        "Pendulum-v1",
+        900,
+    ),
     "sac": (
         SAC,
         dict(learning_starts=100, train_freq=2, batch_size=32, policy_kwargs={"net_arch": [32]}),

@@ -35,10 +35,12 @@ surprising, palaestra differs on purpose:
   (the same update as SB3's, which runs it first: both losses use the coefficient from before);
 - DQN's ``optimize_memory_usage=True`` keeps each frame of stacked observations once (SB3
   keeps it four times) and returns exact terminal observations, so it combines with
-  ``handle_timeout_termination`` (SB3 refuses the pair).
+  ``handle_timeout_termination`` (SB3 refuses the pair);
+- ``n_steps > 1`` (n-step returns of DQN, SAC, TD3, DDPG, as SB3 2.x's ``NStepReplayBuffer``)
+  also works with Dict observations (SB3 asserts ``n_steps == 1`` there).
 
-Not supported yet: ``use_sde`` (gSDE; PPO, A2C and SAC raise ``NotImplementedError``), DQN's
-``n_steps``, custom buffer classes, recurrent policies, VecNormalize-aware replay
+Not supported yet: ``use_sde`` (gSDE; PPO, A2C and SAC raise ``NotImplementedError``),
+custom buffer classes, recurrent policies, VecNormalize-aware replay
 (observations are stored as the env returns them).
 """
 

@@ -42,7 +42,7 @@ _SETTINGS = {
     "DQN": (
         "learning_rate buffer_size learning_starts batch_size tau gamma gradient_steps "
         "target_update_interval exploration_fraction exploration_initial_eps "
-        "exploration_final_eps max_grad_norm seed"
+        "exploration_final_eps max_grad_norm n_steps seed"
     ).split(),
     "PPO": (
         "learning_rate n_steps batch_size n_epochs gamma gae_lambda clip_range clip_range_vf "

@@ -1,7 +1,7 @@
 """SB3's ``common.buffers`` API for code written against it (CleanRL's ``dqn.py``, custom
-training loops): ``ReplayBuffer``, ``DictReplayBuffer``, ``RolloutBuffer``,
-``DictRolloutBuffer`` with SB3's constructors, ``add``, ``sample``/``get``, ``size``,
-``reset``, ``full``, ``pos`` and torch tensor samples with SB3's field names.
+training loops): ``ReplayBuffer``, ``DictReplayBuffer``, ``NStepReplayBuffer``,
+``RolloutBuffer``, ``DictRolloutBuffer`` with SB3's constructors, ``add``, ``sample``/``get``,
+``size``, ``reset``, ``full``, ``pos`` and torch tensor samples with SB3's field names.
 
 Sampling draws from numpy's global generator (``np.random.randint``/``permutation``) in SB3's
 order, so a loop seeded with ``np.random.seed`` draws the same samples as with SB3's buffers:
@@ -20,6 +20,7 @@ import numpy as np
 import torch
 
 from palaestra import spaces
+from palaestra.algos.common.nstep import check_n_steps, n_step_window
 from palaestra.algos.common.preprocessing import get_action_dim, get_obs_shape
 from palaestra.algos.common.utils import get_device
 from palaestra.algos.learners.losses import gae
@@ -30,6 +31,7 @@ __all__ = [
     "DictReplayBufferSamples",
     "DictRolloutBuffer",
     "DictRolloutBufferSamples",
+    "NStepReplayBuffer",
     "ReplayBuffer",
     "ReplayBufferSamples",
     "RolloutBuffer",
@@ -305,6 +307,65 @@ class DictReplayBuffer(ReplayBuffer):
             n_envs,
             optimize_memory_usage,
             handle_timeout_termination,
+        )
+
+
+class NStepReplayBuffer(ReplayBuffer):
+    """SB3's ``NStepReplayBuffer``: ``ReplayBuffer``'s storage sampled as n-step returns, by
+    the computation palaestra's algorithms use (``palaestra.algos.common.nstep``): ``rewards``
+    the discounted sums over windows of up to ``n_steps`` transitions of one env (cut after a
+    termination, a truncation and the newest transition), ``next_observations`` and ``dones``
+    of each window's last transition, ``discounts`` ``gamma^len`` for the target."""
+
+    def __init__(
+        self,
+        buffer_size: int,
+        observation_space: Any,
+        action_space: Any,
+        device: torch.device | str = "auto",
+        n_envs: int = 1,
+        optimize_memory_usage: bool = False,
+        handle_timeout_termination: bool = True,
+        n_steps: int = 3,
+        gamma: float = 0.99,
+    ) -> None:
+        if optimize_memory_usage:
+            raise NotImplementedError(
+                "NStepReplayBuffer doesn't support optimize_memory_usage=True"
+            )
+        self.n_steps, self.gamma = check_n_steps(n_steps), gamma
+        super().__init__(
+            buffer_size,
+            observation_space,
+            action_space,
+            device,
+            n_envs,
+            optimize_memory_usage,
+            handle_timeout_termination,
+        )
+
+    def _get_samples(self, rows: np.ndarray, env: Any = None) -> Any:
+        cols = np.random.randint(0, high=self.n_envs, size=(len(rows),))  # noqa: NPY002 - SB3's
+        newest = (self.pos - 1) % self.buffer_size
+        returns, discounts, last = n_step_window(
+            self.rewards,
+            (self.dones, self.timeouts),
+            newest,
+            rows,
+            cols,
+            self.n_steps,
+            self.gamma,
+            None if env is None else lambda r: self._normalize_reward(r, env),
+        )
+        dones = self.dones[last, cols] * (1 - self.timeouts[last, cols])
+        obs = self._normalize_obs(self.observations[rows, cols], env)
+        next_obs = self._normalize_obs(self.next_observations[last, cols], env)
+        columns = (dones, returns, discounts)  # [B, 1] each, as SB3's
+        return ReplayBufferSamples(
+            self.to_torch(obs),
+            self.to_torch(self.actions[rows, cols]),
+            self.to_torch(next_obs),
+            *(self.to_torch(c.reshape(-1, 1)) for c in columns),
         )
 
 

@@ -203,6 +203,8 @@ _REPLAY: dict[str, Check] = {
         }
     ),
     "optimize_memory_usage": _boolean,
+    # n-step returns: sampling holds O(batch) memory whatever the window (common.nstep)
+    "n_steps": _integer(1, MAX_STEPS),
 }
 _OFF_POLICY: dict[str, Check] = {**_REPLAY, "action_noise": _action_noise}
 _LEARNING_RATE: dict[str, Check] = {"learning_rate": _number(0.0, 1e6)}

@@ -5,7 +5,8 @@ After each collection, once ``num_timesteps > learning_starts``, ``train(gradien
 runs (``-1``: as many updates as env steps collected). A transition cut by a time limit is
 stored with its true terminal observation and bootstraps (``handle_timeout_termination``). A
 callback that stops training ends the loop after its step is fully recorded (the transition
-stored, counters advanced), so a saved model continues exactly.
+stored, counters advanced), so a saved model continues exactly. ``n_steps > 1``: the
+buffer samples n-step returns with each sample's discount (``common.nstep``; SB3 2.x).
 """
 
 from __future__ import annotations
@@ -20,9 +21,10 @@ import torch
 from palaestra.algos.common import model_io
 from palaestra.algos.common.base import BaseAlgorithm, round_up_steps
 from palaestra.algos.common.frame_replay_buffer import FrameReplayBuffer, frame_layout
+from palaestra.algos.common.nstep import check_n_steps
 from palaestra.algos.common.schedules import as_schedule
 from palaestra.algos.common.settings import Settings
-from palaestra.algos.common.transition_ring import TransitionRing
+from palaestra.algos.common.transition_ring import BATCH_KEYS, TransitionRing
 
 __all__ = ["OffPolicyAlgorithm", "train_freq_pair"]
 
@@ -50,8 +52,8 @@ class OffPolicyAlgorithm(BaseAlgorithm):
     # The collection counters make a run stopped mid-collection train at the same steps
     # after a resume as without the stop.
     _extra_counters: tuple[str, ...] = ("_n_calls", "_collected_steps", "_collected_episodes")
-    # Only their defaults are accepted (NotImplementedError otherwise): nothing to keep.
-    _not_saved = BaseAlgorithm._not_saved | {"replay_buffer_class", "n_steps"}
+    # Only its default is accepted (NotImplementedError otherwise): nothing to keep.
+    _not_saved = BaseAlgorithm._not_saved | {"replay_buffer_class"}
     replay_buffer: TransitionRing | FrameReplayBuffer | None
 
     def _build_policy(self, policy_kwargs: dict[str, Any]) -> Any:
@@ -83,9 +85,15 @@ class OffPolicyAlgorithm(BaseAlgorithm):
 
     def _take_settings(self, settings: Settings) -> None:
         """The settings every off-policy algorithm takes (SB3's names and meanings)."""
-        if settings["replay_buffer_class"] is not None or settings["n_steps"] != 1:
-            raise NotImplementedError("replay_buffer_class and n_steps > 1 are not supported yet")
+        if settings["replay_buffer_class"] is not None:
+            raise NotImplementedError("replay_buffer_class is not supported yet")
+        self.n_steps = check_n_steps(settings["n_steps"])
         self.optimize_memory_usage = bool(settings["optimize_memory_usage"])
+        if self.n_steps > 1 and self.optimize_memory_usage:
+            raise NotImplementedError(
+                f"n_steps={self.n_steps} is not supported with optimize_memory_usage=True "
+                "(as SB3's NStepReplayBuffer)"
+            )
         self.learning_rate = settings["learning_rate"]
         self.lr_schedule = as_schedule(self.learning_rate)
         self.buffer_size = settings["buffer_size"]
@@ -95,6 +103,13 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         self.train_freq = train_freq_pair(settings["train_freq"])
         self.gradient_steps = settings["gradient_steps"]
         self.replay_buffer_kwargs: dict[str, Any] = dict(settings["replay_buffer_kwargs"] or {})
+        for key in ("n_steps", "gamma"):  # the algorithm's own (SB3 sets them the same way)
+            if key in self.replay_buffer_kwargs:
+                raise ValueError(
+                    f"replay_buffer_kwargs may not set {key!r} "
+                    f"({self.replay_buffer_kwargs[key]!r}): pass {key}= to "
+                    f"{type(self).__name__}() instead"
+                )
         self._n_calls = 0
         self._collected_steps = self._collected_episodes = 0  # of the collection under way
         self.replay_buffer = None
@@ -113,6 +128,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
                 | self.replay_buffer_kwargs,
             )
             return
+        nstep = {"n_steps": self.n_steps, "gamma": self.gamma} if self.n_steps > 1 else {}
         self.replay_buffer = TransitionRing(
             self.buffer_size,
             self.observation_space,
@@ -120,7 +136,14 @@ class OffPolicyAlgorithm(BaseAlgorithm):
             self.n_envs,
             self.device,
             **self.replay_buffer_kwargs,
+            **nstep,
         )
+
+    def _sample_batch(self, batch_size: int) -> dict[str, Any]:
+        """A uniform minibatch by the objectives' names (``BATCH_KEYS``); with ``n_steps > 1``
+        n-step rewards and next observations, and ``discounts``, each sample's ``gamma^len``."""
+        assert self.replay_buffer is not None
+        return dict(zip(BATCH_KEYS, self.replay_buffer.sample_arrays(batch_size, self._rng)))
 
     def final_timesteps(self, total_timesteps: int) -> int:
         freq, unit = self.train_freq
@@ -267,7 +290,9 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         if self.replay_buffer is None:
             self._make_replay_buffer()
         assert self.replay_buffer is not None
-        limit = self.replay_buffer.nbytes() + (1 << 20) if max_bytes is None else max_bytes
+        # A file saved with n_steps > 1 also records where episodes ended (as rewards, float32).
+        ended = self.replay_buffer.rewards.nbytes
+        limit = self.replay_buffer.nbytes() + ended + (1 << 20) if max_bytes is None else max_bytes
         meta, arrays = model_io.read_archive(path, "replay_buffer", max_bytes=limit)
         try:
             self.replay_buffer.load_state(meta, arrays)

@@ -191,14 +191,6 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
         return super()._saved_value(name)
 
     def _sample_batch(self, batch_size: int) -> dict[str, Any]:
-        assert self.replay_buffer is not None
-        obs, actions, next_obs, rewards, terminated = self.replay_buffer.sample_arrays(
-            batch_size, self._rng
-        )
-        return {
-            "observations": obs,
-            "actions": actions.reshape(batch_size, -1),
-            "next_observations": next_obs,
-            "rewards": rewards,
-            "terminated": terminated,
-        }
+        batch = super()._sample_batch(batch_size)
+        batch["actions"] = batch["actions"].reshape(batch_size, -1)
+        return batch

@@ -6,6 +6,8 @@ Layout follows SB3 (``[buffer_size // n_envs, n_envs, ...]``, next observations 
 Time-limit bootstrapping: a transition that ended by truncation (``TimeLimit.truncated``) is
 stored as *not* terminated, so its target still bootstraps from the next observation (SB3's
 ``handle_timeout_termination``; Pardo et al. 2018, "Time Limits in Reinforcement Learning").
+With ``n_steps > 1`` the ring also keeps where episodes ended (terminated or truncated) and
+samples n-step returns (``palaestra.algos.common.nstep``).
 """
 
 from __future__ import annotations
@@ -16,9 +18,14 @@ import numpy as np
 import torch
 
 from palaestra import spaces
+from palaestra.algos.common.nstep import check_n_steps, n_step_window
 from palaestra.algos.common.spaces_util import allocate
 
-__all__ = ["TransitionRing"]
+__all__ = ["BATCH_KEYS", "TransitionRing"]
+
+# The fields of ``sample_arrays``, by the names the objectives read ("discounts" only with
+# n_steps > 1: without it the objectives discount by their gamma).
+BATCH_KEYS = ("observations", "actions", "next_observations", "rewards", "terminated", "discounts")
 
 Obs = np.ndarray | dict[str, np.ndarray]
 
@@ -54,8 +61,11 @@ class TransitionRing:
         n_envs: int = 1,
         device: torch.device | str = "cpu",
         handle_timeout_termination: bool = True,
+        n_steps: int = 1,
+        gamma: float = 0.99,
     ) -> None:
         self.buffer_size = max(int(buffer_size) // n_envs, 1)  # rows; SB3 divides the same way
+        self.n_steps, self.gamma = check_n_steps(n_steps), float(gamma)
         self.n_envs = n_envs
         self.device = torch.device(device)
         self.handle_timeout_termination = handle_timeout_termination
@@ -66,6 +76,8 @@ class TransitionRing:
         self.actions = allocate(action_space, lead)
         self.rewards = np.zeros(lead, dtype=np.float32)
         self.terminated = np.zeros(lead, dtype=np.float32)
+        # Where an episode ended, truncations included: n-step windows stop there.
+        self.ended = np.zeros(lead if self.n_steps > 1 else (0, n_envs), dtype=np.float32)
         self.pos, self.full = 0, False
 
     def size(self) -> int:
@@ -76,7 +88,7 @@ class TransitionRing:
         """Bytes of every array this buffer holds."""
         stores = [self.observations, self.next_observations, self.actions]
         arrays = [a for st in stores for a in (st.values() if isinstance(st, dict) else [st])]
-        return int(sum(a.nbytes for a in [*arrays, self.rewards, self.terminated]))
+        return int(sum(a.nbytes for a in [*arrays, self.rewards, self.terminated, self.ended]))
 
     def add(
         self,
@@ -97,15 +109,37 @@ class TransitionRing:
             self.terminated[row] = np.logical_and(dones, np.logical_not(timeouts))
         else:
             self.terminated[row] = dones
+        if self.n_steps > 1:
+            self.ended[row] = dones
         self.pos += 1
         if self.pos == self.buffer_size:
             self.full, self.pos = True, 0
 
     def sample_arrays(self, batch_size: int, rng: np.random.Generator) -> tuple[Any, ...]:
         """Uniform rows and envs, with replacement, as SB3 samples:
-        ``(obs, actions, next_obs, rewards, terminated)``."""
+        ``(obs, actions, next_obs, rewards, terminated)``, and ``discounts`` with
+        ``n_steps > 1`` (the fields of ``BATCH_KEYS``; see ``get``)."""
         rows = rng.integers(0, self.size(), size=batch_size)
         cols = rng.integers(0, self.n_envs, size=batch_size)
+        return self.get(rows, cols)
+
+    def get(self, rows: np.ndarray, cols: np.ndarray) -> tuple[Any, ...]:
+        """The transitions at ``(rows, cols)``; with ``n_steps > 1`` their n-step windows:
+        the discounted reward sums, the next observation and ``terminated`` of each window's
+        last transition, and the discount of its target (SB3's ``NStepReplayBuffer``)."""
+        if self.n_steps > 1:
+            newest = (self.pos - 1) % self.buffer_size
+            returns, discounts, last = n_step_window(
+                self.rewards, (self.ended,), newest, rows, cols, self.n_steps, self.gamma
+            )
+            return (
+                _take_arrays(self.observations, rows, cols),
+                self.actions[rows, cols],
+                _take_arrays(self.next_observations, last, cols),
+                returns,
+                self.terminated[last, cols],
+                discounts,
+            )
         return (
             _take_arrays(self.observations, rows, cols),
             self.actions[rows, cols],
@@ -124,6 +158,7 @@ class TransitionRing:
             "actions": self.actions[:n],
             "rewards": self.rewards[:n],
             "terminated": self.terminated[:n],
+            **({"ended": self.ended[:n]} if self.n_steps > 1 else {}),
         }
         meta = {
             "buffer_size": self.buffer_size,
@@ -156,6 +191,15 @@ class TransitionRing:
             "rewards": self.rewards[:n],
             "terminated": self.terminated[:n],
         }
+        if self.n_steps == 1:  # a buffer saved with n_steps > 1 holds the same transitions
+            arrays = {k: v for k, v in arrays.items() if k != "ended"}
+        elif "ended" in arrays:
+            targets["ended"] = self.ended[:n]
+        elif n:
+            raise ValueError(
+                "the saved replay buffer does not record where episodes ended (saved with "
+                f"n_steps=1), which n-step returns need (this model has n_steps={self.n_steps})"
+            )
         if set(targets) != set(arrays):
             raise ValueError(
                 f"replay buffer arrays {sorted(arrays)} do not match {sorted(targets)}"

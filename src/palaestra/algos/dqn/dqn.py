@@ -170,16 +170,8 @@ class DQN(OffPolicyAlgorithm):
         losses = []
         with self.learner.session():
             for _ in range(gradient_steps):
-                obs, actions, next_obs, rewards, terminated = self.replay_buffer.sample_arrays(
-                    batch_size, self._rng
-                )
-                batch = {
-                    "observations": obs,
-                    "next_observations": next_obs,
-                    "actions": actions.reshape(batch_size).astype(np.int64) - start,
-                    "rewards": rewards,
-                    "terminated": terminated,
-                }
+                batch = self._sample_batch(batch_size)
+                batch["actions"] = batch["actions"].reshape(batch_size).astype(np.int64) - start
                 metrics, _ = self.learner.update("q", objective, batch, self.max_grad_norm)
                 losses.append(metrics["loss"])
         self._n_updates += gradient_steps

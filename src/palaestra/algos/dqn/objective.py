@@ -25,12 +25,13 @@ def dqn_loss(
     rewards: Any,
     terminated: Any,
     next_q_target: Any,
-    gamma: float,
+    gamma: Any,
 ) -> tuple[Any, dict[str, Any], Any]:
     """Huber loss between ``Q(s, a)`` and ``r + gamma * (1 - terminated) * max_a' Q'(s', a')``.
 
     ``q_values``/``next_q_target``: ``[B, n_actions]`` (online net on ``s``, target net on
-    ``s'``, not differentiated); ``actions``: ``[B]`` 0-based; the rest ``[B]``.
+    ``s'``, not differentiated); ``actions``: ``[B]`` 0-based; the rest ``[B]``; ``gamma``
+    a number or each sample's discount ``[B]`` (n-step returns: ``gamma^len``).
 
     >>> from palaestra.algos.learners.xp import numpy_ops as xp
     >>> q, nq = np.array([[1.0, 2.0]]), np.array([[0.0, 3.0]])
@@ -54,7 +55,8 @@ def dqn_loss_vjp(tape: Any) -> np.ndarray:
 
 
 class DQNObjective:
-    """Huber TD loss of the online net ``q`` against the target net ``q_target``."""
+    """Huber TD loss of the online net ``q`` against the target net ``q_target``; a batch
+    with ``discounts`` (n-step returns) discounts each sample by its own instead of gamma."""
 
     def __init__(self, gamma: float) -> None:
         self.gamma = gamma
@@ -64,8 +66,9 @@ class DQNObjective:
     ) -> tuple[Any, dict[str, Any], Any]:
         next_q = run("q_target", batch["next_observations"])
         q = run("q", batch["observations"])
+        gamma = batch.get("discounts", self.gamma)
         return dqn_loss(
-            xp, q, batch["actions"], batch["rewards"], batch["terminated"], next_q, self.gamma
+            xp, q, batch["actions"], batch["rewards"], batch["terminated"], next_q, gamma
         )
 
     def vjp(self, tape: Any, backprop: Backprop) -> dict[str, np.ndarray]:

@@ -84,7 +84,7 @@ def qrdqn_loss(
     next_quantiles_target: Any,
     rows: Any,
     cum_prob: Any,
-    gamma: float,
+    gamma: Any,
 ) -> tuple[Any, dict[str, Any], Any]:
     """The quantile Huber loss of ``theta(s, a)`` against ``r + gamma * (1 - terminated) *
     theta'(s', argmax_a' mean theta'(s', a'))``.
@@ -92,10 +92,12 @@ def qrdqn_loss(
     ``quantiles``/``next_quantiles_target``: the online net on ``s`` and the target net on
     ``s'`` (not differentiated), ``[B, N * n_actions]`` or ``[B, N, n_actions]``; ``actions``
     ``[B]`` 0-based; ``rewards``/``terminated`` ``[B]``; ``rows`` ``arange(B)``; ``cum_prob``
-    ``[N]``."""
+    ``[N]``; ``gamma`` a number or each sample's discount ``[B]`` (n-step returns)."""
     n = cum_prob.shape[0]
     next_q = next_quantiles_target.reshape(rows.shape[0], n, -1)  # [B, N, n_actions]
     greedy = next_q.mean(axis=1).argmax(axis=1)
+    if getattr(gamma, "ndim", 0) == 1:  # per-sample discounts [B]
+        gamma = gamma[:, None]
     target = rewards[:, None] + (1.0 - terminated[:, None]) * gamma * next_q[rows, :, greedy]
     current = quantiles.reshape(rows.shape[0], n, -1)[rows, :, actions]  # [B, N]
     loss, tape = quantile_huber_loss(xp, current, target, cum_prob)
@@ -123,7 +125,8 @@ class QRDQNObjective(DQNObjective):
         next_quantiles = run("q_target", batch["next_observations"])
         actions, rewards, terminated = batch["actions"], batch["rewards"], batch["terminated"]
         rows, cum_prob = batch["rows"], batch["cum_prob"]
-        args = (actions, rewards, terminated, next_quantiles, rows, cum_prob, self.gamma)
+        gamma = batch.get("discounts", self.gamma)
+        args = (actions, rewards, terminated, next_quantiles, rows, cum_prob, gamma)
         return qrdqn_loss(xp, quantiles, *args)
 
     def vjp(self, tape: Any, backprop: Backprop) -> dict[str, np.ndarray]:

@@ -22,9 +22,6 @@ from palaestra.algos.qrdqn.policies import (
 
 __all__ = ["QRDQN"]
 
-# What the replay buffer's ``sample_arrays`` returns, by the names the objective reads.
-_BATCH_KEYS = ("observations", "actions", "next_observations", "rewards", "terminated")
-
 
 class QRDQN(DQN):
     """Quantile regression DQN: ``QRDQN(env, ...)``; arguments as sb3-contrib's ``QRDQN``
@@ -117,8 +114,7 @@ class QRDQN(DQN):
         losses = []
         with self.learner.session():
             for _ in range(gradient_steps):
-                sampled = self.replay_buffer.sample_arrays(batch_size, self._rng)
-                batch = fixed | dict(zip(_BATCH_KEYS, sampled))
+                batch = fixed | self._sample_batch(batch_size)
                 batch["actions"] = batch["actions"].reshape(batch_size).astype(np.int64) - start
                 losses.append(self.learner.update("q", objective, batch, clip)[0]["loss"])
         self._n_updates += gradient_steps

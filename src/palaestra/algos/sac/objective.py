@@ -62,7 +62,8 @@ def ent_coef_loss_vjp(tape: Any) -> np.ndarray:
 class SACCriticObjective:
     """Soft Bellman regression of every critic (SB3's SAC): the target is
     ``r + gamma (1 - done) (min_i Q'_i(s', a') - alpha log pi(a'|s'))`` with ``a'`` drawn by the
-    actor with ``next_noise``, not differentiated."""
+    actor with ``next_noise``, not differentiated; a batch with ``discounts`` (n-step returns)
+    discounts each sample by its own instead of gamma."""
 
     def __init__(self, n_critics: int, gamma: float, ent_coef: float) -> None:
         self.names = [f"qf{i}" for i in range(n_critics)]
@@ -80,7 +81,8 @@ class SACCriticObjective:
             targets = [f"{name}_target" for name in self.names]
             next_q = min_of(xp, critics(xp, run, targets, next_obs, next_a))
             next_q = next_q - self.ent_coef * next_log_prob
-            target = batch["rewards"] + (1.0 - batch["terminated"]) * self.gamma * next_q
+            gamma = batch.get("discounts", self.gamma)
+            target = batch["rewards"] + (1.0 - batch["terminated"]) * gamma * next_q
         qs = critics(xp, run, self.names, batch["observations"], batch["actions"])
         return q_regression_loss(xp, qs, xp.stop_gradient(target), 0.5)
 

@@ -36,7 +36,8 @@ def deterministic_actor_loss_vjp(tape: Any) -> np.ndarray:
 class TD3CriticObjective:
     """Clipped double-Q regression (Fujimoto et al. 2018): target actions are the target
     actor's plus the clipped ``target_noise``, clipped to [-1, 1]; the target takes the
-    minimum of the target critics (DDPG: one critic, no noise)."""
+    minimum of the target critics (DDPG: one critic, no noise). A batch with ``discounts``
+    (n-step returns) discounts each sample by its own instead of gamma."""
 
     def __init__(self, n_critics: int, gamma: float) -> None:
         self.names = [f"qf{i}" for i in range(n_critics)]
@@ -50,7 +51,8 @@ class TD3CriticObjective:
             next_a = xp.clip(run("actor_target", next_obs) + batch["target_noise"], -1.0, 1.0)
             targets = [f"{name}_target" for name in self.names]
             next_q = min_of(xp, critics(xp, run, targets, next_obs, next_a))
-            target = batch["rewards"] + (1.0 - batch["terminated"]) * self.gamma * next_q
+            gamma = batch.get("discounts", self.gamma)
+            target = batch["rewards"] + (1.0 - batch["terminated"]) * gamma * next_q
         qs = critics(xp, run, self.names, batch["observations"], batch["actions"])
         return q_regression_loss(xp, qs, xp.stop_gradient(target), 1.0)
 
