@@ -369,7 +369,7 @@ def test_anything_but_data_is_refused_by_name(text: str, piece: str, why: str) -
     with pytest.raises(RunError) as caught:
         literal(text, "policy_kwargs", NAMES)
     assert caught.value.what == f"policy_kwargs: {piece!r} in {text!r} is refused: {why}" + (
-        " (the names palaestra maps are in palaestra.runs.known_names, docs/known_names.md)"
+        ", which palaestra.runs.known_names (docs/known_names.md) does not map"
         if why.startswith("unknown name")
         else ""
     )

@@ -130,7 +130,7 @@ class _Reader:
         if dotted not in self.names:
             raise self.refuse(
                 node,
-                f"unknown name {dotted!r} (the names palaestra maps are in "
-                "palaestra.runs.known_names, docs/known_names.md)",
+                f"unknown name {dotted!r}, which palaestra.runs.known_names "
+                "(docs/known_names.md) does not map",
             )
         return self.names[dotted]
