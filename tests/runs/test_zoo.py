@@ -315,6 +315,23 @@ def test_noise_on_discrete_actions_is_refused(workdir: Path) -> None:
         resolve_spec("dqn", "CartPole-v1", config=path)
 
 
+def test_python_kwargs_strings_are_read_in_any_settings(workdir: Path) -> None:
+    text = 'policy_kwargs: "dict(net_arch=[64, 64], activation_fn=nn.ReLU)"\n'
+    path = _write(workdir, "flat.yaml", text)
+    for spec, _ in (
+        resolve_spec("ppo", "CartPole-v1", config=path),
+        resolve_spec("ppo", "CartPole-v1", assignments=["policy_kwargs=dict(net_arch=[64, 64], "
+                                                        "activation_fn=nn.ReLU)"]),
+    ):  # fmt: skip
+        assert spec.hyperparams["policy_kwargs"] == {"net_arch": [64, 64], "activation_fn": "relu"}
+    with pytest.raises(RunError) as caught:
+        resolve_spec("dqn", "CartPole-v1", assignments=["policy_kwargs=__import__('os')"])
+    assert caught.value.what.startswith(
+        "--set: policy_kwargs: \"__import__('os')\" in \"__import__('os')\" is refused: the only "
+        "call allowed is dict(key=value, ...)"
+    )
+
+
 # -- the literal reader ------------------------------------------------------------------------
 NAMES = {"nn.ReLU": "relu", "th.nn.Tanh": "tanh"}
 

@@ -146,6 +146,9 @@ def _split(algo: str, data: dict[str, Any], source: str) -> dict[str, Any]:
                 f"{source}: unknown {algo} setting {key!r}",
                 f"valid keys: {', '.join(_valid_keys(algo))}",
             )
+    for key in ("policy_kwargs", "replay_buffer_kwargs"):
+        if isinstance(hyper.get(key), str):  # RL Zoo's "dict(net_arch=[64, 64])", read as data
+            hyper[key] = zoo.kwargs_value(key, hyper[key], source)
     kwargs = hyper.get("policy_kwargs")
     if isinstance(kwargs, dict) and isinstance(kwargs.get("activation_fn"), str):
         # RL Zoo writes nn.ReLU / th.nn.Tanh; presets name torch's activations "relu", "tanh"

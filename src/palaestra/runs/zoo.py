@@ -39,7 +39,14 @@ from palaestra.runs.errors import RunError
 from palaestra.runs.literal import literal
 from palaestra.runs.recipe import WRAPPER_KEYS, is_atari_id, registered_id, wrapper_items
 
-__all__ = ["REFUSED", "action_size", "is_zoo_file", "pick_section", "section_settings"]
+__all__ = [
+    "REFUSED",
+    "action_size",
+    "is_zoo_file",
+    "kwargs_value",
+    "pick_section",
+    "section_settings",
+]
 
 ATARI_WRAPPER = "palaestra.wrappers.atari:AtariWrapper"
 # Zoo keys palaestra's settings do not take, and why (the error says it).
@@ -123,7 +130,7 @@ def section_settings(
         elif key == "normalize":
             out[key] = _normalize(value, source)
         elif key in ("policy_kwargs", "replay_buffer_kwargs"):
-            out[key] = _kwargs(key, value, source)
+            out[key] = kwargs_value(key, value, source)
             if key == "policy_kwargs":
                 _check_policy_keys(algo, out[key], source, policy_keys)
         elif key == "env_wrapper":
@@ -159,7 +166,9 @@ def _normalize(value: Any, source: str) -> Any:
     return value
 
 
-def _kwargs(key: str, value: Any, source: str) -> Any:
+def kwargs_value(key: str, value: Any, source: str) -> Any:
+    """``policy_kwargs``-like ``value``: a mapping, or the Zoo's Python string read as data
+    (:func:`palaestra.runs.literal.literal`, names from ``known_names.ACTIVATIONS``)."""
     if isinstance(value, str):
         value = literal(value, f"{source}: {key}", known_names.ACTIVATIONS)
     if not isinstance(value, dict):
