@@ -70,7 +70,9 @@ def add_parser(sub: Any) -> None:
         "n_timesteps, policy, env_kwargs, normalize, env_wrapper ('module:Class'), atari, "
         "frame_stack, seed) or hyperparameters at top level; a module its env_wrapper names "
         "is imported only with --allow-import MODULE (palaestra's own names need none: "
-        "docs/known_names.md); the command line's values override the file's",
+        "docs/known_names.md); the command line's values override the file's. An RL Zoo "
+        "hyperparameter file (rl_zoo3/hyperparams/ppo.yml) is read as the Zoo reads it: the "
+        "section for ENV (else atari, else default), in place of the preset",
     )
     p.add_argument("--n-envs", type=int, metavar="N", help="number of parallel envs")
     add_timesteps(

@@ -16,9 +16,15 @@ because they resolve to code palaestra ships:
 
 This module is the one table (``docs/known_names.md`` shows it; a test keeps the two equal);
 whatever reads foreign settings files maps names through :func:`palaestra_name`. It imports
-nothing. Not mapped, because palaestra has no equivalent: ``rl_zoo3.wrappers.*`` (FrameSkip,
+nothing. RL Zoo hyperparameter files (:mod:`palaestra.runs.zoo`) use it twice: a Python-literal
+``policy_kwargs`` string may name exactly the :data:`ACTIVATIONS` (``"dict(activation_fn=
+nn.ReLU)"``, read by :mod:`palaestra.runs.literal`, never ``eval``), and an ``env_wrapper``
+naming SB3's ``AtariWrapper`` becomes palaestra's Atari recipe (``atari``).
+
+Not mapped, because palaestra has no equivalent: ``rl_zoo3.wrappers.*`` (FrameSkip,
 HistoryWrapper, TimeFeatureWrapper, ...), ``sb3_contrib.common.wrappers.TimeFeatureWrapper``,
-``rl_zoo3.callbacks.*``, and activations other than those below (``nn.GELU``, ``nn.SiLU``).
+``rl_zoo3.callbacks.*``, activations other than those below (``nn.GELU``, ``nn.SiLU``), and
+SB3's ``RMSpropTFLike`` optimizer (the Zoo's A2C ``atari`` section names it).
 """
 
 from __future__ import annotations

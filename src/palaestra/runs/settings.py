@@ -5,6 +5,10 @@ Settings are plain data in the preset format (``policy``, ``n_envs``, ``n_timest
 ``frame_stack``; see :mod:`palaestra.runs.recipe`) plus ``seed``; ``config.json`` records them
 exactly as resolved, so a run's ``config.json`` is itself a valid ``--config`` file.
 
+An RL Zoo hyperparameter file (one section per env id, ``atari``, ``default``) is read as
+the Zoo reads it: the section for the env id, its Zoo keys turned into these
+(:mod:`palaestra.runs.zoo`), over the algorithm's defaults rather than a preset.
+
 A settings file is data as a run folder is (people pass sweep folders around): its values are
 held to a run folder's limits and the modules it names are imported only when the command
 line allows them (:mod:`palaestra.runs.folder`); YAML is read with ``safe_load``, and a
@@ -16,13 +20,13 @@ from __future__ import annotations
 import ast
 import json
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from palaestra import presets
 from palaestra.error import dependency_not_installed
-from palaestra.runs import folder, known_names
+from palaestra.runs import folder, known_names, zoo
 from palaestra.runs.algorithms import (
     ALGO_CLASSES,
     ALGOS,
@@ -44,6 +48,7 @@ __all__ = [
     "hyperparameter_names",
     "load_config_file",
     "resolve_settings",
+    "zoo_section_settings",
 ]
 
 
@@ -141,6 +146,9 @@ def _split(algo: str, data: dict[str, Any], source: str) -> dict[str, Any]:
                 f"{source}: unknown {algo} setting {key!r}",
                 f"valid keys: {', '.join(_valid_keys(algo))}",
             )
+    for key in ("policy_kwargs", "replay_buffer_kwargs"):
+        if isinstance(hyper.get(key), str):  # RL Zoo's "dict(net_arch=[64, 64])", read as data
+            hyper[key] = zoo.kwargs_value(key, hyper[key], source)
     kwargs = hyper.get("policy_kwargs")
     if isinstance(kwargs, dict) and isinstance(kwargs.get("activation_fn"), str):
         # RL Zoo writes nn.ReLU / th.nn.Tanh; presets name torch's activations "relu", "tanh"
@@ -188,22 +196,57 @@ def parse_set(algo: str, assignments: list[str]) -> dict[str, Any]:
     return _split(algo, data, "--set")
 
 
-def _load_file(
-    algo: str, env_id: str, path: str, allow_import: Sequence[str]
-) -> tuple[dict[str, Any], str]:
-    """A settings file's settings, held to a run folder's rules: no module it names is
-    imported unless ``allow_import`` holds it (its ``env_id`` must be the command line's, which
-    is the user's own), and its values within a run folder's limits."""
-    source = f"config file {path!r}"
-    data = load_config_file(path)
-    _check_run_keys(algo, env_id, data, source)
+def _policy_keys(algo: str) -> set[str]:
+    """The keyword arguments ``algo``'s policy takes (its declared rules)."""
+    from palaestra.algos.common.hyperparams import POLICY_KWARGS  # lazy: import-time — torch
+
+    algo_class(algo)  # its package declares the rules
+    return set(POLICY_KWARGS[ALGO_CLASSES[algo]])
+
+
+def zoo_section_settings(
+    algo: str, section: Mapping[str, Any], source: str, action_size: Callable[[], int]
+) -> dict[str, Any]:
+    """One section of an RL Zoo file as checked settings (:func:`palaestra.runs.zoo.
+    section_settings`, then a run folder's limits); ``RunError`` naming the first key it
+    cannot take. ``action_size()``: the env's action dimensions, asked for ``noise_type`` only.
+    Imports no module the section names (the caller gates them: :func:`folder.check_imports`)."""
+    data = zoo.section_settings(algo, section, source, _policy_keys(algo), action_size)
+    return _checked(algo, data, source)
+
+
+def _checked(algo: str, data: dict[str, Any], source: str) -> dict[str, Any]:
     settings = _split(algo, data, source)
     try:
         folder.check_run_config({**settings, "algo": algo}, source, required=())
     except RunError as exc:
         raise RunError(exc.what, "fix the file") from None
+    return settings
+
+
+def _load_file(
+    algo: str, env_id: str, path: str, allow_import: Sequence[str]
+) -> tuple[dict[str, Any], str | None]:
+    """A settings file's settings and, for an RL Zoo file, the section used (else None),
+    held to a run folder's rules: no module it names is imported unless ``allow_import`` holds
+    it (its ``env_id`` must be the command line's, which is the user's own), and its values
+    within a run folder's limits."""
+    source = f"config file {path!r}"
+    data = load_config_file(path)
+    section = None
+    if zoo.is_zoo_file(data, {*_TOP_KEYS, *hyperparameter_names(algo), *_RUN_KEYS}):
+        section, values = zoo.pick_section(data, env_id, source)
+        source = f"{source} section {section!r}"
+        given_kwargs = values.get("env_kwargs")
+        kwargs: dict[str, Any] = given_kwargs if isinstance(given_kwargs, dict) else {}
+        settings = zoo_section_settings(
+            algo, values, source, lambda: zoo.action_size(env_id, kwargs)
+        )
+    else:
+        _check_run_keys(algo, env_id, data, source)
+        settings = _checked(algo, data, source)
     folder.check_imports(settings, source, allow_import, "settings file")
-    return settings, source
+    return settings, section
 
 
 def resolve_settings(
@@ -221,15 +264,33 @@ def resolve_settings(
 
     A settings file is data like a run folder: the modules it names are imported only when
     ``allow_import`` holds them (a mapping, ``assignments`` and ``overrides`` are the caller's
-    own). With no preset, the policy follows the env's observations unless given
+    own). An RL Zoo file's section replaces the default preset (``preset`` still goes beneath
+    it). With no preset, the policy follows the env's observations unless given
     (:func:`~palaestra.runs.recipe.choose_policy`)."""
     notes: list[str] = []
+    given: list[dict[str, Any]] = []
+    section = None
+    if isinstance(config, Mapping):
+        given.append(_split(algo, dict(config), "settings"))
+    elif config is not None:
+        layer, section = _load_file(algo, env_id, str(config), allow_import)
+        given.append(layer)
+    elif allow_import:
+        note(f"--allow-import {', '.join(allow_import)}: no settings file to apply it to")
     if preset is not None:
         try:
             settings = presets.get_preset(algo, env_id, preset)
         except presets.PresetError as exc:
             raise RunError(str(exc), "pick another --preset, or drop it") from None
         used: str | None = preset
+    elif section is not None:  # the Zoo's section is the whole recipe, as in the Zoo
+        settings, used = presets.base_settings(), None
+        if is_atari_id(env_id):
+            settings.update(atari_defaults())
+        notes.append(
+            f"settings from section {section!r} of the RL Zoo file {str(config)!r} over the "
+            f"{algo.upper()} defaults (SB3's), not a preset"
+        )
     elif presets.has_preset(algo, env_id):
         settings, used = presets.get_preset(algo, env_id), "default"
     elif is_atari_id(env_id):
@@ -242,13 +303,6 @@ def resolve_settings(
         settings, used = presets.base_settings(), None
     settings.pop("measured", None)
     settings = {**presets.base_settings(), **settings}
-    given: list[dict[str, Any]] = []
-    if isinstance(config, Mapping):
-        given.append(_split(algo, dict(config), "settings"))
-    elif config is not None:
-        given.append(_load_file(algo, env_id, str(config), allow_import)[0])
-    elif allow_import:
-        note(f"--allow-import {', '.join(allow_import)}: no settings file to apply it to")
     if assignments:
         given.append(parse_set(algo, list(assignments)))
     if overrides:
@@ -256,12 +310,16 @@ def resolve_settings(
     for layer in given:
         settings = presets.merge(settings, layer)
     if used is None and not is_atari_id(env_id):
-        defaults = f"no preset for {algo} on {env_id}: using the {algo.upper()} defaults (SB3's)"
+        defaults = f"no preset for {algo} on {env_id}: using the {algo.upper()} defaults"
+        defaults += " (SB3's) with"
+        if section is not None:
+            defaults = f"section {section!r} of the RL Zoo file names no policy: using"
         if any("policy" in layer for layer in given):
-            notes.append(f"{defaults} with the policy given, {settings['policy']}")
+            if section is None:
+                notes.append(f"{defaults} the policy given, {settings['policy']}")
         else:
             settings["policy"], why = choose_policy(settings, env_id)
-            notes.append(f"{defaults} with {settings['policy']}, chosen for its {why}")
+            notes.append(f"{defaults} {settings['policy']}, chosen for its {why}")
     return settings, used, notes
 
 
