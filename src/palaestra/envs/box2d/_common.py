@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from copy import deepcopy
 from typing import Any
 
@@ -84,7 +85,7 @@ def discrete_action(action: Any, space: Any) -> int:
     raise invalid_action(action, space, why)
 
 
-def _generator_at(state: dict[str, Any]) -> np.random.Generator:
+def _generator_at(state: Mapping[str, Any]) -> np.random.Generator:
     """A fresh generator whose bit generator (of the recorded kind) is at ``state``."""
     bit_generator = getattr(np.random, state["bit_generator"])()
     bit_generator.state = state
@@ -121,7 +122,7 @@ class ReplayCopies:
 
     _FRESH_WORLD_EACH_RESET = False
     _init_kwargs: dict[str, Any]
-    _calls: list[tuple[str, dict[str, Any], Any]]  # ("reset" | "step", rng state, argument)
+    _calls: list[tuple[str, Mapping[str, Any], Any]]  # ("reset" | "step", rng state, argument)
     _replaying = False
     _np_random: np.random.Generator | None
     _np_random_seed: int | None
@@ -132,8 +133,8 @@ class ReplayCopies:
     def _record_init(self, **kwargs: Any) -> None:
         self._init_kwargs = kwargs
         self._calls = []
-        self._reset_start: tuple[dict[str, Any], int] | None = None
-        self._step_start: dict[str, Any] | None = None
+        self._reset_start: tuple[Mapping[str, Any], int] | None = None
+        self._step_start: Mapping[str, Any] | None = None
 
     def _start_reset(self) -> bool:
         """Note the generator's state as ``reset`` begins; True if the history restarts here

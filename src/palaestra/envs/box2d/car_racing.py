@@ -458,7 +458,7 @@ class CarRacing(ReplayCopies, ClassicControlEnv):
                 step_reward = -100.0
         if self.render_mode == "human":
             self.render()
-        return self.state, step_reward, terminated, False, info
+        return self.state, step_reward, terminated, False, info  # type: ignore[return-value]
 
     # -- rendering --------------------------------------------------------------------------
 

@@ -267,7 +267,7 @@ def _vector_env_class() -> type:
             super().__init__(batch, max_episode_steps, metadata=metadata)
             self.render_mode = render_mode
 
-        def render(self) -> tuple[np.ndarray, ...] | None:
+        def render(self) -> tuple[np.ndarray, ...] | None:  # type: ignore[override]
             """One ``[400, 600, 3]`` frame per row (``rgb_array``); None, with Gymnasium's
             warning, without a render mode."""
             if self.render_mode is None:
@@ -277,7 +277,8 @@ def _vector_env_class() -> type:
                     'render_mode="rgb_array")'
                 )
                 return None
-            return tuple(render_cartpole(row) for row in self.batch.state)
+            state = self.batch.state  # type: ignore[attr-defined]  # a CartPoleBatch
+            return tuple(render_cartpole(row) for row in state)
 
     CartPoleVectorEnv.__qualname__ = "CartPoleVectorEnv"  # pickled by this module's name
     return CartPoleVectorEnv
