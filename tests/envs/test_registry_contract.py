@@ -137,3 +137,37 @@ def test_copy_and_pickle_keep_the_trajectory(env_id: str) -> None:
     obs = env.step(action)[0]
     for clone in clones:
         assert clone.step(action)[0].tobytes() == obs.tobytes()
+
+
+# ALE keeps the previous action of its sticky actions outside the state it clones, so a copy
+# of a v5 id (repeat_action_probability=0.25) drifts from its original; ale-py's own env under
+# Gymnasium drifts alike (docs/differences.md).
+_STICKY_ALE = pytest.mark.xfail(
+    strict=True, reason="ALE's cloned state lacks the sticky-action history (as in ale-py)"
+)
+COPY_IDS = [
+    pytest.param(p, marks=_STICKY_ALE) if isinstance(p, str) and p.startswith("ALE/") else p
+    for p in ALL_IDS
+]
+
+
+@pytest.mark.parametrize("env_id", COPY_IDS)
+def test_every_id_copies_and_pickles_mid_episode(env_id: str) -> None:
+    """Issue 26: each native env (Box2D's too) deep-copies and pickles, and the copy continues
+    the same trajectory: same observations, rewards and flags for the same actions."""
+    import copy
+    import pickle
+
+    env = _make(env_id)
+    env.reset(seed=4)
+    env.action_space.seed(4)
+    for _ in range(5):
+        env.step(env.action_space.sample())
+    clones = [copy.deepcopy(env), pickle.loads(pickle.dumps(env))]
+    actions = [env.action_space.sample() for _ in range(5)]
+    want = [env.step(a)[:3] for a in actions]
+    for clone in clones:
+        got = [clone.step(a)[:3] for a in actions]
+        for (obs, reward, term), (want_obs, want_reward, want_term) in zip(got, want):
+            np.testing.assert_array_equal(obs, want_obs)
+            assert (float(reward), bool(term)) == (float(want_reward), bool(want_term))

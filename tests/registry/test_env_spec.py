@@ -146,3 +146,32 @@ def test_pprint_registry_matches_gymnasium(num_cols: int, exclude: list[str] | N
 def test_pprint_registry_prints(capsys: pytest.CaptureFixture[str]) -> None:
     assert pprint_registry({"A-v0": EnvSpec("A-v0", "x.y:Z")}) is None
     assert capsys.readouterr().out == "===== y =====\nA-v0\n"
+
+
+def test_pprint_registry_groups_callables_under_none_as_gymnasium() -> None:
+    """Gymnasium's own test_pprint_namespace registry, on both (issue 26)."""
+
+    def named(lib: str, lib_spec: type) -> dict[str, object]:
+        cc = f"{lib}.envs.classic_control"
+        return {
+            "CartPole-v0": lib_spec("CartPole-v0", cc + ".cartpole:CartPoleEnv"),
+            "CartPole-v1": lib_spec("CartPole-v1", cc + ":CartPoleEnv"),
+            "CartPole-v2": lib_spec("CartPole-v2", f"{lib}.cartpole:CartPoleEnv"),
+            "CartPole-v3": lib_spec("CartPole-v3", lambda: None),
+            "ExampleNamespace/CartPole-v2": lib_spec(
+                "ExampleNamespace/CartPole-v2", cc + ":CartPoleEnv"
+            ),
+        }
+
+    pal = pprint_registry(named("palaestra", EnvSpec), disable_print=True)
+    gym = gymnasium.pprint_registry(
+        named("gymnasium", gym_registration.EnvSpec), disable_print=True
+    )
+    assert pal == gym
+    assert pal is not None and "===== None =====\nCartPole-v3" in pal
+    none_excluded = pprint_registry(
+        named("palaestra", EnvSpec),
+        exclude_namespaces=[None],  # type: ignore[list-item]
+        disable_print=True,
+    )
+    assert none_excluded is not None and "CartPole-v3" not in none_excluded

@@ -239,3 +239,34 @@ def test_close_twice_is_checked(toy_id: str) -> None:
 def test_data_equivalence_matches_gymnasium(a: Any, b: Any, exact: bool, expected: bool) -> None:
     assert data_equivalence(a, b, exact) is expected
     assert gym_env_checker.data_equivalence(a, b, exact) == expected
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "check_reset_return_info_deprecation",
+        "check_seed_deprecation",
+        "check_reset_options",
+        "check_reset_return_type",
+        "check_reset_seed_determinism",
+        "check_returned_data_not_reused",
+        "check_step_determinism",
+    ],
+)
+def test_gymnasiums_helpers_are_public_and_warn_alike(name: str) -> None:
+    """Issue 26: ``utils.env_checker``'s helpers at Gymnasium's names, on a legacy toy."""
+    import palaestra.utils.env_checker as ours_module
+
+    assert name in ours_module.__all__
+
+    def legacy(lib: Any) -> Any:
+        def reset(self: Any, *, seed: Any = None, options: Any = None, return_info: Any = 0):
+            return toy_class(lib).reset(self, seed=seed, options=options)
+
+        return type(
+            "Legacy", (toy_class(lib),), {"seed": lambda self, s=None: None, "reset": reset}
+        )()
+
+    ours = outcome(lambda: getattr(ours_module, name)(legacy(palaestra)))
+    theirs = outcome(lambda: getattr(gym_env_checker, name)(legacy(gymnasium)))
+    assert ours == theirs

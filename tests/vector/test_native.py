@@ -6,6 +6,9 @@ Short time limits (``max_episode_steps``) make every run cross several episode e
 
 from __future__ import annotations
 
+import copy
+import pickle
+
 import gymnasium
 import numpy as np
 import pytest
@@ -127,3 +130,23 @@ def test_call_and_attrs_on_native():
     envs.set_attr("sutton_barto_reward", True)
     with pytest.raises(ValueError, match="share their attributes"):
         envs.set_attr("sutton_barto_reward", [True, False])
+
+
+@pytest.mark.parametrize("env_id", ["CartPole-v1", "Pendulum-v1", "Acrobot-v1"])
+def test_native_vector_envs_copy_and_continue(env_id: str) -> None:
+    """Issue 26: a copied batch writes its physics into its own state (views are rebuilt), and
+    its pre-drawn reset numbers stay its generator's, across autoresets."""
+    envs = gym.make_vec(env_id, num_envs=3)
+    envs.reset(seed=0)
+    envs.action_space.seed(0)
+    for _ in range(30):
+        envs.step(envs.action_space.sample())
+    clones = [copy.deepcopy(envs), pickle.loads(pickle.dumps(envs))]
+    actions = [envs.action_space.sample() for _ in range(250)]  # through several autoresets
+    want = [envs.step(a) for a in actions]
+    for clone in clones:
+        for action, (obs, reward, terminated, truncated, _) in zip(actions, want):
+            got = clone.step(action)
+            np.testing.assert_array_equal(got[0], obs)
+            np.testing.assert_array_equal(got[1], reward)
+            np.testing.assert_array_equal(got[2] | got[3], terminated | truncated)

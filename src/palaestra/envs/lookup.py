@@ -306,12 +306,13 @@ def load_env_creator(name: str) -> Callable[..., Any]:
     return creator
 
 
-def _display_namespace(env_spec: EnvSpec) -> str:
-    """The heading an id is listed under: its namespace, else guessed from the entry point."""
-    if env_spec.namespace is not None:
+def _display_namespace(env_spec: EnvSpec) -> str | None:
+    """The heading an id is listed under: its namespace, else guessed from the entry point.
+
+    An id with neither (a callable entry point) is listed under ``None``, as in Gymnasium.
+    """
+    if env_spec.namespace is not None or not isinstance(env_spec.entry_point, str):
         return env_spec.namespace
-    if not isinstance(env_spec.entry_point, str):
-        return env_spec.name
     # "palaestra.envs.classic_control.cartpole:CartPoleEnv" -> "classic_control" (Gymnasium's rule)
     parts = re.sub(r":\w+", "", env_spec.entry_point).split(".")
     if len(parts) >= 3:
@@ -334,7 +335,7 @@ def pprint_registry(
     A-v0 B-v0
     Cee-v1
     """
-    by_namespace: dict[str, list[str]] = defaultdict(list)
+    by_namespace: dict[str | None, list[str]] = defaultdict(list)
     width = 0
     for env_spec in print_registry.values():
         by_namespace[_display_namespace(env_spec)].append(env_spec.id)

@@ -30,9 +30,18 @@ class RenderedEnv(Env[ObsType, ActType]):
     _window: Any = None
 
     def _init_render(self, render_mode: str | None) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise error.UnsupportedMode(
-                f"render_mode={render_mode!r} is not one of {self.metadata['render_modes']}"
+        modes = self.metadata["render_modes"]
+        listed = render_mode == "rgb_array_list" and "rgb_array" in modes
+        if render_mode is not None and render_mode not in modes and not listed:
+            raise error.UnsupportedMode(f"render_mode={render_mode!r} is not one of {modes}")
+        if listed and render_mode not in modes:
+            # Gymnasium's envs take any mode and leave the list modes to RenderCollection,
+            # which make(render_mode="rgb_array_list") adds; its tests build
+            # CartPoleEnv(render_mode="rgb_array_list") directly.
+            logger.warn(
+                "render_mode='rgb_array_list': this env returns one frame per render() call, "
+                "as for 'rgb_array'; the list of frames is RenderCollection's job "
+                "(make(..., render_mode='rgb_array_list') adds it)"
             )
         self.render_mode = render_mode
 
@@ -55,7 +64,7 @@ class RenderedEnv(Env[ObsType, ActType]):
             )
             return None
         frame = self._frame()
-        if self.render_mode == "rgb_array":
+        if self.render_mode != "human":  # rgb_array, or rgb_array_list on the bare env
             return frame
         if self._window is None:  # created lazily: rgb_array users never need a display
             self._window = window.HumanWindow(*self._window_settings())

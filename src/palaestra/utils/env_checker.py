@@ -26,7 +26,18 @@ from palaestra.utils.passive_env_checker import (
     env_step_passive_checker,
 )
 
-__all__ = ["check_env", "data_equivalence"]
+__all__ = [
+    "check_env",
+    "check_reset_options",
+    "check_reset_return_info_deprecation",
+    "check_reset_return_type",
+    "check_reset_seed_determinism",
+    "check_returned_data_not_reused",
+    "check_seed_deprecation",
+    "check_space_limit",
+    "check_step_determinism",
+    "data_equivalence",
+]
 
 
 def data_equivalence(data_1: Any, data_2: Any, exact: bool = False) -> bool:
@@ -262,17 +273,22 @@ def check_space_limit(space: Any, space_type: str) -> None:
             check_space_limit(subspace, space_type)
 
 
-def _check_legacy_api(env: Env[Any, Any]) -> None:
-    if callable(getattr(env, "seed", None)):
-        logger.warn(
-            "Official support for the `seed` function is dropped. Standard practice is to reset "
-            "palaestra environments using `env.reset(seed=<desired seed>)`"
-        )
+def check_reset_return_info_deprecation(env: Env[Any, Any]) -> None:
+    """Warn if ``env.reset`` still takes Gymnasium 0.x's ``return_info`` argument."""
     if "return_info" in inspect.signature(env.reset).parameters:
         logger.warn(
             "`return_info` is deprecated as an optional argument to `reset`. `reset`should now "
             "always return `obs, info` where `obs` is an observation, and `info` is a "
             "dictionarycontaining additional information."
+        )
+
+
+def check_seed_deprecation(env: Env[Any, Any]) -> None:
+    """Warn if the env still has Gymnasium 0.x's ``seed()`` method."""
+    if callable(getattr(env, "seed", None)):
+        logger.warn(
+            "Official support for the `seed` function is dropped. Standard practice is to reset "
+            "palaestra environments using `env.reset(seed=<desired seed>)`"
         )
 
 
@@ -352,7 +368,8 @@ def check_env(
         check_space(space)
         check_space_limit(space, space_type)
 
-    _check_legacy_api(env)
+    check_seed_deprecation(env)
+    check_reset_return_info_deprecation(env)
     check_reset_return_type(env)
     check_reset_seed_determinism(env)
     check_reset_options(env)

@@ -358,7 +358,14 @@ class ProcessEngine:
         per_row: Any = None
         shared = self._actions
         array = None if shared is None else np.asarray(actions)
-        if shared is not None and array is not None and array.dtype == shared.dtype:
+        # Same shape too: np.copyto would broadcast a scalar to every row, where Sync and
+        # Async without shared memory (and Gymnasium) raise TypeError from iterate().
+        if (
+            shared is not None
+            and array is not None
+            and array.dtype == shared.dtype
+            and array.shape == shared.shape
+        ):
             # One vectorised copy into shared memory; the pipe carries only "step".
             np.copyto(shared, array)
         else:

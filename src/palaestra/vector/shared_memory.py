@@ -49,9 +49,20 @@ __all__ = [
 ]
 
 
+def _not_a_space(function: str, space: Any) -> TypeError:
+    """Gymnasium's error type for a value that is no Space at all (a custom Space subclass
+    gets ``CustomSpaceError`` instead)."""
+    return TypeError(
+        f"The space given to `{function}` is not a palaestra Space, got {space!r} "
+        f"({type(space).__name__})"
+    )
+
+
 @singledispatch
 def create_shared_memory(space: Space[Any], n: int = 1, ctx: Any = mp) -> Any:
     """Shared memory for ``n`` elements of ``space`` (nested like the space)."""
+    if not isinstance(space, Space):
+        raise _not_a_space("create_shared_memory", space)
     raise CustomSpaceError(
         f"Space of type `{type(space)}` doesn't have a registered `create_shared_memory` "
         "function. Register it, or use shared_memory=False."
@@ -101,6 +112,8 @@ def _shared_dict(space: Dict, n: int = 1, ctx: Any = mp) -> dict[str, Any]:
 @singledispatch
 def shared_views(space: Space[Any], shared_memory: Any, n: int = 1) -> Any:
     """Raw numpy views onto ``shared_memory`` (no copy), nested like the space."""
+    if not isinstance(space, Space):
+        raise _not_a_space("read_from_shared_memory", space)
     raise CustomSpaceError(
         f"Space of type `{type(space)}` doesn't have a registered `read_from_shared_memory`."
     )
@@ -160,7 +173,9 @@ def decode_views(space: Space[Any], views: Any) -> Any:
     if isinstance(space, OneOf):
         chosen, subs = views
         decoded = [decode_views(sub, v) for sub, v in zip(space.spaces, subs)]
-        return tuple((int(k), decoded[k][row]) for row, k in enumerate(chosen.tolist()))
+        # Iterating the int64 view, not .tolist(): the index comes back as np.int64, as
+        # Gymnasium's does, so a sample read back is data-equivalent to the one written.
+        return tuple((k, decoded[k][row]) for row, k in enumerate(chosen))
     if isinstance(space, Tuple) and needs_decoding(space):
         return tuple(decode_views(sub, v) for sub, v in zip(space.spaces, views))
     if isinstance(space, Dict) and needs_decoding(space):
@@ -176,12 +191,16 @@ def read_from_shared_memory(space: Space[Any], shared_memory: Any, n: int = 1) -
 
 def write_to_shared_memory(space: Space[Any], index: int, value: Any, shared_memory: Any) -> None:
     """Write one element at row ``index`` (Gymnasium's signature; builds views each call)."""
+    if not isinstance(space, Space):
+        raise _not_a_space("write_to_shared_memory", space)
     write_row(space, shared_views(space, shared_memory, n=index + 1), index, value)
 
 
 @singledispatch
 def write_row(space: Space[Any], views: Any, index: int, value: Any) -> None:
     """Write one element into row ``index`` of views made by :func:`shared_views`."""
+    if not isinstance(space, Space):
+        raise _not_a_space("write_to_shared_memory", space)
     raise CustomSpaceError(f"Space of type `{type(space)}` cannot be written to shared memory.")
 
 

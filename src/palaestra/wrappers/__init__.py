@@ -57,6 +57,8 @@ _LAZY: dict[str, str] = {
     "RecordVideo": "record_video",
     "RenderCollection": "rendering",
     "HumanRendering": "rendering",
+    "AddWhiteNoise": "rendering",
+    "ObstructView": "rendering",
 }
 
 # Names that Gymnasium 0.x had, and what Gymnasium 1.x (and palaestra) call them.
@@ -67,7 +69,8 @@ _RENAMED: dict[str, str] = {
     "VectorListInfo": "vector.DictInfoToList",
 }
 
-__all__ = sorted(_LAZY)
+# "vector" as in Gymnasium's list: the submodule of vector wrappers, loaded on first use
+__all__ = sorted([*_LAZY, "vector"])
 
 
 def __getattr__(name: str) -> Any:  # PEP 562 module attribute, not wrapper forwarding

@@ -13,6 +13,7 @@ Importing this module imports torch only when a conversion involves it.
 
 from __future__ import annotations
 
+import importlib
 import numbers
 from collections.abc import Mapping
 from types import ModuleType
@@ -27,9 +28,13 @@ __all__ = [
     "ArrayConversion",
     "NumpyToTorch",
     "array_conversion",
+    "module_name_to_namespace",
+    "module_namespace",
     "numpy_to_torch",
     "torch_to_numpy",
 ]
+
+Device = Any  # a torch device or its name ("cpu", "cuda:0"); Gymnasium's alias
 
 
 def _is_torch_tensor(value: Any) -> bool:
@@ -63,6 +68,25 @@ def array_conversion(value: Any, xp: ModuleType, device: Any = None) -> Any:
     if hasattr(value, "__array__") or hasattr(value, "__dlpack__"):
         return _convert_array(value, xp, device)
     raise TypeError(f"No known conversion for ({type(value)}) to xp module ({xp.__name__})")
+
+
+def module_namespace(xp: ModuleType) -> ModuleType:
+    """The array namespace of module ``xp``, for :func:`array_conversion` (Gymnasium's helper).
+
+    Gymnasium returns ``array_api_compat``'s wrapper of the module; palaestra converts with the
+    module itself, so it is returned as is once it proves to be an array module (it has
+    ``asarray`` and ``empty``), else ``ValueError`` as in Gymnasium.
+    """
+    if not isinstance(xp, ModuleType) or not (hasattr(xp, "asarray") and hasattr(xp, "empty")):
+        raise ValueError(f"Module {xp!r} is not an Array API compatible module.")
+    return xp
+
+
+def module_name_to_namespace(name: str) -> ModuleType:
+    """:func:`module_namespace` of the module named ``name`` (``"numpy"``, ``"torch"``)."""
+    if not isinstance(name, str):
+        raise TypeError(f"name must be a module name such as 'numpy', got {name!r}")
+    return module_namespace(importlib.import_module(name))
 
 
 def _module(xp: Any, what: str) -> ModuleType:

@@ -17,8 +17,10 @@ import numpy as np
 from palaestra.core import ActType, Env, ObsType, RenderFrame, Wrapper
 from palaestra.rendering.window import HumanWindow
 from palaestra.utils.record_constructor import RecordConstructorArgs
+from palaestra.wrappers.render_noise import AddWhiteNoise, ObstructView
 
-__all__ = ["HumanRendering", "RenderCollection"]
+# AddWhiteNoise and ObstructView are at Gymnasium's path (gymnasium.wrappers.rendering) too
+__all__ = ["AddWhiteNoise", "HumanRendering", "ObstructView", "RenderCollection"]
 
 
 class RenderCollection(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstructorArgs):
@@ -106,7 +108,8 @@ class HumanRendering(Wrapper[ObsType, ActType, ObsType, ActType], RecordConstruc
     ACCEPTED_RENDER_MODES = ("rgb_array", "rgb_array_list", "depth_array", "depth_array_list")
 
     def __init__(self, env: Env[ObsType, ActType], backend: str | None = None) -> None:
-        RecordConstructorArgs.__init__(self)
+        # recorded, so that env.spec rebuilds the stack with the same window backend
+        RecordConstructorArgs.__init__(self, backend=backend)
         Wrapper.__init__(self, env)
         self.window: Any = None  # set first: close() may run on a half-built wrapper
         self.screen_size: tuple[int, int] | None = None

@@ -6,4 +6,19 @@ actions give the same states and rewards bit for bit. CarRacing's observation is
 frame (:mod:`palaestra.rendering.car_racing`), ~99.5% of whose pixels equal Gymnasium's.
 ``Box2D`` is imported when an env is constructed, never by ``import palaestra``; without it
 the constructor raises ``DependencyNotInstalled`` naming ``pip install "palaestra[box2d]"``.
+Each env pickles and deep-copies to an env that continues the same trajectory
+(:class:`~palaestra.envs.box2d._common.ReplayCopies`). The classes are exported here under
+Gymnasium's names (``from palaestra.envs.box2d import LunarLander``).
 """
+
+from palaestra.envs.box2d.bipedal_walker import BipedalWalker, BipedalWalkerHardcore
+from palaestra.envs.box2d.car_racing import CarRacing
+from palaestra.envs.box2d.lunar_lander import LunarLander, LunarLanderContinuous
+
+__all__ = [
+    "BipedalWalker",
+    "BipedalWalkerHardcore",
+    "CarRacing",
+    "LunarLander",
+    "LunarLanderContinuous",
+]

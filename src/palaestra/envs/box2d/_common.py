@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from copy import deepcopy
 from typing import Any
 
 import numpy as np
@@ -81,3 +83,118 @@ def discrete_action(action: Any, space: Any) -> int:
     if np.ndim(action) > 0:
         why = "expected one integer (an array given to a discrete env? use continuous=True)"
     raise invalid_action(action, space, why)
+
+
+def _generator_at(state: Mapping[str, Any]) -> np.random.Generator:
+    """A fresh generator whose bit generator (of the recorded kind) is at ``state``."""
+    bit_generator = getattr(np.random, state["bit_generator"])()
+    bit_generator.state = state
+    return np.random.Generator(bit_generator)
+
+
+# At most this many recorded calls (resets and steps) per copyable history: a copy replays
+# them (measured: ~0.25 ms a BipedalWalker step, so at most ~2.5 s) and each keeps ~0.7 kB.
+MAX_REPLAYED_CALLS = 10_000
+
+
+class ReplayCopies:
+    """``pickle`` and ``copy.deepcopy`` for the Box2D envs, by replaying the calls so far.
+
+    A Box2D world (SWIG objects) cannot be pickled, and what decides its next step (contacts,
+    warm-start impulses, sleep timers, the broad-phase tree) cannot be written back. What built
+    it can be kept: the constructor's arguments and, since the env last had a fresh world, each
+    ``reset``'s options and each ``step``'s action, with the state ``np_random`` had when each
+    began (so draws that wrappers such as ``StickyAction`` make between steps replay too). A
+    copy is constructed from them and replays the calls; Box2D is deterministic, so the copy's
+    world is the same bits and it continues the same trajectory. Attributes changed by hand
+    after construction are not carried over.
+
+    LunarLander builds a fresh world at every ``reset``, so it keeps only the current episode.
+    BipedalWalker and CarRacing keep one world across episodes as Gymnasium does (its freed
+    broad-phase ids decide the next episode's contact order); so that neither memory nor the
+    time a copy takes grows without bound, they start a fresh world at the first ``reset``
+    after :data:`MAX_REPLAYED_CALLS` calls, where Gymnasium's would keep the old one.
+
+    Subclasses call :meth:`_record_init` in ``__init__``, :meth:`_start_reset` right after
+    seeding in ``reset`` (True: build a fresh world now), :meth:`_record_reset` when ``reset``
+    ends, :meth:`_start_step` and :meth:`_record_step` around ``step``.
+    """
+
+    _FRESH_WORLD_EACH_RESET = False
+    _init_kwargs: dict[str, Any]
+    _calls: list[tuple[str, Mapping[str, Any], Any]]  # ("reset" | "step", rng state, argument)
+    _replaying = False
+    _np_random: np.random.Generator | None
+    _np_random_seed: int | None
+    render_mode: str | None
+    spec: Any
+    np_random: np.random.Generator
+
+    def _record_init(self, **kwargs: Any) -> None:
+        self._init_kwargs = kwargs
+        self._calls = []
+        self._reset_start: tuple[Mapping[str, Any], int] | None = None
+        self._step_start: Mapping[str, Any] | None = None
+
+    def _start_reset(self) -> bool:
+        """Note the generator's state as ``reset`` begins; True if the history restarts here
+        with a fresh world (which the env must then build)."""
+        fresh = self._FRESH_WORLD_EACH_RESET or len(self._calls) >= MAX_REPLAYED_CALLS
+        if fresh:
+            self._calls = []
+        self._reset_start = (self.np_random.bit_generator.state, len(self._calls))
+        return fresh
+
+    def _record_reset(self, options: Any) -> None:
+        assert self._reset_start is not None, "_start_reset must run first"
+        start, mark = self._reset_start
+        del self._calls[mark:]  # the steps reset took itself (its first observation's)
+        self._calls.append(("reset", start, deepcopy(options)))
+        self._reset_start = None
+
+    def _start_step(self) -> None:
+        self._step_start = self.np_random.bit_generator.state
+
+    def _record_step(self, action: Any) -> None:
+        assert self._step_start is not None, "_start_step must run first"
+        if isinstance(action, np.ndarray):
+            kept = action.copy()
+        elif isinstance(action, (int, float, np.generic)):
+            kept = action  # immutable (deepcopy of a numpy scalar costs ~3 us a step)
+        else:
+            kept = deepcopy(action)
+        self._calls.append(("step", self._step_start, kept))
+        self._step_start = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {
+            "kwargs": self._init_kwargs,
+            "calls": self._calls,
+            "np_random": self._np_random,
+            "np_random_seed": self._np_random_seed,
+            "spec": self.spec,
+        }
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__init__(**state["kwargs"])  # type: ignore[misc]
+        render_mode = self.render_mode
+        if render_mode == "human":
+            self.render_mode = "rgb_array"  # replay without a window (the same world either way)
+        self._replaying = True
+        try:
+            for kind, start, argument in state["calls"]:
+                self._np_random = _generator_at(start)
+                if kind == "reset":
+                    self.reset(options=argument)  # type: ignore[attr-defined]
+                else:
+                    self.step(argument)  # type: ignore[attr-defined]
+        finally:
+            self._replaying = False
+            self.render_mode = render_mode
+        self._np_random = state["np_random"]
+        self._np_random_seed = state["np_random_seed"]
+        self.spec = state["spec"]
+        self._after_replay()
+
+    def _after_replay(self) -> None:
+        """Redo what the replay skipped (CarRacing draws its observation here)."""

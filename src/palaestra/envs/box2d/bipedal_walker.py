@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from palaestra import error
-from palaestra.envs.box2d._common import box_action, check_bool, import_box2d
+from palaestra.envs.box2d._common import ReplayCopies, box_action, check_bool, import_box2d
 from palaestra.envs.classic_control._common import RENDER_MODES, ClassicControlEnv
 from palaestra.rendering import box2d_scenes as scenes
 from palaestra.spaces import Box
@@ -132,12 +132,13 @@ def _sign(x: float) -> float:
     return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
 
 
-class BipedalWalker(ClassicControlEnv):
+class BipedalWalker(ReplayCopies, ClassicControlEnv):
     """The walker; actions are 4 motor torques in [-1, 1] (hip, knee, hip, knee)."""
 
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": FPS}
 
     def __init__(self, render_mode: str | None = None, hardcore: bool = False) -> None:
+        self._record_init(render_mode=render_mode, hardcore=hardcore)
         self.hardcore = check_bool("hardcore", hardcore)
         self._init_render(render_mode)
         b2 = import_box2d().b2
@@ -289,8 +290,12 @@ class BipedalWalker(ClassicControlEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """New terrain and walker; the first observation is that of a zero-torque step."""
         super().reset(seed=seed)
-        b2, world, fixtures = self._b2, self.world, self._fixtures
+        fresh_world = self._start_reset()
+        b2, fixtures = self._b2, self._fixtures
         self._destroy()
+        if fresh_world:  # the history a copy replays restarts here (ReplayCopies)
+            self.world = b2.world()
+        world = self.world
         self._listener = self._listener_cls(self)
         world.contactListener = self._listener
         self.game_over = False
@@ -357,13 +362,16 @@ class BipedalWalker(ClassicControlEnv):
 
         if self.render_mode == "human":
             self.render()
-        return self.step(np.array([0, 0, 0, 0]))[0], {}
+        obs = self.step(np.array([0, 0, 0, 0]))[0]
+        self._record_reset(options)
+        return obs, {}
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Set the four motors, advance 1/50 s, cast the lidar, observe and score."""
         hull = self.hull
         if hull is None:
             raise error.ResetNeeded("Call reset before using step method.")
+        self._start_step()
         a = box_action(action, self.action_space, keep_float_dtype=True)
         # Each motor turns at full speed towards the action's sign with torque |a| (clipped).
         effort = np.clip(np.abs(a), 0, 1)  # [4], in the action's float type
@@ -418,6 +426,7 @@ class BipedalWalker(ClassicControlEnv):
             terminated = True
         if self.render_mode == "human":
             self.render()
+        self._record_step(action)
         return np.array(state, dtype=np.float32), float(reward), terminated, False, {}
 
     # -- rendering ----------------------------------------------------------------------------
@@ -444,3 +453,19 @@ class BipedalWalker(ClassicControlEnv):
                 bodies.append(([tuple(f.body.transform * v) for v in f.shape.vertices], colors))
         clouds = [poly for poly, _, _ in self.cloud_poly]
         return scenes.render_bipedal_walker(self._strip, self.scroll, clouds, ray, bodies)
+
+
+class BipedalWalkerHardcore(BipedalWalker):
+    """``BipedalWalker(hardcore=True)`` under Gymnasium's name.
+
+    Gymnasium's class of this name only raises, telling the user to pass ``hardcore=True``;
+    here it builds that env (``hardcore=False`` is refused: use :class:`BipedalWalker`).
+    """
+
+    def __init__(self, render_mode: str | None = None, hardcore: bool = True) -> None:
+        if hardcore is not True:
+            raise ValueError(
+                f"BipedalWalkerHardcore is BipedalWalker(hardcore=True), got hardcore="
+                f"{hardcore!r}; use BipedalWalker for the plain course"
+            )
+        super().__init__(render_mode, hardcore=True)

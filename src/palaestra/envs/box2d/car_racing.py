@@ -22,6 +22,7 @@ import numpy as np
 from palaestra import error
 from palaestra.envs.box2d import car_dynamics
 from palaestra.envs.box2d._common import (
+    ReplayCopies,
     box_action,
     check_bool,
     check_real,
@@ -132,7 +133,7 @@ def _sign(x: float) -> float:
     return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
 
 
-class CarRacing(ClassicControlEnv):
+class CarRacing(ReplayCopies, ClassicControlEnv):
     """Continuous ``[steer, gas, brake]`` actions, or 5 discrete ones with
     ``continuous=False`` (nothing, right, left, gas, brake)."""
 
@@ -149,6 +150,13 @@ class CarRacing(ClassicControlEnv):
         domain_randomize: bool = False,
         continuous: bool = True,
     ) -> None:
+        self._record_init(
+            render_mode=render_mode,
+            verbose=verbose,
+            lap_complete_percent=lap_complete_percent,
+            domain_randomize=domain_randomize,
+            continuous=continuous,
+        )
         self.continuous = check_bool("continuous", continuous)
         self.domain_randomize = check_bool("domain_randomize", domain_randomize)
         self.verbose = check_bool("verbose", verbose)
@@ -369,8 +377,11 @@ class CarRacing(ClassicControlEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """A new track (``options={"randomize": False}`` keeps the colours when randomizing)."""
         super().reset(seed=seed)
+        fresh_world = self._start_reset()
         self._destroy()
         self._listener = _friction_detector_class()(self, self.lap_complete_percent)
+        if fresh_world:  # the history a copy replays restarts here (ReplayCopies)
+            self.world = import_box2d().b2.world((0, 0), contactListener=self._listener)
         self.world.contactListener = self._listener
         self.reward = 0.0
         self.prev_reward = 0.0
@@ -394,18 +405,24 @@ class CarRacing(ClassicControlEnv):
         self.car = Car(self.world, *self.track[0][1:4])
         if self.render_mode == "human":
             self.render()
-        return self._advance(None)[0], {}
+        obs = self._advance(None)[0]
+        self._record_reset(options)
+        return obs, {}
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Steer, accelerate or brake for 1/50 s; the observation is the new 96x96 frame."""
         if self.car is None:
             raise error.ResetNeeded("Call reset before using step method.")
+        self._start_step()
         if self.continuous:
             steer, gas, brake = box_action(action, self.action_space).tolist()
-            return self._advance((-steer, gas, brake))  # positive steer turns right
-        act = discrete_action(action, self.action_space)
-        return self._advance((-0.6 * (act == 1) + 0.6 * (act == 2), 0.2 * (act == 3),
-                              0.8 * (act == 4)))  # fmt: skip
+            result = self._advance((-steer, gas, brake))  # positive steer turns right
+        else:
+            act = discrete_action(action, self.action_space)
+            result = self._advance((-0.6 * (act == 1) + 0.6 * (act == 2), 0.2 * (act == 3),
+                                    0.8 * (act == 4)))  # fmt: skip
+        self._record_step(action)
+        return result
 
     def _advance(
         self, controls: tuple[float, float, float] | None
@@ -419,7 +436,9 @@ class CarRacing(ClassicControlEnv):
         car.step(1.0 / FPS)
         self.world.Step(1.0 / FPS, 6 * 30, 2 * 30)
         self.t += 1.0 / FPS
-        self.state = self._draw("state_pixels")
+        # A copy replaying its history draws only the last observation (_after_replay): the
+        # picture never feeds back into the physics, and drawing is most of a step's time.
+        self.state = None if self._replaying else self._draw("state_pixels")
 
         step_reward = 0.0
         terminated = False
@@ -439,7 +458,7 @@ class CarRacing(ClassicControlEnv):
                 step_reward = -100.0
         if self.render_mode == "human":
             self.render()
-        return self.state, step_reward, terminated, False, info
+        return self.state, step_reward, terminated, False, info  # type: ignore[return-value]
 
     # -- rendering --------------------------------------------------------------------------
 
@@ -459,6 +478,10 @@ class CarRacing(ClassicControlEnv):
                 raise error.ResetNeeded("Call reset before render.")
             return self._draw("state_pixels")
         return super().render()
+
+    def _after_replay(self) -> None:
+        if self.car is not None:
+            self.state = self._draw("state_pixels")
 
     def close(self) -> None:
         """Close the window, if any."""

@@ -24,6 +24,7 @@ import numpy as np
 
 from palaestra import error, logger
 from palaestra.envs.box2d._common import (
+    ReplayCopies,
     box_action,
     check_bool,
     check_real,
@@ -122,13 +123,14 @@ def _wind(index: int, power: float) -> float:
     return math.tanh(math.sin(0.02 * index) + math.sin(math.pi * 0.01 * index)) * power
 
 
-class LunarLander(ClassicControlEnv):
+class LunarLander(ReplayCopies, ClassicControlEnv):
     """The lander; ``continuous=True`` takes ``[main, lateral]`` throttles in [-1, 1].
 
     Discrete actions: 0 nothing, 1 left engine, 2 main engine, 3 right engine.
     """
 
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": FPS}
+    _FRESH_WORLD_EACH_RESET = True  # a copy replays the current episode only
 
     def __init__(
         self,
@@ -139,6 +141,14 @@ class LunarLander(ClassicControlEnv):
         wind_power: float = 15.0,
         turbulence_power: float = 1.5,
     ) -> None:
+        self._record_init(
+            render_mode=render_mode,
+            continuous=continuous,
+            gravity=gravity,
+            enable_wind=enable_wind,
+            wind_power=wind_power,
+            turbulence_power=turbulence_power,
+        )
         self.continuous = check_bool("continuous", continuous)
         self.enable_wind = check_bool("enable_wind", enable_wind)
         self.gravity, self.wind_power, self.turbulence_power = _check_kwargs(
@@ -169,6 +179,7 @@ class LunarLander(ClassicControlEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """New terrain and lander; the first observation is that of a no-op step."""
         super().reset(seed=seed)
+        self._start_reset()
         b2 = self._box2d.b2
         if self.world is not None:
             self.world.contactListener = None  # break the env <-> listener cycle
@@ -257,13 +268,16 @@ class LunarLander(ClassicControlEnv):
             self.render()
         # Gymnasium's first observation comes from a no-op step (which draws 2 dispersions).
         noop = np.zeros(2) if self.continuous else 0
-        return self.step(noop)[0], {}
+        obs = self.step(noop)[0]
+        self._record_reset(options)
+        return obs, {}
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Fire the engines, advance the world 1/50 s, observe and score."""
         lander = self.lander
         if lander is None:
             raise error.ResetNeeded("Call reset before using step method.")
+        self._start_step()
         if self.continuous:
             a = box_action(action, self.action_space)
             throttle = min(max(float(a[0]), -1.0), 1.0)
@@ -359,6 +373,7 @@ class LunarLander(ClassicControlEnv):
             terminated, reward = True, +100.0
         if self.render_mode == "human":
             self.render()
+        self._record_step(action)
         return obs, reward, terminated, False, {}
 
     # -- exhaust particles (only with a render_mode) -------------------------------------------
@@ -424,3 +439,21 @@ class LunarLander(ClassicControlEnv):
         super().close()
         if self.world is not None:
             self.world.contactListener = None
+
+
+class LunarLanderContinuous(LunarLander):
+    """``LunarLander(continuous=True)`` under Gymnasium's name.
+
+    Gymnasium's class of this name only raises, telling the user to pass ``continuous=True``;
+    here it builds that env (``continuous=False`` is refused: use :class:`LunarLander`).
+    """
+
+    def __init__(
+        self, render_mode: str | None = None, continuous: bool = True, **kwargs: Any
+    ) -> None:
+        if continuous is not True:
+            raise ValueError(
+                f"LunarLanderContinuous is LunarLander(continuous=True), got continuous="
+                f"{continuous!r}; use LunarLander for the discrete lander"
+            )
+        super().__init__(render_mode, continuous=True, **kwargs)

@@ -13,6 +13,8 @@ as the fewest records any row has left (at least half a block).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 # Bigger blocks mean fewer generator calls (~1 us each plus the loop around them): 16 MiB in
@@ -38,13 +40,27 @@ class PreDrawn:
         self.draws = draws
         self._rngs = rngs
         self._uniforms = np.empty((n * self.per, draws))  # row i: records [i*per, (i+1)*per)
-        # One record per reset: gathering R of them is 1-D fancy indexing, several times
-        # cheaper than indexing the 2-D array (numpy's multi-dimensional indexing costs more).
-        self._records = self._uniforms.view(np.dtype((np.void, 8 * draws)))[:, 0]
+        self._make_views()
         self._end = np.arange(1, n + 1) * self.per  # [N] one past each row's block
         self._pos = self._end.copy()  # [N] each row's next unused record; end means empty
         self._live = np.zeros(n, dtype=bool)  # [N] has a generator
         self._budget = 0  # takes that cannot empty any live row
+
+    def _make_views(self) -> None:
+        # One record per reset: gathering R of them is 1-D fancy indexing, several times
+        # cheaper than indexing the 2-D array (numpy's multi-dimensional indexing costs more).
+        self._records = self._uniforms.view(np.dtype((np.void, 8 * self.draws)))[:, 0]
+
+    # pickle and deepcopy copy each array on its own: a copied view would not see the copied
+    # buffer's top-ups, so it is left out and made again.
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state.pop("_records", None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._make_views()
 
     def restart(self, rows: np.ndarray) -> None:
         """Rows got new generators: drop what the old ones drew."""

@@ -67,12 +67,7 @@ class BatchedEnv:
         # (~0.2 us more per op than contiguous [k, N] rows at 1024 envs, less than what the
         # transposes of that layout cost for observations and resets).
         self._state = np.zeros((n, k))  # [N, k] float64
-        self._cols = tuple(self._state[:, j] for j in range(k))  # k views of [N]
-        # Whole rows as opaque records: gathering or scattering R rows by index is then 1-D
-        # fancy indexing, ~7x faster than 2-D ``a[rows]`` (numpy's multi-dimensional indexing
-        # has a large fixed cost, and a step resets a few rows). Bytes: copied bit for bit.
-        self._row = np.dtype((np.void, 8 * k))
-        self._state_rows = self._state.view(self._row)[:, 0]  # [N] records of k float64
+        self._make_views()
         self._obs = np.zeros((n, obs_dim), dtype=np.float32)  # [N, obs_dim]
         self._rngs: list[np.random.Generator | None] = [None] * n
         self.seeds: list[int | None] = [None] * n
@@ -84,6 +79,28 @@ class BatchedEnv:
         # Both arrays only ever turn False/True: once every row is done, skip the checks.
         self._all_seeded = False
         self._all_reset = False
+
+    def _make_views(self) -> None:
+        """The views the physics and resets write the state through."""
+        k = self.state_dim
+        self._cols = tuple(self._state[:, j] for j in range(k))  # k views of [N]
+        # Whole rows as opaque records: gathering or scattering R rows by index is then 1-D
+        # fancy indexing, ~7x faster than 2-D ``a[rows]`` (numpy's multi-dimensional indexing
+        # has a large fixed cost, and a step resets a few rows). Bytes: copied bit for bit.
+        self._row = np.dtype((np.void, 8 * k))
+        self._state_rows = self._state.view(self._row)[:, 0]  # [N] records of k float64
+
+    # pickle and deepcopy copy each array on its own: copied views would no longer write into
+    # the copied state, so they are left out and made again.
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        for view in ("_cols", "_state_rows"):
+            state.pop(view, None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._make_views()
 
     @property
     def state(self) -> np.ndarray:

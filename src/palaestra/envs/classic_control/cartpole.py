@@ -8,6 +8,7 @@ the terminating one, 0 after it (with Gymnasium's warning), or the Sutton-Barto 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -229,3 +230,55 @@ class CartPoleBatch(BatchedEnv):
             np.copyto(self._obs, self._state)  # float64 -> float32, as np.array(s, float32)
         else:
             self._obs[rows] = self._state[rows]
+
+
+def __getattr__(name: str) -> Any:  # PEP 562 module attribute: built on first use
+    if name == "CartPoleVectorEnv":
+        return _vector_env_class()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+@functools.cache
+def _vector_env_class() -> type:
+    """Gymnasium's ``CartPoleVectorEnv``, built on first use: its base lives in
+    ``palaestra.vector``, which loads multiprocessing, and making a single CartPole must not."""
+    from palaestra.vector.native import BatchedVectorEnv  # lazy: import-time — palaestra.vector
+
+    class CartPoleVectorEnv(BatchedVectorEnv):
+        """Gymnasium's ``CartPoleVectorEnv(num_envs, max_episode_steps, render_mode,
+        sutton_barto_reward)``: :class:`CartPoleBatch` behind the vector API, as
+        ``make_vec("CartPole-v1", num_envs)`` builds it, with time limits and next-step
+        autoreset. Row i of ``reset(seed=s)`` is a single CartPole seeded ``s + i``
+        (Gymnasium's draws all rows from one generator); ``render()`` draws each row.
+        """
+
+        def __init__(
+            self,
+            num_envs: int = 1,
+            max_episode_steps: int = 500,
+            render_mode: str | None = None,
+            sutton_barto_reward: bool = False,
+        ) -> None:
+            modes = ["rgb_array"]  # Gymnasium's: the frames of all rows, no window
+            if render_mode is not None and render_mode not in modes:
+                raise error.UnsupportedMode(f"render_mode={render_mode!r} is not one of {modes}")
+            batch = CartPoleBatch(num_envs, sutton_barto_reward=sutton_barto_reward)
+            metadata = {"render_modes": modes, "render_fps": CartPoleEnv.metadata["render_fps"]}
+            super().__init__(batch, max_episode_steps, metadata=metadata)
+            self.render_mode = render_mode
+
+        def render(self) -> tuple[np.ndarray, ...] | None:  # type: ignore[override]
+            """One ``[400, 600, 3]`` frame per row (``rgb_array``); None, with Gymnasium's
+            warning, without a render mode."""
+            if self.render_mode is None:
+                logger.warn(
+                    "You are calling render method without specifying any render mode. You can "
+                    'specify the render_mode at initialization, e.g. gym.make_vec("CartPole-v1", '
+                    'render_mode="rgb_array")'
+                )
+                return None
+            state = self.batch.state  # type: ignore[attr-defined]  # a CartPoleBatch
+            return tuple(render_cartpole(row) for row in state)
+
+    CartPoleVectorEnv.__qualname__ = "CartPoleVectorEnv"  # pickled by this module's name
+    return CartPoleVectorEnv

@@ -39,14 +39,18 @@ _RAINY_MOVES = {
 }
 
 
-def encode(row: Any, col: Any, passenger: Any, destination: Any) -> Any:
-    """The state number of a taxi position, passenger location (4: in the taxi), destination."""
-    return ((row * 5 + col) * 5 + passenger) * 4 + destination
+def encode(taxi_row: Any, taxi_col: Any, pass_loc: Any, dest_idx: Any) -> Any:
+    """The state number of a taxi position, passenger location (4: in the taxi), destination.
+
+    Gymnasium's argument names (``env.unwrapped.encode(taxi_row=..., ...)``); ints or arrays.
+    """
+    return ((taxi_row * 5 + taxi_col) * 5 + pass_loc) * 4 + dest_idx
 
 
-def decode(state: Any) -> tuple[Any, Any, Any, Any]:
-    """``(row, col, passenger, destination)`` of a state number (ints or arrays)."""
-    rest, destination = divmod(state, 4)
+def decode(i: Any) -> tuple[Any, Any, Any, Any]:
+    """``(taxi_row, taxi_col, pass_loc, dest_idx)`` of a state number ``i`` (ints or arrays;
+    Gymnasium's argument name)."""
+    rest, destination = divmod(i, 4)
     rest, passenger = divmod(rest, 5)
     row, col = divmod(rest, 5)
     return row, col, passenger, destination

@@ -69,7 +69,7 @@ class HumanRendering(VectorWrapper[Any, Any, Any], RecordConstructorArgs):
         backend: str | None = None,
     ) -> None:
         VectorWrapper.__init__(self, env)
-        RecordConstructorArgs.__init__(self, screen_size=screen_size)
+        RecordConstructorArgs.__init__(self, screen_size=screen_size, backend=backend)
         self.window: Any = None  # first: close() may run on a half-built wrapper
         self.screen_size = screen_size
         self.scaled_subenv_size: tuple[int, int] | None = None  # (width, height)

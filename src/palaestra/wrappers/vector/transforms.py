@@ -23,6 +23,17 @@ from palaestra.vector.vector_env import (
 from palaestra.wrappers.transform_reward import ClipReward as SingleClip
 
 
+def _warn_if_unbatched(env: Any, kind: str, space: Space[Any], single: Space[Any]) -> None:
+    """Gymnasium's warning when a ``Transform*`` wrapper's batched space is not its single
+    space batched (the two given disagree, or only one was given and the other is the env's)."""
+    batched = batch_space(single, env.num_envs)
+    if space != batched:
+        logger.warn(
+            f"For {env}, the {kind} space and the batched single {kind} space don't match as "
+            f"expected, {kind}_space={space}, batched single_{kind}_space={batched}"
+        )
+
+
 class TransformObservation(VectorObservationWrapper[Any, Any, np.ndarray]):
     """``func(batch_of_observations)``; give the new batched and/or single observation space."""
 
@@ -40,13 +51,9 @@ class TransformObservation(VectorObservationWrapper[Any, Any, np.ndarray]):
             self.observation_space = observation_space
         elif single_observation_space is not None:
             self.observation_space = batch_space(single_observation_space, self.num_envs)
-        if self.observation_space != batch_space(self.single_observation_space, self.num_envs):
-            logger.warn(
-                f"For {env}, the observation space and the batched single observation space "
-                f"don't match as expected, observation_space={self.observation_space}, batched "
-                f"single_observation_space="
-                f"{batch_space(self.single_observation_space, self.num_envs)}"
-            )
+        _warn_if_unbatched(
+            env, "observation", self.observation_space, self.single_observation_space
+        )
         self.func = func
 
     def observations(self, observations: Any) -> Any:
@@ -103,6 +110,7 @@ class TransformAction(VectorActionWrapper[Any, Any, np.ndarray]):
             self.action_space = action_space
         elif single_action_space is not None:
             self.action_space = batch_space(single_action_space, self.num_envs)
+        _warn_if_unbatched(env, "action", self.action_space, self.single_action_space)
         self.func = func
 
     def actions(self, actions: Any) -> Any:
