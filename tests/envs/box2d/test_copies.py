@@ -80,22 +80,31 @@ def test_draws_made_between_steps_by_a_wrapper_are_replayed() -> None:
     assert _run(clone, later) == _run(env, later)
 
 
-def test_the_history_restarts_in_a_fresh_world_past_the_limit(
+def test_past_the_limit_the_env_keeps_its_world_and_a_copy_warns(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
+    """The cap bounds the history, never the env's physics: the env keeps its one world as
+    Gymnasium's does; a copy made later replays the calls since the cut in a fresh world."""
     monkeypatch.setattr(_common, "MAX_REPLAYED_CALLS", 12)
     env = palaestra.make("BipedalWalker-v3")
-    env.reset(seed=0)
-    _run(env, _actions(env, 20, 0))
+    reference = palaestra.make("BipedalWalker-v3")  # never copied, no cut in its physics
+    for walker in (env, reference):
+        walker.reset(seed=0)
+    first = _actions(env, 20, 0)
+    assert _run(env, first) == _run(reference, first)
     world = env.unwrapped.world
-    env.reset()  # 21 calls recorded: this reset starts a fresh world and a fresh history
-    assert env.unwrapped.world is not world
+    env.reset()  # 21 calls recorded: the history restarts here, the world stays
+    reference.reset()
+    assert env.unwrapped.world is world
     assert [kind for kind, *_ in env.unwrapped._calls] == ["reset"]
-    _run(env, _actions(env, 5, 1))
-    clone = copy.deepcopy(env)
+    second = _actions(env, 5, 1)
+    assert _run(env, second) == _run(reference, second)
+    with pytest.warns(UserWarning, match=r"^BipedalWalker has run more than 12 calls in one world"):
+        clone = copy.deepcopy(env)
     assert len(clone.unwrapped._calls) == 6
     later = _actions(env, 10, 2)
-    assert _run(clone, later) == _run(env, later)
+    assert _run(env, later) == _run(reference, later)  # the original's physics never changed
+    assert len(_run(clone, later)) == len(later)  # the copy runs on, approximately
 
 
 def test_lunar_lander_keeps_only_the_current_episode() -> None:

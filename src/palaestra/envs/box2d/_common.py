@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from copy import deepcopy
 from typing import Any
@@ -111,9 +112,12 @@ class ReplayCopies:
 
     LunarLander builds a fresh world at every ``reset``, so it keeps only the current episode.
     BipedalWalker and CarRacing keep one world across episodes as Gymnasium does (its freed
-    broad-phase ids decide the next episode's contact order); so that neither memory nor the
-    time a copy takes grows without bound, they start a fresh world at the first ``reset``
-    after :data:`MAX_REPLAYED_CALLS` calls, where Gymnasium's would keep the old one.
+    broad-phase ids decide the next episode's contact order), so an exact copy needs every call
+    since construction. So that neither memory nor the time a copy takes grows without bound,
+    the history is cut at the first ``reset`` after :data:`MAX_REPLAYED_CALLS` calls: the env
+    itself keeps its world (its physics stay Gymnasium's, bit for bit), and a later copy
+    replays the calls since the cut in a fresh world, which follows the original only
+    approximately (contact order may differ); copying such an env warns.
 
     Subclasses call :meth:`_record_init` in ``__init__``, :meth:`_start_reset` right after
     seeding in ``reset`` (True: build a fresh world now), :meth:`_record_reset` when ``reset``
@@ -124,6 +128,7 @@ class ReplayCopies:
     _init_kwargs: dict[str, Any]
     _calls: list[tuple[str, Mapping[str, Any], Any]]  # ("reset" | "step", rng state, argument)
     _replaying = False
+    _history_cut = False  # the recorded calls no longer start from a fresh world
     _np_random: np.random.Generator | None
     _np_random_seed: int | None
     render_mode: str | None
@@ -139,8 +144,9 @@ class ReplayCopies:
     def _start_reset(self) -> bool:
         """Note the generator's state as ``reset`` begins; True if the history restarts here
         with a fresh world (which the env must then build)."""
-        fresh = self._FRESH_WORLD_EACH_RESET or len(self._calls) >= MAX_REPLAYED_CALLS
-        if fresh:
+        fresh = self._FRESH_WORLD_EACH_RESET
+        if fresh or len(self._calls) >= MAX_REPLAYED_CALLS:
+            self._history_cut = not fresh
             self._calls = []
         self._reset_start = (self.np_random.bit_generator.state, len(self._calls))
         return fresh
@@ -167,6 +173,13 @@ class ReplayCopies:
         self._step_start = None
 
     def __getstate__(self) -> dict[str, Any]:
+        if self._history_cut:
+            warnings.warn(
+                f"{type(self).__name__} has run more than {MAX_REPLAYED_CALLS:,} calls in one "
+                "world: its copy replays the calls since then in a fresh world and follows "
+                "the original only approximately",
+                stacklevel=2,
+            )
         return {
             "kwargs": self._init_kwargs,
             "calls": self._calls,
