@@ -229,3 +229,73 @@ def test_bad_input() -> None:
         rollout.add(np.zeros((1, 3)), np.zeros(1), np.zeros(1), np.zeros(1), *[torch.zeros(1)] * 2)
     with pytest.raises(ValueError, match="the rollout buffer is full"):
         rollout.add(np.zeros((1, 3)), np.zeros(1), np.zeros(1), np.zeros(1), *[torch.zeros(1)] * 2)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32, np.int64, np.uint8, None])
+def test_maybe_cast_dtype_as_sb3(dtype: Any) -> None:
+    """SB3's tests call ``ReplayBuffer._maybe_cast_dtype``: offered, with SB3's answers."""
+    assert ours.ReplayBuffer._maybe_cast_dtype(dtype) == sb3_buffers.ReplayBuffer._maybe_cast_dtype(
+        dtype
+    )
+    box = spaces.Box(-1, 1, (2,), np.float64)
+    for lib, space in ((ours, box), (sb3_buffers, to_gym(box))):
+        buffer = lib.ReplayBuffer(4, to_gym(spaces.Box(-1, 1, (3,))), space, "cpu")
+        assert buffer.actions.dtype == np.float32
+
+
+@pytest.mark.parametrize(
+    ("env_id", "n_envs"), [("CartPole-v1", 2), ("Pendulum-v1", 1)], ids=["discrete", "box"]
+)
+def test_model_rollout_buffer_answers_sb3s_calls(env_id: str, n_envs: int) -> None:
+    """``model.rollout_buffer`` as callbacks see it: ``size()``, ``buffer_size``, ``full`` and
+    ``get`` give what SB3's PPO's buffer gives (shapes, dtypes, sample types)."""
+    import stable_baselines3 as sb3
+
+    from palaestra.algos import PPO
+    from palaestra.algos.callbacks import BaseCallback
+    from palaestra.vec_env import make_vec_env
+
+    seen = []
+    for lib in (palaestra, sb3):
+
+        class Probe(BaseCallback if lib is palaestra else sb3.common.callbacks.BaseCallback):  # type: ignore[misc]
+            def _on_step(self) -> bool:
+                buf = self.model.rollout_buffer
+                if buf.size() == 3:
+                    seen.append(("mid", buf.size(), buf.full))
+                return True
+
+            def _on_rollout_end(self) -> None:
+                buf = self.locals["rollout_buffer"]
+                samples = list(buf.get(10))
+                fields = [
+                    (f, tuple(getattr(s, f).shape), getattr(s, f).dtype)
+                    for s in samples[:1]
+                    for f in s._fields
+                ]
+                seen.append(
+                    (
+                        "end",
+                        buf.size(),
+                        buf.buffer_size,
+                        buf.full,
+                        len(samples),
+                        fields,
+                        type(samples[0]).__name__,
+                    )
+                )
+
+        if lib is palaestra:
+            env = make_vec_env(env_id, n_envs=n_envs, seed=0)
+            PPO("MlpPolicy", env, n_steps=8, batch_size=8, n_epochs=1).learn(
+                8 * n_envs, callback=Probe()
+            )
+        else:
+            sb3_env = sb3.common.env_util.make_vec_env(env_id, n_envs=n_envs, seed=0)
+            sb3.PPO("MlpPolicy", sb3_env, n_steps=8, batch_size=8, n_epochs=1, device="cpu").learn(
+                8 * n_envs, callback=Probe()
+            )
+    ours_mid, ours_end, theirs_mid, theirs_end = seen
+    assert ours_mid[1:] == theirs_mid[1:] == (3, False)
+    assert ours_end == theirs_end
+    assert ours_end[1:4] == (8, 8, True)

@@ -31,14 +31,14 @@ def test_episode_log_header_then_resume_after_a_torn_row(tmp_path: Path) -> None
 def test_progress_csv_resume_after_a_torn_row(tmp_path: Path) -> None:
     path = tmp_path / "progress.csv"
     first = AppendingCSV(str(path))
-    first.write({"time/total_timesteps": 100, "rollout/ep_rew_mean": -200.0}, 100)
-    first.write({"time/total_timesteps": 200, "rollout/ep_rew_mean": -180.0}, 200)
+    first.write({"time/total_timesteps": 100, "rollout/ep_rew_mean": -200.0}, {}, 100)
+    first.write({"time/total_timesteps": 200, "rollout/ep_rew_mean": -180.0}, {}, 200)
     first.close()
     with open(path, "a", encoding="utf-8") as file:
         file.write("300,-1")  # torn
     resumed = AppendingCSV(str(path))
-    resumed.write({"time/total_timesteps": 300, "rollout/ep_rew_mean": -150.0}, 300)
-    resumed.write({"time/total_timesteps": 400, "rollout/ep_rew_mean": -120.0, "x/new": 1}, 400)
+    resumed.write({"time/total_timesteps": 300, "rollout/ep_rew_mean": -150.0}, {}, 300)
+    resumed.write({"time/total_timesteps": 400, "rollout/ep_rew_mean": -120.0, "x/new": 1}, {}, 400)
     resumed.close()
     assert path.read_text(encoding="utf-8").splitlines() == [
         "time/total_timesteps,rollout/ep_rew_mean,x/new",

@@ -109,6 +109,7 @@ class A2C(OnPolicyAlgorithm):
 
     def train(self) -> None:
         """One gradient step over the whole rollout."""
+        self._set_training_mode(True)
         self._update_learning_rate("policy")
         objective = A2CObjective(self._head, self.ent_coef, self.vf_coef, self.normalize_advantage)
         buf = self.rollout_buffer

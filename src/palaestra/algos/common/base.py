@@ -89,15 +89,66 @@ class BaseAlgorithm:
     lr_schedule: Schedule
     learner: Learner
     _policy: torch.nn.Module
+    _policy_shown: Any  # a wrapper assigned to model.policy (torch.compile's), or None
     _optimizer: torch.optim.Optimizer
 
     # The torch objects users and files see; reading them hands the parameters to torch
     # (``Learner.to_torch``): see ``learners.learner`` on ownership.
     @property
     def policy(self) -> Any:
-        """The policy's torch module, up to date (SB3's ``model.policy``)."""
+        """The policy's torch module, up to date (SB3's ``model.policy``): the object last
+        assigned to it, such as ``torch.compile(model.policy)``."""
+        self.learner.to_torch()
+        return self._policy if self._policy_shown is None else self._policy_shown
+
+    @policy.setter
+    def policy(self, value: Any) -> None:
+        """SB3's ``model.policy = ...``. A wrapper of the model's own policy
+        (``torch.compile``'s, with ``_orig_mod``) is what ``model.policy`` shows from then on;
+        the model acts and trains through its learner on the same parameters. Another policy
+        of the algorithm's family and spaces replaces the model's: the learner and the
+        optimizers are built again for it (fresh optimizer state, as the policy's own
+        optimizer would be in SB3), so ``predict`` and ``learn`` use it at once."""
+        inner: Any = getattr(value, "_orig_mod", value)
+        family = self._policy_family()
+        if not isinstance(inner, family):
+            raise TypeError(
+                f"{type(self).__name__}.policy must be a {family.__name__} (or a module "
+                f"wrapping one, such as torch.compile's), got {type(value).__name__}"
+            )
+        if inner is not self._policy:
+            for name in ("observation_space", "action_space"):
+                theirs, ours = getattr(inner, name, None), getattr(self, name)
+                if theirs != ours:
+                    raise ValueError(
+                        f"the new policy's {name} {theirs} differs from the model's {ours}"
+                    )
+            self.learner.to_torch()
+            self._use_policy(inner.to(self.device))
+        self._policy_shown = None if value is inner else value
+
+    def _policy_family(self) -> type[torch.nn.Module]:
+        """The class a policy assigned to ``model.policy`` must be an instance of."""
+        return self.policy_aliases.get("MlpPolicy", torch.nn.Module)
+
+    def _use_policy(self, policy: Any) -> None:
+        """Build the learner and optimizers for ``policy`` (each algorithm)."""
+        raise NotImplementedError
+
+    def _policy_module(self) -> torch.nn.Module:
+        """The policy module itself, up to date (not a wrapper assigned to ``policy``)."""
         self.learner.to_torch()
         return self._policy
+
+    def _set_training_mode(self, mode: bool, acting_only_in_torch: bool = True) -> None:
+        """SB3's ``policy.set_training_mode``: training mode inside ``train()``, evaluation
+        mode when acting (dropout off, batch norm on its running statistics). Where the numpy
+        learner runs the nets, which are MLPs without such layers, the torch modules are not
+        run at all and ``acting_only_in_torch`` skips the switch (it costs a module walk)."""
+        if acting_only_in_torch and self.learner.backend != "torch":
+            return
+        if self._policy.training != mode:
+            getattr(self._policy, "set_training_mode", self._policy.train)(mode)
 
     @property
     def optimizer(self) -> torch.optim.Optimizer:
@@ -118,6 +169,7 @@ class BaseAlgorithm:
         if not isinstance(backend, str):
             raise ValueError(f"policy_kwargs backend must be a string, got {backend!r}")
         self._policy, self._optimizer = policy, optimizer
+        self._policy_shown = None  # what was assigned to model.policy, if a wrapper
         self.learner = build_learner(backend, nets, groups, self.device, joint or {})
         if self.verbose >= 1:
             print(f"Training with the {self.learner.describe()}")
@@ -512,6 +564,7 @@ class BaseAlgorithm:
                 observation = {k: np.asarray(v)[None] for k, v in observation.items()}
             else:
                 observation = np.asarray(observation)[None]
+        self._set_training_mode(False, acting_only_in_torch=False)
         actions = self._predict(observation, deterministic)
         actions = actions.reshape((-1, *(self.action_space.shape or ())))
         if isinstance(self.action_space, spaces.Box):
@@ -569,7 +622,7 @@ class BaseAlgorithm:
     def get_parameters(self) -> dict[str, dict[str, Any]]:
         """``{"policy": state_dict, "policy.optimizer": optimizer state_dict}`` (SB3's keys;
         SAC: ``actor.optimizer``, ``critic.optimizer``, ``ent_coef_optimizer``)."""
-        params = {"policy": self.policy.state_dict()}
+        params = {"policy": self._policy_module().state_dict()}
         for _, (name, optimizer) in self._optimizers().items():
             params[name] = optimizer.state_dict()
         return params

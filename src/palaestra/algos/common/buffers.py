@@ -209,13 +209,18 @@ class ReplayBuffer(BaseBuffer):
         self.observations = _zeros(self.observation_space, self.obs_shape, lead)
         if not optimize_memory_usage:
             self.next_observations = _zeros(self.observation_space, self.obs_shape, lead)
-        # float64 Box actions are kept as float32 (SB3, GH#1572)
-        dtype = np.dtype(self.action_space.dtype)
-        dtype = np.dtype(np.float32) if dtype == np.float64 else dtype
+        dtype = self._maybe_cast_dtype(self.action_space.dtype)
         self.actions = np.zeros((*lead, self.action_dim), dtype=dtype)
         self.rewards = np.zeros(lead, dtype=np.float32)
         self.dones = np.zeros(lead, dtype=np.float32)
         self.timeouts = np.zeros(lead, dtype=np.float32)
+
+    @staticmethod
+    def _maybe_cast_dtype(dtype: Any) -> Any:
+        """float64 actions are stored as float32 (SB3, GH#1572: a float64 Box action space
+        would otherwise feed float64 actions to float32 critics); other dtypes as given.
+        Offered under SB3's name because SB3's own tests call it."""
+        return np.float32 if dtype is not None and np.dtype(dtype) == np.float64 else dtype
 
     def add(
         self,

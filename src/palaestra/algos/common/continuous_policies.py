@@ -14,6 +14,7 @@ import torch
 from torch import nn
 
 from palaestra import spaces
+from palaestra.algos.common.base_policy import BasePolicy
 from palaestra.algos.common.networks import (
     BaseFeaturesExtractor,
     FlattenExtractor,
@@ -131,6 +132,9 @@ class ContinuousCritic(_Extracting):
         obs, action = obs_action
         with torch.set_grad_enabled(torch.is_grad_enabled() and not self.share_features_extractor):
             features = self.features(obs)
+        # The replay buffer keeps a float64 Box's actions as float64: the critic's dtype here
+        # (SB3 stores them as float32, ReplayBuffer._maybe_cast_dtype)
+        action = action.to(features.dtype)
         return self.q_networks[index](torch.cat([features.flatten(1), action], dim=1))
 
     def flat_input(self) -> bool:
@@ -138,10 +142,12 @@ class ContinuousCritic(_Extracting):
         return isinstance(self.features_extractor, FlattenExtractor)
 
 
-class _ContinuousPolicy(nn.Module):
+class _ContinuousPolicy(BasePolicy):
     """What ``SACPolicy`` and ``TD3Policy`` share: SB3's policy keywords, kept as attributes
     (the algorithm builds its optimizers from ``optimizer_class``/``optimizer_kwargs``), and
-    the critic factory."""
+    the critic factory. The actor acts in ``[-1, 1]``; ``predict`` maps to the bounds."""
+
+    squash_output = True
 
     # The extractor when ``features_extractor_class`` is not given (CnnPolicy: NatureCNN).
     default_features_extractor_class: type[BaseFeaturesExtractor] = FlattenExtractor

@@ -23,6 +23,7 @@ import sys
 import tempfile
 import time
 from collections import defaultdict
+from collections.abc import Mapping
 from typing import Any, TextIO
 
 import numpy as np
@@ -38,10 +39,13 @@ __all__ = [
     "HumanOutputFormat",
     "Image",
     "JSONOutputFormat",
+    "KVWriter",
     "Logger",
+    "SeqWriter",
     "TensorBoardOutputFormat",
     "Video",
     "configure",
+    "filter_excluded_keys",
     "make_output_format",
 ]
 
@@ -109,7 +113,50 @@ def _refuse_rich(values: dict[str, Any], formats: list[str]) -> None:
             raise FormatUnsupportedError(formats, kind)
 
 
-class HumanOutputFormat:
+Excluded = Mapping[str, "tuple[str, ...] | None"]
+
+
+def _checked_excluded(key_excluded: Any) -> Excluded:
+    """SB3's second argument of ``write``: the formats each key is kept out of."""
+    if key_excluded is None:
+        return {}
+    if not isinstance(key_excluded, Mapping):
+        raise TypeError(
+            "write(key_values, key_excluded, step): key_excluded must map keys to the formats "
+            f"they are excluded from, got {key_excluded!r}; pass the step as step=..."
+        )
+    return key_excluded
+
+
+def filter_excluded_keys(
+    key_values: dict[str, Any], key_excluded: Excluded | None, _format: str
+) -> dict[str, Any]:
+    """The values of ``key_values`` that ``_format`` writes (SB3's helper)."""
+    excluded = _checked_excluded(key_excluded)
+    return {k: v for k, v in key_values.items() if _format not in (excluded.get(k) or ())}
+
+
+class KVWriter:
+    """An output of key/value rows (SB3's base class, for users' own formats): ``write``
+    gets every recorded value, the formats each key is excluded from, and the step."""
+
+    def write(
+        self, key_values: dict[str, Any], key_excluded: Excluded | None = None, step: int = 0
+    ) -> None:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        raise NotImplementedError
+
+
+class SeqWriter:
+    """An output of free text lines (SB3's base class)."""
+
+    def write_sequence(self, sequence: list[str]) -> None:
+        raise NotImplementedError
+
+
+class HumanOutputFormat(KVWriter, SeqWriter):
     """SB3's ASCII table: keys grouped by their ``tag/`` prefix, floats as ``%-8.3g``."""
 
     def __init__(self, file: TextIO | str = sys.stdout, max_length: int = 36) -> None:
@@ -120,9 +167,20 @@ class HumanOutputFormat:
     def _cut(self, text: str) -> str:
         return text if len(text) <= self.max_length else text[: self.max_length - 3] + "..."
 
-    def write(self, values: dict[str, Any], step: int) -> None:
+    def write(
+        self, key_values: dict[str, Any], key_excluded: Excluded | None = None, step: int = 0
+    ) -> None:
+        """One table of the values not excluded from ``stdout``/``log``; two keys that
+        truncate to the same text are a ``ValueError``, as in SB3."""
+        excluded = _checked_excluded(key_excluded)
+        values = {
+            k: v
+            for k, v in key_values.items()
+            if not {"stdout", "log"} & set(excluded.get(k) or ())
+        }
         _refuse_rich(values, ["stdout", "log"])
         rows: list[tuple[str, str]] = []
+        seen: set[tuple[str, str]] = set()
         tag = ""
         for key in sorted(values):
             value = values[key]
@@ -133,7 +191,14 @@ class HumanOutputFormat:
                     tag = new_tag
                     rows.append((self._cut(tag), ""))
                 key = "   " + key[len(tag) :]
-            rows.append((self._cut(key), self._cut(text)))
+            cut = self._cut(key)
+            if (tag, cut) in seen:
+                raise ValueError(
+                    f"Key '{key}' truncated to '{cut}' that already exists. Consider "
+                    "increasing `max_length`."
+                )
+            seen.add((tag, cut))
+            rows.append((cut, self._cut(text)))
         if not rows:
             return
         kw = max(len(k) for k, _ in rows)
@@ -148,12 +213,17 @@ class HumanOutputFormat:
             self.file.write(text)
         self.file.flush()
 
+    def write_sequence(self, sequence: list[str]) -> None:
+        """The items on one line, separated by spaces (``Logger.log``)."""
+        self.file.write(" ".join(sequence) + "\n")
+        self.file.flush()
+
     def close(self) -> None:
         if self.own:
             self.file.close()
 
 
-class CSVOutputFormat:
+class CSVOutputFormat(KVWriter):
     """``progress.csv``: one row per dump; a new key rewrites the header (as SB3 does).
 
     The header and every rewrite replace the file whole (``utils.atomic_write``); rows are
@@ -167,7 +237,10 @@ class CSVOutputFormat:
         self.file = open(filename, "a", encoding="utf-8")
         self.keys: list[str] = []
 
-    def write(self, values: dict[str, Any], step: int) -> None:
+    def write(
+        self, key_values: dict[str, Any], key_excluded: Excluded | None = None, step: int = 0
+    ) -> None:
+        values = filter_excluded_keys(key_values, key_excluded, "csv")
         _refuse_rich(values, ["csv"])
         extra = [k for k in values if k not in self.keys]
         if extra:
@@ -197,7 +270,7 @@ class CSVOutputFormat:
         self.file.close()
 
 
-class JSONOutputFormat:
+class JSONOutputFormat(KVWriter):
     """``progress.json``: one JSON object per dump (numpy values as numbers or lists)."""
 
     def __init__(self, filename: str) -> None:
@@ -205,7 +278,10 @@ class JSONOutputFormat:
             pass  # a fresh, empty file; rows are appended and flushed, as the CSV's
         self.file = open(filename, "a", encoding="utf-8")
 
-    def write(self, values: dict[str, Any], step: int) -> None:
+    def write(
+        self, key_values: dict[str, Any], key_excluded: Excluded | None = None, step: int = 0
+    ) -> None:
+        values = filter_excluded_keys(key_values, key_excluded, "json")
         _refuse_rich(values, ["json"])
         row = {k: _json_value(v) for k, v in values.items()}
         self.file.write(json.dumps(row) + "\n")
@@ -223,7 +299,7 @@ def _json_value(value: Any) -> Any:
     return value
 
 
-class TensorBoardOutputFormat:
+class TensorBoardOutputFormat(KVWriter):
     """Scalars, text, histograms (arrays, tensors) and SB3's ``Video``/``Figure``/``Image``/
     ``HParam`` values to TensorBoard through ``torch.utils.tensorboard`` (needs
     ``tensorboard``)."""
@@ -235,9 +311,13 @@ class TensorBoardOutputFormat:
             raise dependency_not_installed("tensorboard", "tensorboard", "tensorboard_log") from exc
         self.writer = SummaryWriter(log_dir=folder)
 
-    def write(self, values: dict[str, Any], step: int) -> None:
+    def write(
+        self, key_values: dict[str, Any], key_excluded: Excluded | None = None, step: int = 0
+    ) -> None:
+        """Each value not excluded from ``tensorboard`` as an event at ``step``."""
         import torch
 
+        values = filter_excluded_keys(key_values, key_excluded, "tensorboard")
         for key in sorted(values):
             value = values[key]
             if isinstance(value, str):
@@ -266,12 +346,6 @@ class TensorBoardOutputFormat:
 
 
 OutputFormat = HumanOutputFormat | CSVOutputFormat | JSONOutputFormat | TensorBoardOutputFormat
-_FORMAT_NAMES = {
-    HumanOutputFormat: "stdout",
-    CSVOutputFormat: "csv",
-    JSONOutputFormat: "json",
-    TensorBoardOutputFormat: "tensorboard",
-}
 
 
 class Logger:
@@ -299,16 +373,11 @@ class Logger:
         self.record(key, self._sums[key] / self._counts[key], exclude)
 
     def dump(self, step: int = 0) -> None:
-        """Write everything recorded since the last dump, then forget it."""
+        """Write everything recorded since the last dump, then forget it: each output gets
+        all values and what each key is excluded from (SB3's ``KVWriter.write``)."""
         for fmt in self.output_formats:
-            name = _FORMAT_NAMES.get(type(fmt), "")
-            values = {
-                k: v
-                for k, v in self.name_to_value.items()
-                if name not in self.name_to_excluded.get(k, ())
-                and not (name == "stdout" and "log" in self.name_to_excluded.get(k, ()))
-            }
-            fmt.write(values, step)
+            if hasattr(fmt, "write"):
+                fmt.write(self.name_to_value, self.name_to_excluded, step)
         self.name_to_value.clear()
         self.name_to_excluded.clear()
         self._sums.clear()

@@ -195,6 +195,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         with self._learning_session():
             while running and self.num_timesteps < self._total_timesteps:
                 callback.on_rollout_start()
+                self._set_training_mode(False)  # SB3: evaluation mode while collecting
                 while (
                     running
                     and (self._collected_steps if unit == "step" else self._collected_episodes)

@@ -115,6 +115,10 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
         """The policy (``SACPolicy``/``TD3Policy`` or a subclass), checked to hold ``parts``
         (attribute name -> the class it must be an instance of) for the learner to run."""
         policy = self._build_policy({**self._policy_defaults, **self.policy_kwargs})
+        self._check_parts(policy, parts)
+        return policy
+
+    def _check_parts(self, policy: Any, parts: dict[str, type[torch.nn.Module]]) -> None:
         for name, cls in parts.items():
             part = getattr(policy, name, None)
             if not isinstance(part, cls):
@@ -122,7 +126,6 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
                     f"{type(policy).__name__}.{name} must be a {cls.__module__}.{cls.__name__} "
                     f"(or a subclass; see make_actor/make_critic), got {type(part).__name__}"
                 )
-        return policy
 
     def _critic_nets(
         self, critic: ContinuousCritic, target: ContinuousCritic, policy: torch.nn.Module

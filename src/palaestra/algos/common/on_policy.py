@@ -80,8 +80,8 @@ class OnPolicyAlgorithm(BaseAlgorithm):
     def _setup_model(self) -> None:
         self.set_random_seed(self.seed)
         kwargs = dict(self.policy_kwargs)
-        optimizer_class, optimizer_kwargs = self._optimizer_choice(kwargs)
-        backend = kwargs.pop("backend", "auto")
+        self._optimizer_choice(kwargs)  # takes its keys out of the policy's
+        kwargs.pop("backend", None)
         kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
         policy: ActorCritic
         if isinstance(self.policy_name, type):  # an ActorCriticPolicy subclass (SB3's guide)
@@ -91,7 +91,16 @@ class OnPolicyAlgorithm(BaseAlgorithm):
             )
         else:
             policy = ActorCritic(self.observation_space, self.action_space, **kwargs)
-        policy = policy.to(self.device)
+        self._use_policy(policy.to(self.device))
+        self._make_rollout_buffer()
+
+    def _policy_family(self) -> type[torch.nn.Module]:
+        return ActorCritic
+
+    def _use_policy(self, policy: Any) -> None:
+        kwargs = dict(self.policy_kwargs)
+        optimizer_class, optimizer_kwargs = self._optimizer_choice(kwargs)
+        backend = kwargs.pop("backend", "auto")
         params = list(policy.parameters())
         optimizer = self._make_optimizer(params, optimizer_class, optimizer_kwargs)
         pi_modules, vf_modules, why = policy.mlp_modules()
@@ -115,7 +124,6 @@ class OnPolicyAlgorithm(BaseAlgorithm):
             joint={("pi", "vf"): policy.pi_and_vf},
         )
         self._head = head
-        self._make_rollout_buffer()
 
     def _make_rollout_buffer(self) -> None:
         self.rollout_buffer = RolloutStore(
@@ -207,6 +215,7 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         # The values of the whole rollout come from one batched forward at its end (the
         # parameters do not change during a rollout): per step, only the policy.
         bits = isinstance(self.action_space, spaces.MultiBinary)
+        self._set_training_mode(False)
         while not buf.full:
             actions, log_probs = self._sample(self._last_obs, False)
             if bits:

@@ -6,10 +6,12 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
 import torch
 from torch import nn
 
 from palaestra import spaces
+from palaestra.algos.common.base_policy import BasePolicy
 from palaestra.algos.common.distributions import ActionHead
 from palaestra.algos.common.networks import (
     BaseFeaturesExtractor,
@@ -28,6 +30,7 @@ __all__ = [
     "POLICY_EXTRACTORS",
     "ActorCritic",
     "ActorCriticPolicy",
+    "BasePolicy",
     "extractor_class",
 ]
 
@@ -84,7 +87,7 @@ def _ortho_init(module: nn.Module, gain: float) -> None:
                 m.bias.data.fill_(0.0)
 
 
-class ActorCritic(nn.Module):
+class ActorCritic(BasePolicy):
     """PPO's policy and value function: separate pi/vf MLPs (SB3 default ``[64, 64]`` Tanh) on
     a features extractor shared by default, an ``ActionHead`` and a linear value head."""
 
@@ -105,6 +108,10 @@ class ActorCritic(nn.Module):
         self.observation_space, self.action_space = observation_space, action_space
         self.normalize_images, self.ortho_init = normalize_images, ortho_init
         self.net_arch, self.activation_fn = net_arch, activation_fn
+        # Kept under their argument names: ``save`` rebuilds the policy from them.
+        self.features_extractor_class = features_extractor_class
+        self.features_extractor_kwargs = dict(features_extractor_kwargs or {})
+        self.log_std_init, self.share_features_extractor = log_std_init, share_features_extractor
         kwargs = features_extractor_kwargs
         self.features_extractor = make_extractor(
             features_extractor_class, observation_space, kwargs
@@ -207,6 +214,16 @@ class ActorCritic(nn.Module):
         """``V(obs)`` ``[B]``."""
         return self.value_head(self._latents(obs)[1]).squeeze(1)
 
+    def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
+        """The distribution's mode, or a sample drawn from a generator seeded by torch's
+        (so ``torch.manual_seed`` fixes it, as in SB3)."""
+        params = self.pi_out(observation).cpu().numpy()
+        head = self.action_head
+        log_std = head.log_std.detach().cpu().numpy() if head.kind == "gaussian" else None
+        seed = 0 if deterministic else int(torch.randint(0, 2**62, (1,)).item())
+        actions, _ = head.sample(params, log_std, np.random.default_rng(seed), deterministic)
+        return torch.as_tensor(actions)
+
 
 class ActorCriticPolicy(ActorCritic):
     """SB3's ``ActorCriticPolicy`` face, for subclasses written by SB3's custom-policy guide:
@@ -242,6 +259,8 @@ class ActorCriticPolicy(ActorCritic):
         if use_sde or squash_output:
             raise NotImplementedError("use_sde and squash_output are not supported yet")
         self.lr_schedule = lr_schedule
+        self.use_sde, self.full_std, self.use_expln = use_sde, full_std, use_expln
+        self.optimizer_class, self.optimizer_kwargs = optimizer_class, optimizer_kwargs
         super().__init__(
             observation_space,
             action_space,

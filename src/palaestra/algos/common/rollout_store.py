@@ -1,6 +1,8 @@
 """The on-policy algorithms' rollout storage: ``n_steps`` steps of ``n_envs`` envs as numpy
 arrays, then GAE, then minibatches (PPO) or the whole rollout as one batch (A2C). The
-SB3-compatible class users build is ``palaestra.algos.buffers.RolloutBuffer``."""
+SB3-compatible class users build is ``palaestra.algos.buffers.RolloutBuffer``; this one, the
+``model.rollout_buffer`` callbacks see, also answers SB3's read-side calls (``size()``,
+``buffer_size``, ``full``, ``get(batch_size)`` with SB3's sample tuples)."""
 
 from __future__ import annotations
 
@@ -8,8 +10,14 @@ from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
+import torch
 
 from palaestra import spaces
+from palaestra.algos.common.buffers import (
+    BaseBuffer,
+    DictRolloutBufferSamples,
+    RolloutBufferSamples,
+)
 from palaestra.algos.common.spaces_util import allocate
 from palaestra.algos.learners.losses import gae
 
@@ -38,6 +46,8 @@ class RolloutStore:
     ) -> None:
         self.n_steps, self.n_envs = n_steps, n_envs
         self.gamma, self.gae_lambda = gamma, gae_lambda
+        self.observation_space, self.action_space = observation_space, action_space
+        self.device = torch.device("cpu")
         lead = (n_steps, n_envs)
         self.observations = allocate(observation_space, lead)
         self.obs_shape = (
@@ -57,6 +67,51 @@ class RolloutStore:
     @property
     def full(self) -> bool:
         return self.pos == self.n_steps
+
+    # -- SB3's RolloutBuffer face (read side) ------------------------------------------------
+    @property
+    def buffer_size(self) -> int:
+        """Steps per env in one rollout (SB3's name for ``n_steps``)."""
+        return self.n_steps
+
+    def size(self) -> int:
+        """Steps stored so far (each holds one step of every env)."""
+        return self.pos
+
+    swap_and_flatten = staticmethod(BaseBuffer.swap_and_flatten)
+
+    def to_torch(self, array: np.ndarray, copy: bool = True) -> torch.Tensor:
+        """A tensor on the CPU (a copy unless ``copy=False``)."""
+        return torch.tensor(array) if copy else torch.as_tensor(array)
+
+    def get(self, batch_size: int | None = None) -> Iterator[Any]:
+        """SB3's ``RolloutBuffer.get``: ``RolloutBufferSamples`` (or the Dict ones) of
+        ``batch_size`` (None: all) over a ``np.random.permutation`` of the samples, env-major
+        as SB3 orders them; the arrays themselves are left as they are (the algorithm's)."""
+        if not self.full:
+            raise ValueError("the rollout buffer is not full yet: add buffer_size steps first")
+        total = self.n_steps * self.n_envs
+        size = total if batch_size is None else int(batch_size)
+        if size < 1:
+            raise ValueError(f"batch_size must be a positive integer, got {batch_size!r}")
+        indices = np.random.permutation(total)  # noqa: NPY002 - SB3's draws
+        flat = self.swap_and_flatten
+        obs = self.observations
+        obs = {k: flat(v) for k, v in obs.items()} if isinstance(obs, dict) else flat(obs)
+        actions = flat(self.actions.reshape(self.n_steps, self.n_envs, -1))
+        cols = [flat(a) for a in (self.values, self.log_probs, self.advantages, self.returns)]
+        for start in range(0, total, size):
+            i = indices[start : start + size]
+            rest = (
+                self.to_torch(actions[i].astype(np.float32, copy=False)),
+                *(self.to_torch(c[i].flatten()) for c in cols),
+            )
+            if isinstance(obs, dict):
+                yield DictRolloutBufferSamples(
+                    {k: self.to_torch(v[i]) for k, v in obs.items()}, *rest
+                )
+            else:
+                yield RolloutBufferSamples(self.to_torch(obs[i]), *rest)
 
     def reset(self) -> None:
         self.pos = 0

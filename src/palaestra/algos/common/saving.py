@@ -153,7 +153,10 @@ def save_model(model: Any, path: Any, exclude: Any = None, include: Any = None) 
         "counters": {name: getattr(model, name) for name in (*COUNTERS, *model._extra_counters)},
         "rng": model._rng.bit_generator.state,
     }
-    arrays = {f"policy/{k}": v.detach().cpu().numpy() for k, v in model.policy.state_dict().items()}
+    arrays = {
+        f"policy/{k}": v.detach().cpu().numpy()
+        for k, v in model._policy_module().state_dict().items()
+    }
     for key, (_, optimizer) in model._optimizers().items():
         meta[key], opt_arrays = optimizer_to_arrays(optimizer, key)
         arrays.update(opt_arrays)
@@ -324,7 +327,7 @@ def _fits(model: Any, exact_match: bool, source: str) -> Expect:
     """An ``expect`` hook for ``read_arrays``: the file's ``policy/`` and ``optimizer/`` arrays
     must have this model's shapes (and, with ``exact_match``, its parameter names), checked
     before any of them is read. Other arrays are left to their own readers' checks."""
-    params = {f"policy/{k}": tuple(v.shape) for k, v in model.policy.state_dict().items()}
+    params = {f"policy/{k}": tuple(v.shape) for k, v in model._policy_module().state_dict().items()}
     shapes = {
         key: [tuple(p.shape) for g in opt.param_groups for p in g["params"]]
         for key, (_, opt) in model._optimizers().items()
@@ -402,7 +405,7 @@ def _load_policy(model: Any, arrays: dict[str, np.ndarray], exact_match: bool, s
         for k, v in arrays.items()
         if k.startswith("policy/")
     }
-    expected = model.policy.state_dict()
+    expected = model._policy_module().state_dict()
     for key, tensor in state.items():
         if key in expected and tuple(expected[key].shape) != tuple(tensor.shape):
             raise ModelFileError(
@@ -410,7 +413,7 @@ def _load_policy(model: Any, arrays: dict[str, np.ndarray], exact_match: bool, s
                 f"this model expects {tuple(expected[key].shape)}"
             )
     try:
-        model.policy.load_state_dict(state, strict=exact_match)
+        model._policy_module().load_state_dict(state, strict=exact_match)
     except RuntimeError as exc:
         raise ModelFileError(f"{source}: parameters do not fit this model ({exc})") from exc
 
@@ -451,6 +454,7 @@ def _object_named(model: Any, name: Any) -> Any:
             target = getattr(target, part)
     except AttributeError:
         target = None
+    target = getattr(target, "_orig_mod", target)  # model.policy = torch.compile(...)
     if not isinstance(name, str) or not isinstance(target, torch.nn.Module):
         raise ValueError(
             f"Key {name!r} is an invalid object name: expected 'policy', an optimizer name "

@@ -102,7 +102,10 @@ class DQN(OffPolicyAlgorithm):
         self.set_random_seed(self.seed)
         # SB3's DQNPolicy does not take it; palaestra always let it through (and ignores it).
         kwargs = {k: v for k, v in self.policy_kwargs.items() if k != "share_features_extractor"}
-        policy: DQNPolicy = self._build_policy(kwargs)
+        self._use_policy(self._build_policy(kwargs))
+        self._make_replay_buffer()
+
+    def _use_policy(self, policy: Any) -> None:
         q_net, q_net_target = policy.q_net, policy.q_net_target
         params = list(q_net.parameters())
         optimizer = self._make_optimizer(params, policy.optimizer_class, policy.optimizer_kwargs)
@@ -115,7 +118,6 @@ class DQN(OffPolicyAlgorithm):
         }
         backend = self.policy_kwargs.get("backend", "auto")
         self._set_learner(policy, optimizer, backend, nets, {"q": Group(optimizer, params)})
-        self._make_replay_buffer()
 
     # SB3's attributes; reading them hands the parameters to torch, as ``policy`` does.
     @property
@@ -164,6 +166,7 @@ class DQN(OffPolicyAlgorithm):
     def train(self, gradient_steps: int, batch_size: int = 100) -> None:
         """``gradient_steps`` Huber-loss updates on uniform replay minibatches."""
         assert self.replay_buffer is not None
+        self._set_training_mode(True)
         self._update_learning_rate("q")
         start = int(self.action_space.start)
         objective = DQNObjective(self.gamma)

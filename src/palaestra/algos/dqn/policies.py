@@ -9,6 +9,7 @@ import torch
 from torch import nn
 
 from palaestra import spaces
+from palaestra.algos.common.base_policy import BasePolicy
 from palaestra.algos.common.networks import (
     BaseFeaturesExtractor,
     CombinedExtractor,
@@ -61,7 +62,7 @@ class QNetwork(nn.Module):
         return (None, why) if why else ([self.features_extractor, self.mlp, self.head], "")
 
 
-class DQNPolicy(nn.Module):
+class DQNPolicy(BasePolicy):
     """SB3's ``DQNPolicy`` (``palaestra.algos.dqn.MlpPolicy``): ``q_net`` and its frozen copy
     ``q_net_target``, each built by ``make_q_net()``, which a subclass may override (it must
     return a ``QNetwork``). ``DQN(MyPolicy, env)`` builds it as
@@ -72,6 +73,7 @@ class DQNPolicy(nn.Module):
 
     # The extractor when ``features_extractor_class`` is not given (CnnPolicy: NatureCNN).
     default_features_extractor_class: type[BaseFeaturesExtractor] = FlattenExtractor
+    _frozen = ("q_net_target",)
 
     def __init__(
         self,
@@ -125,6 +127,11 @@ class DQNPolicy(nn.Module):
         """The greedy actions ``[B]`` for a raw observation batch (SB3's ``policy(obs)``)."""
         start = int(getattr(self.action_space, "start", 0))
         return self.q_net(obs).argmax(dim=1) + start
+
+    def _predict(self, observation: Any, deterministic: bool = True) -> torch.Tensor:
+        """Greedy actions whatever ``deterministic`` says: epsilon-greedy exploration is the
+        algorithm's (``DQN.predict``), as in SB3."""
+        return self(observation)
 
 
 MlpPolicy = DQNPolicy  # SB3's alias

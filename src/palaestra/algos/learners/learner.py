@@ -239,13 +239,18 @@ class TorchLearner(Learner):
         net = self.nets[target]
         assert net.target_of is not None
         source, frozen = self.nets[net.target_of], net
-        params = []
+        params, stats = [], []
         for n in (source, frozen):
             module = n.module if n.module is not None else n.torch_fn
             assert isinstance(module, nn.Module)
             params.append(list(module.parameters()))
+            stats.append([b for name, b in module.named_buffers() if "running_" in name])
         with torch.no_grad():
             polyak(params[0], params[1], tau)
+            # Batch-norm running statistics are copied whole, whatever tau (SB3's
+            # polyak_update(batch_norm_stats, batch_norm_stats_target, 1.0)).
+            for src, dst in zip(*stats):
+                dst.copy_(src)
 
 
 class NumpyLearner(Learner):

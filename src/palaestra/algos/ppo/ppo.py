@@ -116,6 +116,7 @@ class PPO(OnPolicyAlgorithm):
 
     def train(self) -> None:
         """``n_epochs`` passes of minibatch updates over the current rollout."""
+        self._set_training_mode(True)
         self._update_learning_rate("policy")
         clip_range = self.clip_range(self._progress_remaining)
         clip_range_vf = (

@@ -104,6 +104,7 @@ class QRDQN(DQN):
     # -- learning ------------------------------------------------------------------------------
     def train(self, gradient_steps: int, batch_size: int = 100) -> None:
         """``gradient_steps`` quantile Huber updates on uniform replay minibatches."""
+        self._set_training_mode(True)
         assert self.replay_buffer is not None
         self._update_learning_rate("q")
         objective = QRDQNObjective(self.gamma)

@@ -18,6 +18,8 @@ from palaestra.algos.common.networks import (
     CombinedExtractor,
     NatureCNN,
 )
+from palaestra.algos.learners.heads import squashed_gaussian_rsample
+from palaestra.algos.learners.xp import torch_ops
 
 __all__ = ["CnnPolicy", "MlpPolicy", "MultiInputPolicy", "SACPolicy"]
 
@@ -29,6 +31,9 @@ class SACPolicy(_ContinuousPolicy):
     ``MyPolicy(observation_space, action_space, lr_schedule, **policy_kwargs)`` and trains a
     subclass on the torch learner. ``log_std_init``, ``use_expln`` and ``clip_mean`` only
     matter with ``use_sde``, which is not supported yet."""
+
+    _frozen = ("critic_target",)
+    _not_policy_state = ("ent_coef.",)  # SAC's learned temperature, the algorithm's
 
     def __init__(
         self,
@@ -66,6 +71,7 @@ class SACPolicy(_ContinuousPolicy):
             share_features_extractor,
         )
         self.log_std_init, self.use_expln, self.clip_mean = log_std_init, use_expln, clip_mean
+        self.use_sde = use_sde
         # SB3's order (it sets the parameters a seed gives): actor, critic, critic target.
         self.actor = self.make_actor()
         shared = self.actor.features_extractor if self.share_features_extractor else None
@@ -88,6 +94,15 @@ class SACPolicy(_ContinuousPolicy):
             self.activation_fn,
             self.normalize_images,
         )
+
+    def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
+        """``tanh`` of the Gaussian's mean, or of a sample (log-std clipped as in training)."""
+        latent = self.actor.latent(observation)
+        mean = self.actor.mu(latent)
+        if deterministic:
+            return torch.tanh(mean)
+        log_std = self.actor.log_std(latent)
+        return squashed_gaussian_rsample(torch_ops, mean, log_std, torch.randn_like(mean))[0]
 
 
 MlpPolicy = SACPolicy  # SB3's alias

@@ -127,9 +127,20 @@ class SAC(ActorCriticOffPolicy):
     def _setup_model(self) -> None:
         self._check_action_space()
         self.set_random_seed(self.seed)
-        policy = self._make_policy(
-            actor=SquashedGaussianActor, critic=ContinuousCritic, critic_target=ContinuousCritic
-        )
+        policy = self._make_policy(**self._policy_parts)
+        self._use_policy(policy, math.log(self._ent_coef_init))
+        self._make_replay_buffer()
+
+    _policy_parts = dict(
+        actor=SquashedGaussianActor, critic=ContinuousCritic, critic_target=ContinuousCritic
+    )
+
+    def _use_policy(self, policy: Any, log_ent_coef_init: float | None = None) -> None:
+        """``log_ent_coef_init``: None keeps the current temperature (a policy assigned to
+        ``model.policy``)."""
+        self._check_parts(policy, self._policy_parts)
+        if log_ent_coef_init is None:
+            log_ent_coef_init = math.log(self._current_ent_coef())
         actor, critic, critic_target = policy.actor, policy.critic, policy.critic_target
         backend = self.policy_kwargs.get("backend", "auto")
         self.target_entropy = (
@@ -137,7 +148,7 @@ class SAC(ActorCriticOffPolicy):
             if self.target_entropy_setting == "auto"
             else float(self.target_entropy_setting)
         )
-        log_ent_coef = torch.nn.Parameter(torch.full((1,), math.log(self._ent_coef_init)))
+        log_ent_coef = torch.nn.Parameter(torch.full((1,), log_ent_coef_init))
         if self._learn_ent_coef:
             # Kept in the policy's state (``ent_coef.log_ent_coef``) so the model file has it.
             ent_coef = torch.nn.ParameterDict({"log_ent_coef": log_ent_coef}).to(self.device)
@@ -170,7 +181,6 @@ class SAC(ActorCriticOffPolicy):
             )
         self._set_learner(policy, groups["actor"].optimizer, backend, nets, groups)
         self._groups = list(groups)
-        self._make_replay_buffer()
 
     @property
     def actor(self) -> SquashedGaussianActor:
@@ -209,6 +219,7 @@ class SAC(ActorCriticOffPolicy):
     # -- learning ----------------------------------------------------------------------------
     def train(self, gradient_steps: int, batch_size: int = 64) -> None:
         """``gradient_steps`` updates of the critics, the actor and the temperature."""
+        self._set_training_mode(True)
         for group in self._groups:
             self._update_learning_rate(group)
         logs: dict[str, list[float]] = {}

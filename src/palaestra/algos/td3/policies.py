@@ -29,6 +29,7 @@ class TD3Policy(_ContinuousPolicy):
     the actor's extractor and the critic target the actor target's, as in SB3."""
 
     default_net_arch = (400, 300)
+    _frozen = ("actor_target", "critic_target")
 
     def __init__(
         self,
@@ -85,6 +86,11 @@ class TD3Policy(_ContinuousPolicy):
             self.activation_fn,
             self.normalize_images,
         )
+
+    def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
+        """The actor's action in ``[-1, 1]`` (deterministic either way: exploration noise is
+        the algorithm's, as in SB3)."""
+        return self.actor(observation)
 
 
 MlpPolicy = TD3Policy  # SB3's alias (DDPG's policies are TD3's, as in SB3)

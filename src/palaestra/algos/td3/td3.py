@@ -85,12 +85,18 @@ class TD3(ActorCriticOffPolicy):
     def _setup_model(self) -> None:
         self._check_action_space()
         self.set_random_seed(self.seed)
-        policy = self._make_policy(
-            actor=DeterministicActor,
-            actor_target=DeterministicActor,
-            critic=ContinuousCritic,
-            critic_target=ContinuousCritic,
-        )
+        self._use_policy(self._make_policy(**self._policy_parts))
+        self._make_replay_buffer()
+
+    _policy_parts = dict(
+        actor=DeterministicActor,
+        actor_target=DeterministicActor,
+        critic=ContinuousCritic,
+        critic_target=ContinuousCritic,
+    )
+
+    def _use_policy(self, policy: Any) -> None:
+        self._check_parts(policy, self._policy_parts)
         actor, actor_target = policy.actor, policy.actor_target
         critic, critic_target = policy.critic, policy.critic_target
         why = self._custom_policy(policy) or _numpy_input_problem(
@@ -121,7 +127,6 @@ class TD3(ActorCriticOffPolicy):
             nets,
             groups,
         )
-        self._make_replay_buffer()
 
     @property
     def actor(self) -> DeterministicActor:
@@ -146,6 +151,7 @@ class TD3(ActorCriticOffPolicy):
     # -- learning ----------------------------------------------------------------------------
     def train(self, gradient_steps: int, batch_size: int = 100) -> None:
         """Critic updates every step; actor and target updates every ``policy_delay``."""
+        self._set_training_mode(True)
         for group in ("actor", "critic"):
             self._update_learning_rate(group)
         critic = TD3CriticObjective(self._n_critics, self.gamma)
