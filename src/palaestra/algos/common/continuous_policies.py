@@ -180,7 +180,10 @@ class _ContinuousPolicy(nn.Module):
     def make_features_extractor(self) -> BaseFeaturesExtractor:
         """A new features extractor of the policy's class and keywords."""
         return make_extractor(
-            self.features_extractor_class, self.observation_space, self.features_extractor_kwargs
+            self.features_extractor_class,
+            self.observation_space,
+            self.features_extractor_kwargs,
+            self.normalize_images,
         )
 
     def make_critic(
