@@ -176,7 +176,7 @@ def _write_npy(out: IO[bytes], array: np.ndarray) -> None:
     """``np.save``'s bytes, without its 16 MiB ``tobytes`` copies: the header, then the
     array's own buffer in slices."""
     np.lib.format.write_array_header_1_0(out, np.lib.format.header_data_from_array_1_0(array))
-    data = memoryview(array.reshape(-1).view(np.uint8))  # C-contiguous: a view
+    data = array.reshape(-1).view(np.uint8).data  # C-contiguous: a view of its buffer
     for start in range(0, len(data), _CHUNK):
         out.write(data[start : start + _CHUNK])
 

@@ -344,7 +344,9 @@ def _convert_old_net_arch(meta: dict[str, Any]) -> None:
     """SB3's conversion of a pre-1.8 ``net_arch=[dict(pi=..., vf=...)]`` saved in a file to
     ``dict(pi=..., vf=...)`` (its load does so too, silently)."""
     kwargs = meta.get("policy_kwargs")
-    arch = kwargs.get("net_arch") if isinstance(kwargs, dict) else None
+    if not isinstance(kwargs, dict):
+        return
+    arch = kwargs.get("net_arch")
     if isinstance(arch, list) and arch and isinstance(arch[0], dict):
         kwargs["net_arch"] = arch[0]
 
