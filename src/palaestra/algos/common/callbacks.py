@@ -394,7 +394,9 @@ class EvalCallback(BaseCallback):
 
     def _init_callback(self) -> None:
         from palaestra.vec_env import VecMonitor  # lazy: import-time — cloudpickle
-        from palaestra.vec_env.engine_vec_env import EngineVecEnv
+        from palaestra.vec_env.engine_vec_env import (  # lazy: import-time — cloudpickle
+            EngineVecEnv,
+        )
 
         def face(env: Any) -> Any:
             while isinstance(env, VecMonitor):  # where SB3 has a Monitor on each env
