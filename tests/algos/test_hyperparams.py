@@ -138,7 +138,10 @@ OUT_OF_RANGE = [
     ("DQN", H + "exploration_final_eps", 2, "expected a number in [0.0, 1.0]"),
     ("PPO", P + "net_arch", [10**6, 10**6],
      "net_arch=[1000000, 1000000] is refused: expected null or a list of at most 64 layer"),
-    ("PPO", P + "net_arch", [4096] * 20, "layers with at most 100000000 weights between them"),
+    # a network larger than the weights the file holds: refused before it is built
+    ("PPO", P + "net_arch", [4096] * 20,
+     "policy_kwargs net_arch=[4096, 4096, 4096, 4096, 4096, 4096, ...] needs at least "
+     "318767104 weights, but the file's parameters hold 9155"),
     ("PPO", P + "net_arch", {"pi": [64], "vf": [64], "x": [1]},
      "expected null or a mapping with keys among ['pi', 'vf'] (not 'x')"),
     ("PPO", P + "evil", 1, "policy_kwargs names 'evil', which a model file may not set"),

@@ -142,8 +142,10 @@ def read_npy(
     max_bytes: int,
     dtypes: Collection[str] | None = None,
     shape: tuple[int, ...] | None = None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """The array in the ``.npy`` member ``info``, read without pickle into one buffer.
+    """The array in the ``.npy`` member ``info``, read without pickle into one buffer: ``out``
+    (a writable C-contiguous array of the stated dtype and shape, which is returned) or a new one.
 
     Its header must state a dtype among ``dtypes`` (``dtype.str`` values; by default any plain
     numeric, bool or text dtype), ``shape`` when given, and at most ``max_bytes`` of data, and
@@ -173,9 +175,22 @@ def read_npy(
                 f"{name}: member {member!r} holds {info.file_size - file.tell()} bytes of data, "
                 f"its header says {nbytes}"
             )
-        base = np.empty(found[::-1] if fortran else found, dtype=dtype)
+        direct = (
+            out is not None
+            and not fortran
+            and out.shape == found
+            and out.dtype == dtype
+            and out.flags.c_contiguous
+            and out.flags.writeable
+        )
+        base = out if direct else np.empty(found[::-1] if fortran else found, dtype=dtype)
+        assert base is not None
         _read_into(file, base, f"{name}: member {member!r}")
-    return base.T if fortran else base
+    result = base.T if fortran else base
+    if out is not None and not direct:
+        out[...] = result  # (a Fortran-ordered file, or a destination of another layout)
+        return out
+    return result
 
 
 def _npy_header(file: IO[bytes], where: str) -> tuple[np.dtype, tuple[int, ...], bool]:

@@ -16,7 +16,7 @@ import numpy as np
 
 from palaestra import error
 from palaestra.core import Env
-from palaestra.spaces import Box, Discrete, MultiBinary, MultiDiscrete
+from palaestra.spaces import Box, Dict, Discrete, MultiBinary, MultiDiscrete, Tuple
 from palaestra.spaces.batched_samples import concatenate, create_empty_array
 from palaestra.utils.run_state import State, supports_run_state
 from palaestra.vec_env.base import Indices, StepReturn, VecEnv
@@ -199,6 +199,15 @@ class DummyVecEnv(EngineVecEnv):
                 "n_envs)`. You should replace `lambda: env` by a `make_env` function that "
                 "creates a new instance of the environment at every call (using `gym.make()` "
                 "for instance)."
+            )
+        space = engine.single_observation_space
+        subs = space.spaces.values() if isinstance(space, Dict) else getattr(space, "spaces", ())
+        if isinstance(space, (Dict, Tuple)) and any(isinstance(s, (Dict, Tuple)) for s in subs):
+            engine.close()
+            # SB3's check_for_nested_spaces: its buffers and policies take one level of keys
+            raise NotImplementedError(
+                "Nested observation spaces are not supported (Tuple/Dict space inside "
+                f"Tuple/Dict space): got {space}"
             )
         self.envs = engine.envs
         super().__init__(engine, np.float32)

@@ -114,6 +114,10 @@ class VecNormalize(VecEnvWrapper):
                 )
         else:
             self.obs_rms = RunningMeanStd(shape=(space.shape or ()) if norm_obs else ())
+            if norm_obs and _is_image(space):
+                # SB3 GH#1214: normalised images are floats, so a CnnPolicy that would scale
+                # them as uint8 images (normalize_images=True) refuses them
+                self.observation_space = Box(-clip_obs, clip_obs, space.shape, np.float32)
         self.ret_rms = RunningMeanStd(shape=())
         self.clip_obs, self.clip_reward = clip_obs, clip_reward
         self.gamma, self.epsilon = gamma, epsilon

@@ -23,7 +23,7 @@ import numpy as np
 
 from palaestra.core import ActType, Env, ObsType, Wrapper
 from palaestra.error import dependency_not_installed
-from palaestra.utils.atomic_write import atomic_write, complete_text, open_append
+from palaestra.utils.atomic_write import atomic_write, open_append
 from palaestra.utils.record_constructor import RecordConstructorArgs
 
 if TYPE_CHECKING:
@@ -220,13 +220,38 @@ def get_monitor_files(path: str) -> list[str]:
     return glob(os.path.join(path, "*" + EXT))
 
 
+def _monitor_text(filename: str) -> str:
+    """The text of a monitor file for ``csv``: ``complete_text`` (a row torn by a crash is
+    left out), but an unterminated last line is kept when it is whole: the column line
+    (palaestra writes it with the comment line, atomically), or a row with a value for every
+    column whose ``r``, ``l``, ``t`` parse. Files written by hand or by other tools (SB3's
+    own test data) need not end with a line end; a torn row lacks fields."""
+    with open(filename, encoding="utf-8", newline="") as file:
+        text = file.read()
+    cut = text.rfind("\n") + 1
+    tail, lines = text[cut:], text[:cut].splitlines()
+    if not tail or not lines:
+        return text[:cut] if lines else text
+    if len(lines) == 1:  # the comment, then the column line
+        return text + "\n"
+    columns, fields = next(csv.reader([lines[1]])), next(csv.reader([tail]))
+    parse = {"r": float, "l": int, "t": float}
+    try:
+        whole = len(fields) == len(columns) and all(
+            parse[name](value) is not None for name, value in zip(columns, fields) if name in parse
+        )
+    except ValueError:
+        whole = False
+    return text + "\n" if whole else text[:cut]
+
+
 def read_monitor_file(filename: str) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """Read one monitor file without pandas: ``(header, columns)``.
 
     ``columns`` maps each CSV column to a numpy array: ``r`` float64, ``l`` int64, ``t`` float64
     (seconds since the header's ``t_start``), extra columns as strings.
     """
-    f = io.StringIO(complete_text(filename))  # a row torn by a crash is left out
+    f = io.StringIO(_monitor_text(filename))  # a row torn by a crash is left out
     first = f.readline()
     if not first.startswith("#"):
         raise LoadMonitorResultsError(
@@ -258,7 +283,7 @@ def load_results(path: str) -> pandas.DataFrame:
         raise LoadMonitorResultsError(f"No monitor files of the form *{EXT} found in {path}")
     frames, headers = [], []
     for name in files:
-        f = io.StringIO(complete_text(name))  # a row torn by a crash is left out
+        f = io.StringIO(_monitor_text(name))  # a row torn by a crash is left out
         first = f.readline()
         if not first.startswith("#"):
             raise LoadMonitorResultsError(f"{name} does not start with a '#{{json}}' header line")

@@ -113,6 +113,8 @@ class VectorizedActionNoise(ActionNoise):
     def __init__(self, base_noise: ActionNoise, n_envs: int) -> None:
         if isinstance(n_envs, bool) or not isinstance(n_envs, (int, np.integer)) or n_envs < 1:
             raise ValueError(f"Expected n_envs={n_envs!r} to be positive integer greater than 0")
+        if base_noise is None:  # SB3: a ValueError for None, a TypeError for other objects
+            raise ValueError("Expected base_noise to be an instance of ActionNoise, not None")
         if not isinstance(base_noise, ActionNoise):
             raise TypeError(
                 f"Expected base_noise to be an instance of ActionNoise, got {base_noise!r}"

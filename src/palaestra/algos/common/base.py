@@ -593,10 +593,16 @@ class BaseAlgorithm:
         env: Any = None,
         device: torch.device | str = "auto",
         custom_objects: dict[str, Any] | None = None,
+        print_system_info: bool = False,
         **kwargs: Any,
     ) -> Any:
-        """Rebuild a saved model; never unpickles. ``custom_objects`` overrides stored values."""
-        return saving.load_model(cls, path, env, device, custom_objects or {}, kwargs)
+        """Rebuild a saved model; never unpickles. ``custom_objects`` overrides stored values
+        (names the model does not save are ignored, as in SB3); ``print_system_info`` prints
+        this system's versions and those the file was saved with; ``policy_kwargs`` may be
+        passed when it equals the stored one (``ValueError`` otherwise, as in SB3); other
+        ``kwargs`` set hyperparameters. Any model ``save`` wrote loads, whatever its size."""
+        custom = custom_objects or {}
+        return saving.load_model(cls, path, env, device, custom, kwargs, print_system_info)
 
     def _hyperparameters(self) -> dict[str, Any]:
         """What a model file keeps of the constructor's arguments, at their current values (so

@@ -10,6 +10,7 @@ as a callback too; unlike SB3, a function returning ``None`` does not stop train
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -392,6 +393,30 @@ class EvalCallback(BaseCallback):
                 self._is_success_buffer.append(success)
 
     def _init_callback(self) -> None:
+        from palaestra.vec_env import VecMonitor  # lazy: import-time — cloudpickle
+        from palaestra.vec_env.engine_vec_env import (  # lazy: import-time — cloudpickle
+            EngineVecEnv,
+        )
+
+        def face(env: Any) -> Any:
+            while isinstance(env, VecMonitor):  # where SB3 has a Monitor on each env
+                env = env.venv
+            return env
+
+        # SB3 evaluates a single env in a DummyVecEnv, and warns when the training env is
+        # another type of VecEnv (a VecNormalize on one side only...): results would differ.
+        # palaestra picks the engine (a native batch for a built-in id, where SB3 always has a
+        # DummyVecEnv) and make_vec_env adds a VecMonitor: engine faces count as one type.
+        eval_env = face(self.eval_env)
+        vectorized = hasattr(eval_env, "step_async") and hasattr(eval_env, "num_envs")
+        plain = not vectorized or isinstance(eval_env, EngineVecEnv)
+        eval_type = EngineVecEnv if plain else type(eval_env)
+        if not isinstance(face(self.training_env), eval_type):
+            warnings.warn(
+                "Training and eval env are not of the same type"
+                f"{self.training_env} != {self.eval_env}",
+                stacklevel=2,
+            )
         for path in (self.best_model_save_path, self.log_path and os.path.dirname(self.log_path)):
             if path:
                 os.makedirs(path, exist_ok=True)

@@ -186,7 +186,10 @@ class _ContinuousPolicy(BasePolicy):
     def make_features_extractor(self) -> BaseFeaturesExtractor:
         """A new features extractor of the policy's class and keywords."""
         return make_extractor(
-            self.features_extractor_class, self.observation_space, self.features_extractor_kwargs
+            self.features_extractor_class,
+            self.observation_space,
+            self.features_extractor_kwargs,
+            self.normalize_images,
         )
 
     def make_critic(

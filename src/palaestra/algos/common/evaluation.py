@@ -52,22 +52,28 @@ def evaluate_policy(
 
     With a ``Monitor`` in the env stack the Monitor's episode statistics are used (so reward
     wrappers or episodic-life wrappers do not distort them), as SB3 does. ``callback`` gets
-    ``(locals_, globals_)`` where ``locals_`` holds ``i, reward, done, info, observations,
-    episode_counts, current_rewards, current_lengths``. ``reward_threshold`` raises
-    ``AssertionError`` when the mean return is at or below it (SB3's behaviour).
+    ``(locals_, globals_)`` where ``locals_`` holds ``model, env, i, reward, done, info,
+    observations, episode_counts, current_rewards, current_lengths``. An env without a
+    ``Monitor`` (or ``VecMonitor``) gets SB3's warning unless ``warn=False``.
+    ``reward_threshold`` raises ``AssertionError`` when the mean return is at or below it
+    (SB3's behaviour).
     """
     if n_eval_episodes <= 0:
         raise ValueError(f"n_eval_episodes must be positive, got {n_eval_episodes}")
-    if isinstance(env, Env):
-        rewards, lengths = _evaluate_single(
-            model, env, n_eval_episodes, deterministic, render, callback
-        )
-    elif hasattr(env, "step_async") and hasattr(env, "num_envs"):
-        rewards, lengths = _evaluate_vec(
-            model, env, n_eval_episodes, deterministic, render, callback, warn
-        )
-    else:
+    single = isinstance(env, Env)
+    if not single and not (hasattr(env, "step_async") and hasattr(env, "num_envs")):
         raise TypeError(f"evaluate_policy needs an Env or a VecEnv, got {type(env).__name__}")
+    monitored = _has_monitor(env) if single else _vec_monitored(env)
+    if not monitored and warn:  # SB3 warns for a single env too (it wraps it in a VecEnv)
+        warnings.warn(
+            "Evaluation environment is not wrapped with a ``Monitor`` wrapper. This may result in "
+            "reporting modified episode lengths and rewards, if other wrappers happen to modify "
+            "these. Consider wrapping environment first with ``Monitor`` wrapper.",
+            UserWarning,
+            stacklevel=2,
+        )
+    run = _evaluate_single if single else _evaluate_vec
+    rewards, lengths = run(model, env, n_eval_episodes, deterministic, render, callback, monitored)
     mean_reward, std_reward = float(np.mean(rewards)), float(np.std(rewards))
     if reward_threshold is not None:
         assert mean_reward > reward_threshold, (
@@ -85,8 +91,8 @@ def _evaluate_single(
     deterministic: bool,
     render: bool,
     callback: EvalCallbackFn | None,
+    monitored: bool,
 ) -> tuple[list[float], list[int]]:
-    monitored = _has_monitor(env)
     rewards: list[float] = []
     lengths: list[int] = []
     obs, _ = env.reset()
@@ -102,6 +108,8 @@ def _evaluate_single(
         if callback is not None:
             callback(
                 {
+                    "model": model,  # SB3 passes its locals(), which user callbacks read
+                    "env": env,
                     "i": 0,
                     "reward": reward,
                     "done": done,
@@ -134,18 +142,9 @@ def _evaluate_vec(
     deterministic: bool,
     render: bool,
     callback: EvalCallbackFn | None,
-    warn: bool,
+    monitored: bool,
 ) -> tuple[list[float], list[int]]:
     n_envs = env.num_envs
-    monitored = _vec_monitored(env)
-    if not monitored and warn:
-        warnings.warn(
-            "Evaluation environment is not wrapped with a ``Monitor`` wrapper. This may result in "
-            "reporting modified episode lengths and rewards, if other wrappers happen to modify "
-            "these. Consider wrapping environment first with ``Monitor`` wrapper.",
-            UserWarning,
-            stacklevel=3,
-        )
     # Spread the episodes over the envs evenly so no env's short episodes dominate (SB3).
     targets = np.array([(n + i) // n_envs for i in range(n_envs)], dtype=int)
     counts = np.zeros(n_envs, dtype=int)
@@ -169,6 +168,8 @@ def _evaluate_vec(
             if callback is not None:
                 callback(
                     {
+                        "model": model,
+                        "env": env,
                         "i": i,
                         "reward": step_rewards[i],
                         "done": dones[i],

@@ -8,7 +8,8 @@ A model file or a run folder is data that someone else may have written. Its val
   writes (``tensorboard_log``), the device, the thread count or ``_init_setup_model``; numbers
   of the right type inside ranges that bound what they allocate (a 10^12-row replay buffer is
   refused before anything is allocated); schedules of known shapes; ``policy_kwargs`` with the
-  keys the policies take and bounded network sizes.
+  keys the policies take, bounded layer widths and depths, and networks no larger than the
+  weights the file holds (:func:`check_net_arch_weights`).
 - :func:`check_run_hyperparams` (``palaestra eval``/``record``/``train --resume``): a run
   folder's ``hyperparams`` hold only constructor hyperparameters, and the numbers among them
   pass the same ranges.
@@ -37,6 +38,7 @@ __all__ = [
     "MAX_N_ENVS",
     "MAX_N_STEPS",
     "check_model_file",
+    "check_net_arch_weights",
     "check_run_hyperparams",
     "declare_rules",
 ]
@@ -49,7 +51,9 @@ MAX_BATCH_SIZE = 1_000_000
 MAX_N_ENVS = 65_536
 MAX_NET_WIDTH = 65_536  # units of one layer
 MAX_NET_DEPTH = 64  # hidden layers
-MAX_NET_PARAMETERS = 100_000_000  # weights between the hidden layers: 400 MB of float32
+# weights between the hidden layers of a run folder's networks (400 MB of float32); a model
+# file is bounded by the weights it holds instead (check_net_arch_weights)
+MAX_NET_PARAMETERS = 100_000_000
 MAX_STEPS = 10**15  # anything counted in env steps
 MAX_TABLE = 100_000  # points of a tabulated schedule
 
@@ -146,16 +150,56 @@ def _layers(value: Any) -> str | None:
         return expected
     if any(_integer(1, MAX_NET_WIDTH)(w) is not None for w in value):
         return expected
-    if sum(a * b for a, b in itertools.pairwise(value)) > MAX_NET_PARAMETERS:
-        return f"layers with at most {MAX_NET_PARAMETERS} weights between them"
     return None
 
 
-def _net_arch(value: Any) -> str | None:
+def _weights_between(layers: Any) -> int:
+    """The weights between a list of hidden layers (0 for anything else)."""
+    if not isinstance(layers, list) or not all(isinstance(w, int) for w in layers):
+        return 0
+    return sum(a * b for a, b in itertools.pairwise(layers))
+
+
+def _arch_weights(net_arch: Any) -> int:
+    """The weights between hidden layers ``net_arch`` asks for: a lower bound on the
+    parameters of the networks built from it (each is built at least once)."""
+    if isinstance(net_arch, dict):
+        return sum(_weights_between(layers) for layers in net_arch.values())
+    return _weights_between(net_arch)
+
+
+def _capped_layers(value: Any) -> str | None:
+    """``_layers``, and at most MAX_NET_PARAMETERS weights between them (run folders, whose
+    networks are built from these values with no weights to bound them)."""
+    problem = _layers(value)
+    if problem is None and _weights_between(value) > MAX_NET_PARAMETERS:
+        return f"layers with at most {MAX_NET_PARAMETERS} weights between them"
+    return problem
+
+
+def _net_arch(value: Any, layers: Check = _layers) -> str | None:
     """A list of widths, or ``{"pi": [...], "vf": [...]}`` (PPO's separate networks)."""
     if isinstance(value, dict):
-        return _mapping({"pi": _layers, "vf": _layers})(value)
-    return _layers(value)
+        return _mapping({"pi": layers, "vf": layers})(value)
+    return layers(value)
+
+
+def check_net_arch_weights(policy_kwargs: Any, declared: Mapping[str, Any], source: str) -> None:
+    """``ModelFileError`` unless a model file's ``policy/`` arrays (``model_io.ArraySpec``s,
+    each already checked against the bytes its member holds) declare at least the weights its
+    ``net_arch`` makes the model allocate: the networks are built before their weights are
+    read, so a small file must not ask for a large one. The bound is the file's own size, not
+    a fixed count: whatever ``save`` writes, ``load`` reads."""
+    net_arch = policy_kwargs.get("net_arch") if isinstance(policy_kwargs, dict) else None
+    needed = _arch_weights(net_arch)
+    held = sum(
+        math.prod(spec.shape) for name, spec in declared.items() if name.startswith("policy/")
+    )
+    if needed > held:
+        raise ModelFileError(
+            f"{source}: policy_kwargs net_arch={_short(net_arch)} needs at least {needed} "
+            f"weights, but the file's parameters hold {held}"
+        )
 
 
 # -- the rules ---------------------------------------------------------------------------------
@@ -395,7 +439,8 @@ def check_run_hyperparams(algo: str, hyperparams: Any, allowed: set[str], source
         checks.append(("policy_kwargs", policy_kwargs, _mapping_of_any))
     elif policy_kwargs is not None:
         net_arch = policy_kwargs.get("net_arch")
-        checks.append(("policy_kwargs.net_arch", net_arch, _optional(_net_arch)))
+        rule = _optional(lambda v: _net_arch(v, _capped_layers))
+        checks.append(("policy_kwargs.net_arch", net_arch, rule))
     for key, value, rule in checks:
         problem = rule(value)
         if problem is not None:

@@ -5,10 +5,17 @@ arbitrary code. Here the manifest is plain JSON, arrays are plain ``.npy`` (neve
 classes named in the manifest (``activation_fn`` …) resolve only inside ``torch.nn``,
 ``torch.optim`` and ``palaestra.algos`` (anything else must come through ``custom_objects``).
 Loading is bounded (``utils.bounded_zip``): every array's dtype, shape and size is checked
-against its member, against ``max_bytes`` for the whole file and against what the caller
-expects (``expect``, or ``read_manifest`` then ``read_arrays``) before anything is allocated.
-Bad files raise ``ModelFileError`` naming the member and what is wrong. Files are written
-atomically.
+against its member and against what the caller expects (``expect``, or ``read_manifest`` then
+``read_arrays``) before anything is allocated. A stored (uncompressed) member holds its bytes on
+disk, so a file can only make the reader allocate what it really contains; only the deflated
+members, which a small file can inflate 1032-fold, count against ``max_bytes``. Model files are
+written stored (as SB3's are, and for the same reason: deflating gigabytes of float weights
+costs minutes and saves ~7%), so whatever ``save`` writes, ``load`` reads, at any size; replay
+buffers and env states, which compress well, are deflated. Arrays stream one at a time both ways
+(``write_archive`` takes torch tensors and copies each to the host only as it is written;
+``read_arrays``' ``sink`` reads an array straight into its destination, a model's parameter),
+so neither side holds a second copy of the file in memory. Bad files raise ``ModelFileError``
+naming the member and what is wrong. Files are written atomically.
 
 Layout::
 
@@ -27,7 +34,7 @@ import operator
 import os
 import zipfile
 import zlib
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, NamedTuple
@@ -54,6 +61,7 @@ __all__ = [
     "ArraySpec",
     "Manifest",
     "ModelFileError",
+    "Sink",
     "decode_classes",
     "encode_classes",
     "optimizer_from_arrays",
@@ -70,6 +78,7 @@ _MAX_MANIFEST = 64 << 20
 _DTYPES = {"<f4", "<f8", "<f2", "|u1", "|i1", "<i2", "<u2", "<i4", "<u4", "<i8", "<u8", "|b1"}
 
 PathLike = str | os.PathLike[str] | IO[bytes]
+_CHUNK = 16 << 20  # bytes handed to the zip writer at a time (a view, never a copy)
 
 
 class ArraySpec(NamedTuple):
@@ -86,6 +95,11 @@ class ArraySpec(NamedTuple):
 # ``expect(meta, declared)``: a caller's check of the declared arrays before any is read; it
 # raises ModelFileError (naming the array and what it expected) for one it does not want.
 Expect = Callable[[dict[str, Any], dict[str, ArraySpec]], None]
+# ``sink(name, spec, read)``: a caller's destination for some arrays as they are read, one at a
+# time. ``read(out)`` reads the array (into ``out``, a C-contiguous array of its dtype and shape,
+# when given, else into a new one) and returns it; the sink returns True when it took the array
+# (it is then left out of ``read_arrays``' result) and False to leave it there unread.
+Sink = Callable[[str, ArraySpec, Callable[[np.ndarray | None], np.ndarray]], bool]
 
 
 @dataclass(frozen=True)
@@ -113,38 +127,78 @@ def resolve_path(path: PathLike, for_write: bool) -> PathLike:
 
 
 def write_archive(
-    path: PathLike, kind: str, meta: dict[str, Any], arrays: dict[str, np.ndarray]
+    path: PathLike,
+    kind: str,
+    meta: dict[str, Any],
+    arrays: Mapping[str, np.ndarray | torch.Tensor],
+    *,
+    compress: bool = True,
 ) -> None:
-    """Write ``meta`` (JSON-able) and named numeric arrays as one archive.
+    """Write ``meta`` (JSON-able) and named numeric arrays (numpy or torch) as one archive.
 
-    A path is written atomically (``utils.atomic_write``): a crash or ``kill -9`` mid-save
-    leaves the previous file whole. A file object is written directly.
+    Arrays are written one at a time: a tensor is copied to the host only as it is written,
+    and a host array is handed to the zip writer as views of its own buffer. ``compress=False``
+    stores them uncompressed (model files: fast, and loadable at any size, see the module
+    docstring). A path is written atomically (``utils.atomic_write``): a crash or ``kill -9``
+    mid-save leaves the previous file whole. A file object is written directly.
     """
     for name, array in arrays.items():
-        if np.asarray(array).dtype.str not in _DTYPES:
-            raise TypeError(f"cannot store array {name!r} of dtype {np.asarray(array).dtype}")
+        if _dtype_str(array) not in _DTYPES:
+            dtype = array.dtype if isinstance(array, torch.Tensor) else np.asarray(array).dtype
+            raise TypeError(f"cannot store array {name!r} of dtype {dtype}")
     target = resolve_path(path, for_write=True)
     if not isinstance(target, (str, os.PathLike)):
-        _write_zip(target, kind, meta, arrays)
+        _write_zip(target, kind, meta, arrays, compress)
         return
     Path(target).parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(target, "wb") as file:
-        _write_zip(file, kind, meta, arrays)
+        _write_zip(file, kind, meta, arrays, compress)
+
+
+def _dtype_str(array: Any) -> str:
+    """The numpy ``dtype.str`` an array or tensor is stored as ('' if numpy has none)."""
+    if isinstance(array, torch.Tensor):
+        try:
+            return torch.empty(0, dtype=array.dtype).numpy().dtype.str
+        except TypeError:  # bfloat16 and other types numpy lacks
+            return ""
+    return np.asarray(array).dtype.str
+
+
+def _host(array: np.ndarray | torch.Tensor) -> np.ndarray:
+    """A C-ordered host array: a view where the data already is one, else one copy."""
+    if isinstance(array, torch.Tensor):
+        array = array.detach().cpu().numpy()
+    return np.asarray(array, order="C")  # (ascontiguousarray makes 0-d 1-d)
+
+
+def _write_npy(out: IO[bytes], array: np.ndarray) -> None:
+    """``np.save``'s bytes, without its 16 MiB ``tobytes`` copies: the header, then the
+    array's own buffer in slices."""
+    np.lib.format.write_array_header_1_0(out, np.lib.format.header_data_from_array_1_0(array))
+    data = array.reshape(-1).view(np.uint8).data  # C-contiguous: a view of its buffer
+    for start in range(0, len(data), _CHUNK):
+        out.write(data[start : start + _CHUNK])
 
 
 def _write_zip(
-    file: IO[bytes], kind: str, meta: dict[str, Any], arrays: dict[str, np.ndarray]
+    file: IO[bytes],
+    kind: str,
+    meta: dict[str, Any],
+    arrays: Mapping[str, np.ndarray | torch.Tensor],
+    compress: bool,
 ) -> None:
     entries: dict[str, dict[str, Any]] = {}
-    with zipfile.ZipFile(file, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for i, (name, array) in enumerate(arrays.items()):
-            array = np.asarray(array, order="C")  # (ascontiguousarray makes 0-d 1-d)
+    method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
+    with zipfile.ZipFile(file, "w", compression=method) as zf:
+        for i, (name, value) in enumerate(arrays.items()):
+            array = _host(value)
             member = f"arrays/{i:05d}.npy"
-            # Streamed into the zip (no second copy of a large buffer in memory).
             # zip64 well before 2 GiB: incompressible data deflates to slightly more bytes.
             with zf.open(member, "w", force_zip64=array.nbytes > 1 << 30) as out:
-                np.save(out, array, allow_pickle=False)
+                _write_npy(out, array)
             entries[name] = {"file": member, "dtype": array.dtype.str, "shape": list(array.shape)}
+            del array  # a device tensor's host copy goes before the next one is made
         manifest = {
             "format": FORMAT,
             "kind": kind,
@@ -152,7 +206,7 @@ def _write_zip(
             "meta": meta,
             "arrays": entries,
         }
-        zf.writestr(MANIFEST, json.dumps(manifest))
+        zf.writestr(MANIFEST, json.dumps(manifest), compress_type=zipfile.ZIP_DEFLATED)
 
 
 def read_archive(
@@ -181,15 +235,18 @@ def read_manifest(path: PathLike, kind: str, *, max_bytes: int = MAX_BYTES) -> M
         return _manifest(zf, kind, source, name, max_bytes)
 
 
-def read_arrays(manifest: Manifest, expect: Expect | None = None) -> dict[str, np.ndarray]:
-    """The arrays ``manifest`` declares, after ``expect(meta, declared)`` accepted them; the
-    file must be the one the manifest came from."""
+def read_arrays(
+    manifest: Manifest, expect: Expect | None = None, sink: Sink | None = None
+) -> dict[str, np.ndarray]:
+    """The arrays ``manifest`` declares, after ``expect(meta, declared)`` accepted them, less
+    those ``sink`` took as they were read (see ``Sink``); the file must be the one the
+    manifest came from."""
     if expect is not None:
         expect(manifest.meta, manifest.declared)
     with _opened(manifest.source, manifest.name, "") as zf:
         if manifest.stamp is not None and _stamp(manifest.source) != manifest.stamp:
             raise ModelFileError(f"{manifest.name} changed while it was being loaded")
-        return _arrays(zf, manifest)
+        return _arrays(zf, manifest, sink)
 
 
 def _source(path: PathLike) -> tuple[PathLike, str]:
@@ -261,10 +318,15 @@ def _manifest(
         files[key], declared[key] = _entry(key, entry, members, name)
     if len(set(files.values())) != len(files):
         raise ModelFileError(f"{name}: two arrays name the same member")
-    total = sum(spec.nbytes for spec in declared.values())
+    # Stored members hold their bytes on disk (check_members): only what deflate inflates
+    # is bounded by max_bytes.
+    stored = zipfile.ZIP_STORED
+    total = sum(
+        spec.nbytes for key, spec in declared.items() if members[files[key]].compress_type != stored
+    )
     if total > max_bytes:
         raise ModelFileError(
-            f"{name}: its arrays declare {total} bytes in all, more than the limit "
+            f"{name}: its deflated arrays declare {total} bytes in all, more than the limit "
             f"max_bytes={max_bytes} (pass a larger max_bytes to read a file this large)"
         )
     return Manifest(meta, declared, files, source, name, _stamp(source))
@@ -294,15 +356,26 @@ def _entry(
     return file, spec
 
 
-def _arrays(zf: zipfile.ZipFile, manifest: Manifest) -> dict[str, np.ndarray]:
-    """Each declared array, streamed into a buffer of exactly its declared size."""
+def _arrays(
+    zf: zipfile.ZipFile, manifest: Manifest, sink: Sink | None = None
+) -> dict[str, np.ndarray]:
+    """Each declared array, streamed into a buffer of exactly its declared size (the sink's,
+    or a new one)."""
     members = check_members(zf, manifest.name)
     arrays = {}
     for key, spec in manifest.declared.items():
         info = members.get(manifest.files[key])
         if info is None:
             raise ModelFileError(f"{manifest.name}: array {short(key, 80)!r} is missing")
-        arrays[key] = read_npy(zf, info, manifest.name, spec.nbytes, {spec.dtype.str}, spec.shape)
+
+        def read(
+            out: np.ndarray | None, info: zipfile.ZipInfo = info, spec: ArraySpec = spec
+        ) -> np.ndarray:
+            dtypes = {spec.dtype.str}
+            return read_npy(zf, info, manifest.name, spec.nbytes, dtypes, spec.shape, out=out)
+
+        if sink is None or not sink(key, spec, read):
+            arrays[key] = read(None)
     return arrays
 
 
@@ -364,15 +437,16 @@ def decode_classes(value: Any, custom: dict[str, Any]) -> Any:
 # -- optimizer state --------------------------------------------------------------------------
 def optimizer_to_arrays(
     optimizer: torch.optim.Optimizer, prefix: str
-) -> tuple[Any, dict[str, np.ndarray]]:
-    """Split ``optimizer.state_dict()`` into JSON (param groups, scalars) and arrays."""
+) -> tuple[Any, dict[str, torch.Tensor]]:
+    """Split ``optimizer.state_dict()`` into JSON (param groups, scalars) and tensors (left
+    where they are: ``write_archive`` copies each to the host as it writes it)."""
     state = optimizer.state_dict()
-    arrays: dict[str, np.ndarray] = {}
+    arrays: dict[str, torch.Tensor] = {}
     scalars: dict[str, dict[str, Any]] = {}
     for idx, per_param in state["state"].items():
         for key, val in per_param.items():
             if isinstance(val, torch.Tensor):
-                arrays[f"{prefix}/{idx}/{key}"] = val.detach().cpu().numpy()
+                arrays[f"{prefix}/{idx}/{key}"] = val.detach()
             else:
                 scalars.setdefault(str(idx), {})[key] = val
     groups = [encode_classes({k: v for k, v in g.items()}) for g in state["param_groups"]]
@@ -387,7 +461,8 @@ def optimizer_from_arrays(
     for name, array in arrays.items():
         if name.startswith(prefix + "/"):
             idx, key = name[len(prefix) + 1 :].split("/", 1)
-            per_param.setdefault(int(idx), {})[key] = torch.from_numpy(array.copy())
+            # read_npy's arrays are fresh and writable: shared, not copied
+            per_param.setdefault(int(idx), {})[key] = torch.from_numpy(array)
     for idx, values in meta["scalars"].items():
         per_param.setdefault(int(idx), {}).update(values)
     groups = []

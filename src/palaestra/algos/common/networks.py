@@ -103,15 +103,22 @@ def extractor_space(space: spaces.Space[Any]) -> spaces.Space[Any]:
 
 
 def make_extractor(
-    extractor_class: Any, space: spaces.Space[Any], kwargs: dict[str, Any] | None = None
+    extractor_class: Any,
+    space: spaces.Space[Any],
+    kwargs: dict[str, Any] | None = None,
+    normalize_images: bool = True,
 ) -> BaseFeaturesExtractor:
     """``extractor_class(extractor_space(space), **kwargs)``, checked: a ``TypeError`` naming the
     value unless it is a ``torch.nn.Module`` class whose instances have a positive integer
     ``features_dim`` (a ``BaseFeaturesExtractor`` or one shaped like it), which would
-    otherwise fail later, obscurely, inside a network."""
+    otherwise fail later, obscurely, inside a network. With ``normalize_images=False`` the
+    image extractors take images already normalised (``normalized_image=True``, as SB3's
+    policies pass it): float images from ``VecNormalize``."""
     expected = "a BaseFeaturesExtractor subclass (palaestra.algos.networks)"
     if not (isinstance(extractor_class, type) and issubclass(extractor_class, nn.Module)):
         raise TypeError(f"features_extractor_class must be {expected}, got {extractor_class!r}")
+    if not normalize_images and issubclass(extractor_class, (NatureCNN, CombinedExtractor)):
+        kwargs = {**(kwargs or {}), "normalized_image": True}
     extractor: Any = extractor_class(extractor_space(space), **(kwargs or {}))
     dim = getattr(extractor, "features_dim", None)
     if isinstance(dim, bool) or not isinstance(dim, int) or dim < 1:
@@ -178,12 +185,24 @@ def _chw(space: spaces.Box) -> tuple[int, int, int]:
 class NatureCNN(BaseFeaturesExtractor):
     """Three conv layers and a linear layer, as in the DQN Nature paper (Mnih et al. 2015)."""
 
-    def __init__(self, observation_space: spaces.Space[Any], features_dim: int = 512) -> None:
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        features_dim: int = 512,
+        normalized_image: bool = False,
+    ) -> None:
         super().__init__(observation_space, features_dim)
         if not isinstance(observation_space, spaces.Box) or len(observation_space.shape) != 3:
             raise ValueError(
                 f"NatureCNN needs an image observation space (rank-3 Box), got "
                 f"{observation_space}; use 'MlpPolicy' for vector observations"
+            )
+        if not normalized_image and not is_image_space(observation_space):
+            # SB3 refuses these too (an AssertionError): they would reach the network unscaled
+            raise ValueError(
+                f"NatureCNN with normalize_images=True needs uint8 images with bounds 0..255, "
+                f"got {observation_space}; for images already normalised (VecNormalize, "
+                "float images) pass policy_kwargs=dict(normalize_images=False)"
             )
         c, h, w = _chw(observation_space)
         self.cnn = nn.Sequential(
@@ -206,7 +225,12 @@ class NatureCNN(BaseFeaturesExtractor):
 class CombinedExtractor(BaseFeaturesExtractor):
     """Dict observations: NatureCNN(``cnn_output_dim``) per image key, flatten the others."""
 
-    def __init__(self, observation_space: spaces.Space[Any], cnn_output_dim: int = 256) -> None:
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        cnn_output_dim: int = 256,
+        normalized_image: bool = False,
+    ) -> None:
         if not isinstance(observation_space, spaces.Dict):
             raise ValueError(
                 f"MultiInputPolicy needs a Dict observation space, got {observation_space}"
@@ -214,8 +238,10 @@ class CombinedExtractor(BaseFeaturesExtractor):
         extractors: dict[str, nn.Module] = {}
         total = 0
         for key, sub in observation_space.spaces.items():
-            if is_image_space(sub):
-                extractors[key] = NatureCNN(sub, features_dim=cnn_output_dim)
+            # normalised images: any rank-3 Box (SB3's is_image_space(normalized_image=True))
+            rank3 = isinstance(sub, spaces.Box) and len(sub.shape) == 3
+            if is_image_space(sub) or (normalized_image and rank3):
+                extractors[key] = NatureCNN(sub, cnn_output_dim, normalized_image)
                 total += cnn_output_dim
             else:
                 extractors[key] = nn.Flatten()

@@ -37,6 +37,9 @@ def train_freq_pair(value: Any) -> tuple[int, str]:
         not isinstance(value, (tuple, list))
         or len(value) != 2
         or value[1] not in ("step", "episode")
+        # an int, as SB3 requires: ("1", "episode") is a ValueError there too
+        or not isinstance(value[0], (int, np.integer))
+        or isinstance(value[0], bool)
         or int(value[0]) < 1
     ):
         raise ValueError(
@@ -301,3 +304,5 @@ class OffPolicyAlgorithm(BaseAlgorithm):
             raise model_io.ModelFileError(
                 f"{path}: replay buffer does not fit this model ({exc})"
             ) from exc
+        # samples go where the model is now (SB3 GH#1561: model.device may have changed)
+        self.replay_buffer.device = self.device

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Any
 
 import numpy as np
@@ -78,6 +79,23 @@ def _split_arch(net_arch: Any, features_extractor_class: type) -> tuple[list[int
     )
 
 
+def _sb3_net_arch(net_arch: Any, features_extractor_class: type) -> Any:
+    """``net_arch`` as SB3's ActorCriticPolicy keeps it: None becomes the default (so a model
+    saved with ``net_arch=None`` loads with it), and the pre-1.8 ``[dict(pi=..., vf=...)]``
+    becomes the dict, with SB3's warning."""
+    if isinstance(net_arch, list) and net_arch and isinstance(net_arch[0], dict):
+        warnings.warn(
+            "As shared layers in the mlp_extractor are removed since SB3 v1.8.0, you should "
+            "now pass directly a dictionary and not a list (net_arch=dict(pi=..., vf=...) "
+            "instead of net_arch=[dict(pi=..., vf=...)])",
+            stacklevel=4,
+        )
+        net_arch = net_arch[0]
+    if net_arch is None:
+        return [] if features_extractor_class is NatureCNN else {"pi": [64, 64], "vf": [64, 64]}
+    return net_arch
+
+
 def _ortho_init(module: nn.Module, gain: float) -> None:
     """Orthogonal weights, zero biases (OpenAI baselines' PPO init, kept by SB3)."""
     for m in module.modules():
@@ -107,19 +125,18 @@ class ActorCritic(BasePolicy):
         super().__init__()
         self.observation_space, self.action_space = observation_space, action_space
         self.normalize_images, self.ortho_init = normalize_images, ortho_init
-        self.net_arch, self.activation_fn = net_arch, activation_fn
+        self.net_arch = _sb3_net_arch(net_arch, features_extractor_class)
+        self.activation_fn = activation_fn
         # Kept under their argument names: ``save`` rebuilds the policy from them.
         self.features_extractor_class = features_extractor_class
         self.features_extractor_kwargs = dict(features_extractor_kwargs or {})
         self.log_std_init, self.share_features_extractor = log_std_init, share_features_extractor
-        kwargs = features_extractor_kwargs
-        self.features_extractor = make_extractor(
-            features_extractor_class, observation_space, kwargs
-        )
+        kwargs, cls = features_extractor_kwargs, features_extractor_class
+        self.features_extractor = make_extractor(cls, observation_space, kwargs, normalize_images)
         self.vf_features_extractor = (
             None
             if share_features_extractor
-            else make_extractor(features_extractor_class, observation_space, kwargs)
+            else make_extractor(cls, observation_space, kwargs, normalize_images)
         )
         self.features_dim = self.features_extractor.features_dim
         self._features_extractor_class = features_extractor_class

@@ -11,6 +11,7 @@ with the model, see :func:`bind_env_token`).
 
 from __future__ import annotations
 
+import functools
 import math
 import uuid
 import weakref
@@ -19,11 +20,12 @@ from typing import Any
 import numpy as np
 import torch
 
-from palaestra.algos.common.hyperparams import check_model_file
+from palaestra.algos.common.hyperparams import check_model_file, check_net_arch_weights
 from palaestra.algos.common.model_io import (
     ArraySpec,
     Expect,
     ModelFileError,
+    Sink,
     decode_classes,
     encode_classes,
     optimizer_from_arrays,
@@ -35,6 +37,8 @@ from palaestra.algos.common.model_io import (
 )
 from palaestra.algos.common.schedules import schedule_from_json, schedule_to_json
 from palaestra.algos.common.spaces_util import space_from_json, space_to_json
+from palaestra.algos.common.utils import get_system_info
+from palaestra.utils.bounded_zip import short, summary
 
 __all__ = [
     "bind_env_token",
@@ -152,10 +156,12 @@ def save_model(model: Any, path: Any, exclude: Any = None, include: Any = None) 
         },
         "counters": {name: getattr(model, name) for name in (*COUNTERS, *model._extra_counters)},
         "rng": model._rng.bit_generator.state,
+        "system_info": dict(_system_info()),  # for load(print_system_info=True)
     }
-    arrays = {
-        f"policy/{k}": v.detach().cpu().numpy()
-        for k, v in model._policy_module().state_dict().items()
+    # tensors: write_archive streams each to the file (a device tensor reaches the host one at
+    # a time), so saving never holds a second copy of the model
+    arrays: dict[str, Any] = {
+        f"policy/{k}": v for k, v in model._policy_module().state_dict().items()
     }
     for key, (_, optimizer) in model._optimizers().items():
         meta[key], opt_arrays = optimizer_to_arrays(optimizer, key)
@@ -163,9 +169,16 @@ def save_model(model: Any, path: Any, exclude: Any = None, include: Any = None) 
     meta["run"], run_arrays = _run_state(model)
     arrays.update(run_arrays)
     _drop(meta, arrays, dropped)
-    write_archive(path, "model", meta, arrays)
+    write_archive(path, "model", meta, arrays, compress=False)
     if meta["run"]["env_token"] is not None:
         bind_env_token(model.env, meta["run"]["env_token"])
+
+
+@functools.cache
+def _system_info() -> dict[str, str]:
+    """This process's versions, looked up once (package metadata lookups take milliseconds:
+    a small model saves in about as long)."""
+    return get_system_info(print_info=False)[0]
 
 
 def _run_state(model: Any) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
@@ -233,16 +246,31 @@ def _load_run_state(model: Any, meta: Any, arrays: dict[str, np.ndarray], source
 
 
 def load_model(
-    cls: Any, path: Any, env: Any, device: Any, custom: dict[str, Any], kwargs: dict[str, Any]
+    cls: Any,
+    path: Any,
+    env: Any,
+    device: Any,
+    custom: dict[str, Any],
+    kwargs: dict[str, Any],
+    print_system_info: bool = False,
 ) -> Any:
     # The arrays are read only once the model is built from the metadata, so that a file
     # declaring parameters this model does not have is refused before they are allocated.
+    if print_system_info:
+        print("== CURRENT SYSTEM INFO ==")
+        get_system_info()
     manifest = read_manifest(path, "model")
     meta = manifest.meta
     algo = meta.get("algo")
     if algo != cls.__name__:
         raise ModelFileError(f"{path} holds a {algo} model; load it with {algo}.load()")
+    if print_system_info:
+        _print_saved_system_info(meta)
+    _convert_old_net_arch(meta)
     check_model_file(algo, meta, str(path))  # types, ranges, allowed keys: before any use
+    # A network is built before its weights are read: the file must hold what it declares
+    # (a stored member holds its bytes on disk, see model_io), not a fixed weight count.
+    check_net_arch_weights(meta.get("policy_kwargs", {}), manifest.declared, str(path))
     if "observation_space" not in meta or "action_space" not in meta:
         # saved with exclude=["observation_space"] or ["action_space"]: SB3's error and words
         raise KeyError(
@@ -267,6 +295,9 @@ def load_model(
         raise ModelFileError(f"{path}: malformed model metadata ({exc!r})") from exc
     if "policy_kwargs" in custom:
         policy_kwargs = custom["policy_kwargs"]
+    kwargs = dict(kwargs)
+    if "policy_kwargs" in kwargs:
+        _check_same_policy_kwargs(kwargs.pop("policy_kwargs"), policy_kwargs)
     hyper.update({k: v for k, v in custom.items() if k in hyper})
     hyper.update(kwargs)
     model = cls(
@@ -282,8 +313,8 @@ def load_model(
         _check_spaces(model, venv)
         model.env, model.n_envs = venv, venv.num_envs
     model._setup_model()
-    arrays = read_arrays(manifest, expect=_fits(model, exact_match=True, source=str(path)))
-    _load_policy(model, arrays, exact_match=True, source=str(path))
+    expect = _fits(model, exact_match=True, source=str(path))
+    arrays = read_arrays(manifest, expect=expect, sink=_into_policy(model))
     _load_optimizers(model, meta, arrays, str(path))
     for name, value in counters.items():
         if name in (*COUNTERS, *model._extra_counters):
@@ -295,6 +326,74 @@ def load_model(
         raise ModelFileError(f"{path}: malformed generator state") from exc
     _load_run_state(model, meta.get("run"), arrays, str(path))
     return model
+
+
+def _print_saved_system_info(meta: dict[str, Any]) -> None:
+    """SB3's ``== SAVED MODEL SYSTEM INFO ==`` block, from what ``save`` recorded (files
+    from before it did: the versions they name). Text from the file is shortened and never
+    formatted as anything but text."""
+    info = meta.get("system_info")
+    if not isinstance(info, dict):
+        info = {
+            "palaestra": meta.get("palaestra_version", "unknown"),
+            "PyTorch": meta.get("torch_version", "unknown"),
+        }
+    print("== SAVED MODEL SYSTEM INFO ==")
+    print("".join(f"- {short(key, 40)}: {short(value, 200)!s}\n" for key, value in info.items()))
+
+
+def _convert_old_net_arch(meta: dict[str, Any]) -> None:
+    """SB3's conversion of a pre-1.8 ``net_arch=[dict(pi=..., vf=...)]`` saved in a file to
+    ``dict(pi=..., vf=...)`` (its load does so too, silently)."""
+    kwargs = meta.get("policy_kwargs")
+    if not isinstance(kwargs, dict):
+        return
+    arch = kwargs.get("net_arch")
+    if isinstance(arch, list) and arch and isinstance(arch[0], dict):
+        kwargs["net_arch"] = arch[0]
+
+
+def _check_same_policy_kwargs(given: Any, stored: Any) -> None:
+    """SB3's ``load(path, policy_kwargs=...)``: accepted when it equals what the file holds
+    (the model is rebuilt from the file's), a ``ValueError`` otherwise. Compared as the file
+    keeps them, so ``(64, 64)`` equals the ``[64, 64]`` JSON gives back."""
+    try:
+        same = encode_classes(given) == encode_classes(stored)
+    except TypeError:  # a value JSON cannot hold: compare as it is
+        same = given == stored
+    if not same:
+        raise ValueError(
+            "The specified policy kwargs do not equal the stored policy kwargs."
+            f"Stored kwargs: {summary(stored)}, specified kwargs: {summary(given)}"
+        )
+
+
+def _into_policy(model: Any) -> Sink:
+    """A ``read_arrays`` sink that reads each ``policy/`` array straight into the model's
+    parameter or buffer (a CPU tensor of the file's dtype: no copy at all; otherwise one array
+    at a time through the host), so loading holds no second copy of the model."""
+    state = model._policy_module().state_dict()  # detached tensors sharing their storage
+
+    def sink(name: str, spec: ArraySpec, read: Any) -> bool:
+        target = state.get(name[len("policy/") :]) if name.startswith("policy/") else None
+        if target is None or tuple(target.shape) != spec.shape:
+            return False  # _fits refused what does not fit; anything else: the dict path
+        with torch.no_grad():
+            direct = target.device.type == "cpu" and target.is_contiguous()
+            if direct and _numpy_dtype(target) == spec.dtype:
+                read(target.numpy())
+            else:
+                target.copy_(torch.from_numpy(read(None)))
+        return True
+
+    return sink
+
+
+def _numpy_dtype(tensor: torch.Tensor) -> np.dtype | None:
+    try:
+        return torch.empty(0, dtype=tensor.dtype).numpy().dtype
+    except TypeError:
+        return None
 
 
 # Counters that are fractions (schedules' progress, epsilon); the others count steps.
@@ -334,6 +433,12 @@ def _fits(model: Any, exact_match: bool, source: str) -> Expect:
     }
 
     def expect(meta: dict[str, Any], declared: dict[str, ArraySpec]) -> None:
+        missing = sorted(set(params) - set(declared))
+        if exact_match and missing:  # what load_state_dict(strict=True) says, before reading
+            raise ModelFileError(
+                f"{source}: parameters do not fit this model (missing parameter "
+                f"{missing[0][len('policy/') :][:80]!r})"
+            )
         for name, spec in declared.items():
             if name.startswith("policy/"):
                 want = params.get(name)

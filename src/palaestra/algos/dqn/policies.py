@@ -41,7 +41,7 @@ class QNetwork(nn.Module):
         super().__init__()
         self.observation_space, self.normalize_images = observation_space, normalize_images
         self.features_extractor = make_extractor(
-            features_extractor_class, observation_space, features_extractor_kwargs
+            features_extractor_class, observation_space, features_extractor_kwargs, normalize_images
         )
         if net_arch is None:
             net_arch = [] if features_extractor_class is NatureCNN else [64, 64]

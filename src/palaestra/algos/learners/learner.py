@@ -471,6 +471,10 @@ def numpy_unsupported(nets: dict[str, Net], groups: dict[str, Group]) -> str | N
 
 
 BACKENDS = ("auto", "numpy", "torch")
+# "auto" leaves larger nets to torch: the numpy learner keeps its own flat copy of the
+# parameters (twice the model's memory, and a copy to make at every build and load), which
+# pays off only where torch's per-call overhead dominates, on small nets.
+AUTO_NUMPY_MAX_PARAMETERS = 1_000_000
 
 
 def build_learner(
@@ -493,6 +497,12 @@ def build_learner(
         return NumpyLearner(nets, groups, "asked for")
     if request == "torch":
         return TorchLearner(nets, groups, device, "asked for", joint)
+    if why_not is None:
+        count = sum(
+            p.numel() for net in nets.values() for m in net.modules or () for p in m.parameters()
+        )
+        if count > AUTO_NUMPY_MAX_PARAMETERS:
+            why_not = f"{count} parameters, more than {AUTO_NUMPY_MAX_PARAMETERS} for 'auto'"
     if why_not is None:
         optimizers = sorted({type(g.optimizer).__name__ for g in groups.values()})
         return NumpyLearner(nets, groups, f"small MLPs with {'/'.join(optimizers)} on the CPU")

@@ -114,7 +114,10 @@ class QRDQNPolicy(DQNPolicy):
         """A new quantile network with its own features extractor (none after NatureCNN's
         MLP layers unless ``net_arch`` says)."""
         extractor = networks.make_extractor(
-            self.features_extractor_class, self.observation_space, self.features_extractor_kwargs
+            self.features_extractor_class,
+            self.observation_space,
+            self.features_extractor_kwargs,
+            self.normalize_images,
         )
         net_arch = self.net_arch
         if net_arch is None:
