@@ -46,7 +46,11 @@ from palaestra.algos.common.policies import extractor_class
 from palaestra.algos.common.preprocessing import check_for_nested_spaces
 from palaestra.algos.common.schedules import Schedule
 from palaestra.algos.common.settings import Settings
-from palaestra.algos.common.spaces_util import is_image_space, is_vectorized_observation
+from palaestra.algos.common.spaces_util import (
+    is_image_space,
+    is_vectorized_observation,
+    refuse_reset_tuple,
+)
 from palaestra.algos.learners import Group, Learner, Net, build_learner
 from palaestra.core import Env, Wrapper
 from palaestra.wrappers.monitor import Monitor
@@ -548,16 +552,7 @@ class BaseAlgorithm:
         deterministic: bool = False,
     ) -> tuple[np.ndarray, Any]:
         """Actions for one observation or a batch ``[n_env, *obs_shape]`` (SB3's rules)."""
-        if (
-            isinstance(observation, tuple)
-            and len(observation) == 2
-            and isinstance(observation[1], dict)
-        ):
-            raise ValueError(
-                "You have passed a tuple to the predict() function instead of a Numpy array or a "
-                "Dict. You are probably mixing Gym API with SB3 VecEnv API: `obs, info = "
-                "env.reset()` (Gym) vs `obs = vec_env.reset()` (SB3 VecEnv)."
-            )
+        refuse_reset_tuple(observation)
         vectorized = is_vectorized_observation(observation, self.observation_space)
         if not vectorized:
             if isinstance(observation, dict):

@@ -34,6 +34,7 @@ from palaestra.algos.common.model_io import (
 from palaestra.algos.common.spaces_util import (
     is_image_space,
     is_vectorized_observation,
+    refuse_reset_tuple,
     space_from_json,
     space_to_json,
 )
@@ -156,16 +157,7 @@ class BasePolicy(nn.Module):
         ``BasePolicy.predict``: Box actions clipped, or mapped from [-1, 1] to the bounds
         for squashing policies); ``state`` is returned as given (no recurrent policies)."""
         self.set_training_mode(False)
-        if (
-            isinstance(observation, tuple)
-            and len(observation) == 2
-            and isinstance(observation[1], dict)
-        ):
-            raise ValueError(
-                "You have passed a tuple to the predict() function instead of a Numpy array or a "
-                "Dict. You are probably mixing Gym API with SB3 VecEnv API: `obs, info = "
-                "env.reset()` (Gym) vs `obs = vec_env.reset()` (SB3 VecEnv)."
-            )
+        refuse_reset_tuple(observation)
         obs_tensor, vectorized = self.obs_to_tensor(observation)
         with torch.no_grad():
             actions = self._predict(obs_tensor, deterministic=deterministic)

@@ -15,6 +15,7 @@ __all__ = [
     "is_image_space",
     "is_image_space_channels_first",
     "is_vectorized_observation",
+    "refuse_reset_tuple",
     "space_from_json",
     "space_to_json",
 ]
@@ -46,6 +47,18 @@ def allocate(space: spaces.Space[Any], lead: tuple[int, ...]) -> Any:
     raise UnsupportedSpace(
         f"palaestra.algos does not support {type(space).__name__} spaces: {space}"
     )
+
+
+def refuse_reset_tuple(observation: Any) -> None:
+    """SB3's ``ValueError`` for ``predict((obs, info))``: a Gym-style reset return handed to a
+    VecEnv-style call."""
+    pair = isinstance(observation, tuple) and len(observation) == 2
+    if pair and isinstance(observation[1], dict):
+        raise ValueError(
+            "You have passed a tuple to the predict() function instead of a Numpy array or a "
+            "Dict. You are probably mixing Gym API with SB3 VecEnv API: `obs, info = "
+            "env.reset()` (Gym) vs `obs = vec_env.reset()` (SB3 VecEnv)."
+        )
 
 
 def is_vectorized_observation(obs: Any, space: spaces.Space[Any]) -> bool:
