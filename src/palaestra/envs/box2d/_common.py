@@ -163,6 +163,7 @@ class ReplayCopies:
 
     def _record_step(self, action: Any) -> None:
         assert self._step_start is not None, "_start_step must run first"
+        kept: Any
         if isinstance(action, np.ndarray):
             kept = action.copy()
         elif isinstance(action, (int, float, np.generic)):
