@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import warnings
 from typing import Any, ClassVar
 
@@ -163,19 +164,29 @@ class DQN(OffPolicyAlgorithm):
         self.exploration_rate = self.exploration_schedule(self._progress_remaining)
         self.logger.record("rollout/exploration_rate", self.exploration_rate)
 
+    def _objective(self) -> Any:
+        """The loss and its VJP the updates run (DQN's Huber TD loss)."""
+        return DQNObjective(self.gamma)
+
+    def _fixed_batch(self, batch_size: int) -> dict[str, np.ndarray]:
+        """Arrays every minibatch adds for the objective (none for DQN)."""
+        return {}
+
     def train(self, gradient_steps: int, batch_size: int = 100) -> None:
-        """``gradient_steps`` Huber-loss updates on uniform replay minibatches."""
+        """``gradient_steps`` updates of ``_objective()`` on uniform replay minibatches."""
         assert self.replay_buffer is not None
         self._set_training_mode(True)
         self._update_learning_rate("q")
         start = int(self.action_space.start)
-        objective = DQNObjective(self.gamma)
+        objective = self._objective()
+        fixed = self._fixed_batch(batch_size)
+        clip = math.inf if self.max_grad_norm is None else self.max_grad_norm
         losses = []
         with self.learner.session():
             for _ in range(gradient_steps):
-                batch = self._sample_batch(batch_size)
+                batch = fixed | self._sample_batch(batch_size)
                 batch["actions"] = batch["actions"].reshape(batch_size).astype(np.int64) - start
-                metrics, _ = self.learner.update("q", objective, batch, self.max_grad_norm)
+                metrics, _ = self.learner.update("q", objective, batch, clip)
                 losses.append(metrics["loss"])
         self._n_updates += gradient_steps
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")

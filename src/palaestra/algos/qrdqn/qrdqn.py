@@ -3,7 +3,6 @@ with a distribution of returns per action, ``n_quantiles`` quantiles, instead of
 
 from __future__ import annotations
 
-import math
 from typing import Any, ClassVar, cast
 
 import numpy as np
@@ -102,22 +101,9 @@ class QRDQN(DQN):
         return values.argmax(axis=1) + int(self.action_space.start)
 
     # -- learning ------------------------------------------------------------------------------
-    def train(self, gradient_steps: int, batch_size: int = 100) -> None:
-        """``gradient_steps`` quantile Huber updates on uniform replay minibatches."""
-        self._set_training_mode(True)
-        assert self.replay_buffer is not None
-        self._update_learning_rate("q")
-        objective = QRDQNObjective(self.gamma)
-        clip = math.inf if self.max_grad_norm is None else self.max_grad_norm
+    def _objective(self) -> Any:
+        return QRDQNObjective(self.gamma)
+
+    def _fixed_batch(self, batch_size: int) -> dict[str, np.ndarray]:
         # The objective indexes and weighs with these (arrays, so they reach torch's device).
-        fixed = {"rows": np.arange(batch_size), "cum_prob": quantile_midpoints(self.n_quantiles)}
-        start = int(self.action_space.start)
-        losses = []
-        with self.learner.session():
-            for _ in range(gradient_steps):
-                batch = fixed | self._sample_batch(batch_size)
-                batch["actions"] = batch["actions"].reshape(batch_size).astype(np.int64) - start
-                losses.append(self.learner.update("q", objective, batch, clip)[0]["loss"])
-        self._n_updates += gradient_steps
-        self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
-        self.logger.record("train/loss", float(np.mean(losses)))
+        return {"rows": np.arange(batch_size), "cum_prob": quantile_midpoints(self.n_quantiles)}
