@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import stable_baselines3 as sb3
 import stable_baselines3.common.envs as sb3_envs
+import torch
 
 from palaestra.algos import A2C, PPO, envs
 from palaestra.algos.a2c import policies as a2c_policies
@@ -62,6 +63,17 @@ def test_a_given_extractor_wins_over_the_class_default() -> None:
     model = PPO(ppo_policies.CnnPolicy, env, n_steps=8, batch_size=8, policy_kwargs=kwargs)
     assert type(model.policy.features_extractor) is FlattenExtractor
     assert model.policy.net_arch == {"pi": [64, 64], "vf": [64, 64]}  # SB3's default after it
+
+
+def test_the_extractor_may_be_given_in_sb3s_position() -> None:
+    env = envs.FakeImageEnv(screen_height=36, screen_width=36)
+    spaces = (env.observation_space, env.action_space, lambda _: 1e-3)
+    # net_arch, activation_fn, ortho_init, use_sde, log_std_init, full_std, use_expln,
+    # squash_output, then features_extractor_class: SB3's order
+    positional = (None, torch.nn.Tanh, True, False, 0.0, True, False, False, FlattenExtractor)
+    policy = ActorCriticCnnPolicy(*spaces, *positional)
+    assert type(policy.features_extractor) is FlattenExtractor
+    assert type(ActorCriticCnnPolicy(*spaces, *positional[:3]).features_extractor) is NatureCNN
 
 
 def test_a_class_trains_saves_and_loads(tmp_path: object) -> None:

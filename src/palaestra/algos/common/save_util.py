@@ -177,7 +177,7 @@ class _AtomicFile(io.BufferedWriter):
             self._commit.__exit__(None, None, None)
 
     def _abort(self) -> None:
-        if not self.closed:
+        if "_commit" in vars(self) and not self.closed:  # (an __init__ that failed: nothing)
             super().close()
             with contextlib.suppress(RuntimeError):
                 self._commit.__exit__(RuntimeError, RuntimeError("aborted"), None)
