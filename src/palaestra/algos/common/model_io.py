@@ -380,9 +380,10 @@ def _arrays(
 
 
 # -- classes in policy_kwargs -----------------------------------------------------------------
-_ALLOWED = {
+_ALLOWED = {  # the first prefix a class's module has decides
     "torch.nn": nn.Module,
     "torch.optim": torch.optim.Optimizer,
+    "palaestra.algos.common.sb2_compat": torch.optim.Optimizer,  # RMSpropTFLike
     "palaestra.algos": nn.Module,
 }
 

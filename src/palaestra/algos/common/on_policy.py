@@ -9,14 +9,20 @@ in the same order (PPO's golden hashes did not change when this was taken out of
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
 from palaestra import spaces
 from palaestra.algos.common.base import BaseAlgorithm, round_up_steps
-from palaestra.algos.common.policies import ActorCritic, ActorCriticPolicy, extractor_class
+from palaestra.algos.common.policies import (
+    ActorCritic,
+    ActorCriticCnnPolicy,
+    ActorCriticPolicy,
+    MultiInputActorCriticPolicy,
+    extractor_class,
+)
 from palaestra.algos.common.rollout_store import RolloutStore
 from palaestra.algos.common.schedules import as_schedule
 from palaestra.algos.common.settings import Settings
@@ -38,6 +44,12 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         spaces.MultiBinary,
     )
     _policy_class_base = ActorCriticPolicy
+    # SB3's table: the class each name stands for (``PPO(CnnPolicy, env)`` with the class)
+    policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {
+        "MlpPolicy": ActorCriticPolicy,
+        "CnnPolicy": ActorCriticCnnPolicy,
+        "MultiInputPolicy": MultiInputActorCriticPolicy,
+    }
     # SB3's arguments for gSDE and custom rollout buffers: refused, or without effect here.
     _not_saved = BaseAlgorithm._not_saved | {
         "use_sde",
@@ -82,14 +94,15 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         kwargs = dict(self.policy_kwargs)
         self._optimizer_choice(kwargs)  # takes its keys out of the policy's
         kwargs.pop("backend", None)
-        kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
         policy: ActorCritic
         if isinstance(self.policy_name, type):  # an ActorCriticPolicy subclass (SB3's guide)
+            # its own default extractor (ActorCriticCnnPolicy's is NatureCNN), as in SB3
             policy_class: Any = self.policy_name
             policy = policy_class(
                 self.observation_space, self.action_space, self.lr_schedule, **kwargs
             )
         else:
+            kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
             policy = ActorCritic(self.observation_space, self.action_space, **kwargs)
         self._use_policy(policy.to(self.device))
         self._make_rollout_buffer()

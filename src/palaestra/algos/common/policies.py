@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import inspect
 import math
 import warnings
 from typing import Any
@@ -30,8 +31,10 @@ from palaestra.algos.learners.xp import torch_ops
 __all__ = [
     "POLICY_EXTRACTORS",
     "ActorCritic",
+    "ActorCriticCnnPolicy",
     "ActorCriticPolicy",
     "BasePolicy",
+    "MultiInputActorCriticPolicy",
     "extractor_class",
 ]
 
@@ -319,3 +322,34 @@ class ActorCriticPolicy(ActorCritic):
 
     def mlp_modules(self) -> tuple[list[nn.Module] | None, list[nn.Module] | None, str]:
         return None, None, f"the policy is a custom {type(self).__name__}"
+
+
+# Where ``features_extractor_class`` falls among ActorCriticPolicy's positional arguments.
+_EXTRACTOR_ARG = list(inspect.signature(ActorCriticPolicy.__init__).parameters).index(
+    "features_extractor_class"
+)
+
+
+def _extractor_default(args: tuple[Any, ...], kwargs: dict[str, Any], default: type) -> None:
+    """Give ``kwargs`` the class's default extractor unless the caller named one (by keyword
+    or positionally, in SB3's argument order)."""
+    if len(args) < _EXTRACTOR_ARG:  # (self is not in args)
+        kwargs.setdefault("features_extractor_class", default)
+
+
+class ActorCriticCnnPolicy(ActorCriticPolicy):
+    """SB3's ``ActorCriticCnnPolicy`` (PPO's and A2C's ``CnnPolicy`` class): an
+    ``ActorCriticPolicy`` whose features extractor is ``NatureCNN`` unless one is given."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        _extractor_default(args, kwargs, NatureCNN)
+        super().__init__(*args, **kwargs)
+
+
+class MultiInputActorCriticPolicy(ActorCriticPolicy):
+    """SB3's ``MultiInputActorCriticPolicy`` (``MultiInputPolicy`` class) for Dict
+    observations: its features extractor is ``CombinedExtractor`` unless one is given."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        _extractor_default(args, kwargs, CombinedExtractor)
+        super().__init__(*args, **kwargs)
