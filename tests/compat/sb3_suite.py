@@ -110,6 +110,7 @@ def run(tests: Path, files: list[str], junit: Path, hooked: bool, timeout: int) 
     env.setdefault("MPLBACKEND", "Agg")
     command = [
         sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--tb=line",
+        "--continue-on-collection-errors",
         f"--timeout={timeout}", f"--junitxml={junit}", "-o", "junit_family=xunit1",
         *(files or ["."]),
     ]  # fmt: skip
