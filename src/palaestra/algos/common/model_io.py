@@ -27,6 +27,7 @@ Layout::
 from __future__ import annotations
 
 import contextlib
+import functools
 import importlib
 import json
 import math
@@ -151,18 +152,23 @@ def write_archive(
         _write_zip(target, kind, meta, arrays, compress)
         return
     Path(target).parent.mkdir(parents=True, exist_ok=True)
-    with atomic_write(target, "wb") as file:
+    with atomic_write(target, "wb", write_behind=True) as file:
         _write_zip(file, kind, meta, arrays, compress)
 
 
 def _dtype_str(array: Any) -> str:
     """The numpy ``dtype.str`` an array or tensor is stored as ('' if numpy has none)."""
     if isinstance(array, torch.Tensor):
-        try:
-            return torch.empty(0, dtype=array.dtype).numpy().dtype.str
-        except TypeError:  # bfloat16 and other types numpy lacks
-            return ""
+        return _torch_dtype_str(array.dtype)
     return np.asarray(array).dtype.str
+
+
+@functools.cache
+def _torch_dtype_str(dtype: torch.dtype) -> str:
+    try:
+        return torch.empty(0, dtype=dtype).numpy().dtype.str
+    except TypeError:  # bfloat16 and other types numpy lacks
+        return ""
 
 
 def _host(array: np.ndarray | torch.Tensor) -> np.ndarray:
