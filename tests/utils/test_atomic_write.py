@@ -185,10 +185,14 @@ def test_write_behind_is_for_binary_files(tmp_path: Path) -> None:
 def test_a_model_archive_is_written_behind_and_reads_back(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """``write_archive`` writes through the write-behind file: a 3 MB archive written with a
-    64 KiB chunk is handed over in ranges that tile it, and reads back equal."""
+    """``write_archive`` writes a file of 4 MiB of arrays or more through the write-behind
+    file: 5.7 MB written with a 64 KiB chunk are handed over in ranges that tile the file,
+    and read back equal. A smaller file is assembled in memory and written in one piece,
+    never advised."""
     calls = _advice_log(monkeypatch, 64 << 10)
-    arrays = {"a": np.arange(500_000, dtype=np.float32), "b": np.ones((300, 700), np.float64)}
+    write_archive(tmp_path / "small", "model", {}, {"a": np.arange(1 << 20, dtype=np.uint8)})
+    assert calls == [] and read_archive(tmp_path / "small.zip", "model")[1]["a"][-1] == 255
+    arrays = {"a": np.arange(1_000_000, dtype=np.float32), "b": np.ones((300, 700), np.float64)}
     write_archive(tmp_path / "m", "model", {"x": 1}, arrays, compress=False)
     meta, back = read_archive(tmp_path / "m.zip", "model")
     assert meta == {"x": 1} and all(np.array_equal(back[k], arrays[k]) for k in arrays)
