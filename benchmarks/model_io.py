@@ -2,7 +2,8 @@
 
 The model is SB3's large-model test's, ``TD3("MlpPolicy", "Pendulum-v1",
 policy_kwargs=dict(net_arch=[w, w, w]), device="cpu")``, at several widths ``w`` (an untrained
-TD3 file holds its actor, twin critics and their targets: about 12 w**2 float32 weights). Each
+TD3 file holds its actor, twin critics and their targets: about 12 w**2 float32 weights), or
+with ``--algo ppo`` the same with PPO (its actor and critic: about 4 w**2 weights). Each
 measurement runs in a fresh interpreter, so one library's memory never counts against the
 other's: one process builds the model and times ``save``; another times ``load`` of that file
 (the model is rebuilt from the file, so loading includes building the networks, on both sides).
@@ -11,7 +12,8 @@ before it: for ``save`` what the call adds over the model, for ``load`` the mode
 call adds. Repeats alternate the two libraries; each figure is a median.
 
     python benchmarks/model_io.py                      # widths 64 1024 2048 4096, 3 repeats
-    python benchmarks/model_io.py --widths 8192 --repeats 1
+    python benchmarks/model_io.py --widths 8192 --repeats 3
+    python benchmarks/model_io.py --algo ppo --widths 7072 --repeats 3
 
 Needs stable-baselines3 (a dev dependency).
 """
@@ -50,31 +52,32 @@ def measured(fn):
     peak[0] = max(peak[0], rss())
     return result, seconds, peak[0] - base
 
-lib, op, width, path = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+lib, op, width, path, algo = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4], sys.argv[5]
 import torch
 torch.set_num_threads(1)
 if lib == "sb3":
     import gymnasium as gym
-    from stable_baselines3 import TD3
+    import stable_baselines3 as algos
     env = gym.make("Pendulum-v1")
 else:
-    from palaestra.algos import TD3
+    import palaestra.algos as algos
     env = "Pendulum-v1"
+Algo = getattr(algos, algo.upper())
 kwargs = dict(policy_kwargs=dict(net_arch=[width] * 3), device="cpu")
 if op == "save":
-    model = TD3("MlpPolicy", env, **kwargs)
+    model = Algo("MlpPolicy", env, **kwargs)
     _, seconds, peak = measured(lambda: model.save(path))
 else:
-    model, seconds, peak = measured(lambda: TD3.load(path, env=env, **kwargs))
+    model, seconds, peak = measured(lambda: Algo.load(path, env=env, **kwargs))
 weights = sum(p.numel() for p in model.policy.parameters())
 print(json.dumps({"seconds": seconds, "peak": peak, "weights": weights}))
 """
 
 
-def run(lib: str, op: str, width: int, path: Path) -> dict[str, float]:
+def run(lib: str, op: str, width: int, path: Path, algo: str) -> dict[str, float]:
     """One measurement in a fresh interpreter."""
     out = subprocess.run(
-        [sys.executable, "-c", CHILD, lib, op, str(width), str(path)],
+        [sys.executable, "-c", CHILD, lib, op, str(width), str(path), algo],
         capture_output=True,
         text=True,
         check=True,
@@ -87,11 +90,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--widths", type=int, nargs="+", default=[64, 1024, 2048, 4096])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--algo", choices=["td3", "ppo"], default="td3")
     args = parser.parse_args()
     mib = 1 << 20
     print(f"load average before: {os.getloadavg()[0]:.2f}")
     header = (
-        "| net_arch | file | lib | save s | load s | save peak extra | load peak | "
+        f"| {args.algo} net_arch | file | lib | save s | load s | save peak extra | load peak | "
         "save ratio | load ratio |"
     )
     print(header)
@@ -103,7 +107,8 @@ def main() -> None:
             for _ in range(args.repeats):
                 for lib in ("palaestra", "sb3"):
                     path = Path(tmp) / f"{lib}_{width}.zip"
-                    saved, loaded = run(lib, "save", width, path), run(lib, "load", width, path)
+                    saved = run(lib, "save", width, path, args.algo)
+                    loaded = run(lib, "load", width, path, args.algo)
                     sizes[lib] = path.stat().st_size
                     path.unlink()
                     r = results.setdefault(lib, {"save": [], "load": [], "sp": [], "lp": []})
@@ -127,6 +132,11 @@ def main() -> None:
                     f"{ratio} |",
                     flush=True,
                 )
+            for lib in ("palaestra", "sb3"):
+                runs = ", ".join(
+                    f"{a:.3f}/{b:.3f}" for a, b in zip(results[lib]["save"], results[lib]["load"])
+                )
+                print(f"<!-- [{width}]*3 {lib} save/load s, each run: {runs} -->", flush=True)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
 
 

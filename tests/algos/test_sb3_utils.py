@@ -4,11 +4,14 @@ plotter is checked against monitor files with known contents)."""
 
 from __future__ import annotations
 
+import platform
 import random
+import sys
 
 import numpy as np
 import pytest
 import torch
+from stable_baselines3 import __version__ as sb3_version
 from stable_baselines3.common import utils as sb3_utils
 
 import palaestra as gym
@@ -71,6 +74,23 @@ def test_device_parameters_zip_and_system_info(capsys):
     assert {"OS", "Python", "PyTorch", "Numpy"} <= set(info)
     assert capsys.readouterr().out.strip() == text.strip()
     assert text.startswith("- OS: ")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux's shortcut")
+def test_system_info_names_the_os_as_platform_does_without_its_subprocess(monkeypatch):
+    """``save`` records the OS as ``platform.platform()`` names it, less the processor that
+    ``uname -p`` (a subprocess) may add; ``platform.processor`` is never asked."""
+    processor = platform.processor()
+    expected = platform.platform().replace(f"-{processor}", "", 1) if processor else None
+
+    def no_subprocess() -> str:
+        raise AssertionError("platform.processor() runs uname -p")
+
+    monkeypatch.setattr(platform, "processor", no_subprocess)
+    info, _ = utils.get_system_info(print_info=False)
+    assert info["OS"].startswith(expected or platform.platform())
+    assert info["Numpy"] == np.__version__ and info["PyTorch"] == torch.__version__
+    assert info["Stable-Baselines3"] == sb3_version  # read from its metadata's Version line
 
 
 def _monitor_logs(tmp_path, ranks):

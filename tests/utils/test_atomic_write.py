@@ -3,6 +3,7 @@ tests, and ``kill -9`` in the middle of saving a model, three times (the previou
 
 from __future__ import annotations
 
+import itertools
 import multiprocessing
 import os
 import random
@@ -17,6 +18,7 @@ import numpy as np
 import pytest
 
 from palaestra.algos.common.model_io import read_archive, write_archive
+from palaestra.utils import atomic_write as atomic_write_module
 from palaestra.utils.atomic_write import (
     atomic_path,
     atomic_write,
@@ -92,6 +94,113 @@ def _save_forever(path: str, nbytes: int, ready: multiprocessing.synchronize.Eve
         weights[0] = version
         write_archive(path, "model", {"version": version}, {"w": weights})
         ready.set()
+
+
+def _advice_log(monkeypatch: pytest.MonkeyPatch, chunk: int) -> list[tuple[int, int]]:
+    """Record the (offset, length) of every ``posix_fadvise`` a write-behind file gives, with
+    a chunk of ``chunk`` bytes."""
+    calls: list[tuple[int, int]] = []
+
+    def advise(fd: int, offset: int, length: int, advice: int) -> None:
+        assert advice == os.POSIX_FADV_DONTNEED
+        calls.append((offset, length))
+
+    monkeypatch.setattr(atomic_write_module, "WRITE_BEHIND_CHUNK", chunk)
+    monkeypatch.setattr(os, "posix_fadvise", advise)
+    return calls
+
+
+def _handed_and_dropped(
+    calls: list[tuple[int, int]],
+) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+    """Split the advice log into hand-overs and drops: each round after the first drops the
+    range handed the round before, then hands the new one."""
+    handed, dropped = [calls[0]], []
+    for i in range(1, len(calls), 2):
+        dropped.append(calls[i])
+        handed.append(calls[i + 1])
+    assert dropped == handed[:-1]  # a range is dropped one round after it was handed over
+    return handed, dropped
+
+
+@pytest.mark.skipif(not hasattr(os, "posix_fadvise"), reason="no posix_fadvise")
+def test_write_behind_hands_each_chunk_to_the_disk_and_drops_it_a_round_later(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Once at least a chunk (here 10,000 bytes) was written since the last advice, the new
+    range is handed over (DONTNEED starts its writeback) and the range handed the time
+    before is dropped; the ranges tile the file in order; a write that goes back (a zip
+    header filled in after its data) changes bytes, not the ranges; the file is exactly
+    what a plain write gives."""
+    calls = _advice_log(monkeypatch, 10_000)
+    target = tmp_path / "model.zip"
+    data = bytes(range(256)) * 400  # 102,400 bytes
+    with atomic_write(target, "wb", write_behind=True) as file:
+        file.write(b"H" * 10)
+        for start in range(0, len(data), 3000):
+            file.write(data[start : start + 3000])
+        file.seek(3)
+        file.write(b"xyz")  # goes back: no new range
+        file.seek(0, os.SEEK_END)
+        file.write(b"end")
+    assert target.read_bytes() == b"HHHxyzHHHH" + data + b"end"
+    handed, _ = _handed_and_dropped(calls)
+    assert handed[0][0] == 0
+    assert all(a + n == b for (a, n), (b, _) in itertools.pairwise(handed))
+    assert all(n >= 10_000 for _, n in handed)
+    end = handed[-1][0] + handed[-1][1]
+    assert len(data) + 13 - 10_000 < end <= len(data) + 13  # the tail stays for the fsync
+
+
+@pytest.mark.skipif(not hasattr(os, "posix_fadvise"), reason="no posix_fadvise")
+def test_write_behind_on_a_file_system_that_refuses_advice_writes_a_plain_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    calls: list[int] = []
+
+    def refuse(fd: int, offset: int, length: int, advice: int) -> None:
+        calls.append(offset)
+        raise OSError(22, "Invalid argument")
+
+    monkeypatch.setattr(atomic_write_module, "WRITE_BEHIND_CHUNK", 100)
+    monkeypatch.setattr(os, "posix_fadvise", refuse)
+    with atomic_write(tmp_path / "f.bin", "wb", write_behind=True) as file:
+        for i in range(10):
+            file.write(bytes([i]) * 150)
+    assert (tmp_path / "f.bin").read_bytes() == b"".join(bytes([i]) * 150 for i in range(10))
+    assert calls == [0]  # asked once, then never again
+    assert _names(tmp_path) == ["f.bin"]
+
+
+def test_write_behind_is_for_binary_files(tmp_path: Path) -> None:
+    with pytest.raises(
+        ValueError, match=r"atomic_write\(write_behind=True\) writes mode 'wb', got 'w'"
+    ):
+        with atomic_write(tmp_path / "a.txt", "w", write_behind=True):
+            pass
+    assert _names(tmp_path) == []
+
+
+@pytest.mark.skipif(not hasattr(os, "posix_fadvise"), reason="no posix_fadvise")
+def test_a_model_archive_is_written_behind_and_reads_back(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``write_archive`` writes a file of 4 MiB of arrays or more through the write-behind
+    file: 5.7 MB written with a 64 KiB chunk are handed over in ranges that tile the file,
+    and read back equal. A smaller file is assembled in memory and written in one piece,
+    never advised."""
+    calls = _advice_log(monkeypatch, 64 << 10)
+    write_archive(tmp_path / "small", "model", {}, {"a": np.arange(1 << 20, dtype=np.uint8)})
+    assert calls == [] and read_archive(tmp_path / "small.zip", "model")[1]["a"][-1] == 255
+    arrays = {"a": np.arange(1_000_000, dtype=np.float32), "b": np.ones((300, 700), np.float64)}
+    write_archive(tmp_path / "m", "model", {"x": 1}, arrays, compress=False)
+    meta, back = read_archive(tmp_path / "m.zip", "model")
+    assert meta == {"x": 1} and all(np.array_equal(back[k], arrays[k]) for k in arrays)
+    handed, _ = _handed_and_dropped(calls)
+    assert handed[0][0] == 0
+    assert all(a + n == b for (a, n), (b, _) in itertools.pairwise(handed))
+    size = (tmp_path / "m.zip").stat().st_size
+    assert size - (64 << 10) <= handed[-1][0] + handed[-1][1] <= size
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="fork and SIGKILL")

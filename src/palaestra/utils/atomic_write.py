@@ -6,6 +6,12 @@ a hidden temporary file beside the target, flushed and ``fsync``'d, then renamed
 with ``os.replace`` (atomic on POSIX and Windows when both are in one folder), and the folder is
 ``fsync``'d so the rename itself survives a power cut.
 
+A large file (a model of gigabytes) is written with ``write_behind=True``: each few MiB are
+handed to the disk as soon as they are written and dropped from the page cache once they are
+there, so the final ``fsync`` has little left to wait for and the save never holds more than a
+few MiB of unwritten pages (without it, writing fills the cache first and the kernel then
+throttles the writer, or the ``fsync`` waits for all of it at the end).
+
 Temporary names are ``.<name>.<random>.tmp``: hidden, and ending in ``.tmp``, so no palaestra
 loader or glob (``model.zip``, ``*monitor.csv`` ...) ever reads one. A process killed with
 ``kill -9`` cannot remove its temporary file; such leftovers are harmless and may be deleted.
@@ -26,6 +32,7 @@ row is one ``write`` of a whole line, so a crash leaves at worst a torn last lin
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -71,13 +78,24 @@ def atomic_write(
     mode: str = "wb",
     encoding: str | None = None,
     newline: str | None = None,
+    *,
+    write_behind: bool = False,
 ) -> Iterator[IO[Any]]:
     """``open(path, mode)`` for writing (``"w"`` or ``"wb"``), but ``path`` only changes, whole,
-    when the block ends without an exception."""
+    when the block ends without an exception. ``write_behind=True`` (binary mode; for files
+    of hundreds of MiB) hands the file to the disk as it is written (see the module
+    docstring); where ``posix_fadvise`` is missing (Windows, macOS) it changes nothing."""
     if mode not in ("w", "wb"):
         raise ValueError(f"atomic_write opens files with mode 'w' or 'wb', got {mode!r}")
-    with atomic_path(path) as temp, open(temp, mode, encoding=encoding, newline=newline) as file:
-        yield file
+    if write_behind and mode != "wb":
+        raise ValueError(f"atomic_write(write_behind=True) writes mode 'wb', got {mode!r}")
+    with atomic_path(path) as temp:
+        if write_behind and hasattr(os, "posix_fadvise"):
+            opened: IO[Any] = io.BufferedWriter(_WriteBehind(temp))
+        else:
+            opened = open(temp, mode, encoding=encoding, newline=newline)
+        with opened as file:
+            yield file
 
 
 def fsync_directory(folder: str | os.PathLike[str]) -> None:
@@ -112,6 +130,45 @@ def _create_temp(target: Path, suffix: str) -> Path:
             continue
         return temp
     raise FileExistsError(f"could not create a temporary file beside {str(target)!r}")
+
+
+WRITE_BEHIND_CHUNK = 8 << 20  # bytes written before they are handed to the disk
+
+
+class _WriteBehind(io.FileIO):
+    """A binary file that, every ``WRITE_BEHIND_CHUNK`` bytes, starts the writeback of what it
+    wrote since the last time and drops the pages it handed over the time before (clean by
+    now; ``POSIX_FADV_DONTNEED`` does both: it starts writing dirty pages back, without
+    waiting, and evicts the clean ones). The freed pages serve the next chunk, so a file of
+    any size passes through a few chunks of page cache. Writes that go back (a zip writer
+    fills in a member's header after its data) are plain writes."""
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(path, "w")
+        self._end = 0  # the furthest offset written
+        self._handed = 0  # [0, _handed) was handed to the disk
+        self._dropped = 0  # [0, _dropped) was dropped from the cache
+        self._advise = True
+        self._pos = 0  # kept here: a tell() per write would be a system call
+
+    def seek(self, pos: int, whence: int = os.SEEK_SET) -> int:
+        self._pos = super().seek(pos, whence)
+        return self._pos
+
+    def write(self, data: Any) -> int:
+        written = super().write(data)
+        self._pos += written
+        self._end = max(self._end, self._pos)
+        if self._advise and self._end - self._handed >= WRITE_BEHIND_CHUNK:
+            fd, dontneed = self.fileno(), os.POSIX_FADV_DONTNEED
+            try:
+                if self._handed > self._dropped:
+                    os.posix_fadvise(fd, self._dropped, self._handed - self._dropped, dontneed)
+                os.posix_fadvise(fd, self._handed, self._end - self._handed, dontneed)
+            except OSError:  # a file system without it: the rest is written as a plain file
+                self._advise = False
+            self._dropped, self._handed = self._handed, self._end
+        return written
 
 
 def _fsync_file(path: Path) -> None:
