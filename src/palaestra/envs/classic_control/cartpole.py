@@ -201,6 +201,10 @@ class CartPoleBatch(BatchedEnv):
         self._live = np.ones(n, dtype=bool)  # [N] not terminated since the last reset
         self._reward = np.zeros(n)  # [N] float64, rewritten every step
 
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture (see :meth:`BatchedEnv.frame`)."""
+        return render_cartpole(self._state[row])
+
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.05, 0.05)
 
