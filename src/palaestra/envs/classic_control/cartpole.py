@@ -281,8 +281,8 @@ def _vector_env_class() -> type:
                     'render_mode="rgb_array")'
                 )
                 return None
-            state = self.batch.state  # type: ignore[attr-defined]  # a CartPoleBatch
-            return tuple(render_cartpole(row) for row in state)
+            batch = self.batch  # a CartPoleBatch: it draws its rows
+            return tuple(batch.frame(i) for i in range(self.num_envs))  # type: ignore[attr-defined]
 
     CartPoleVectorEnv.__qualname__ = "CartPoleVectorEnv"  # pickled by this module's name
     return CartPoleVectorEnv
