@@ -104,7 +104,7 @@ def test_make_vec_env_paths():
     assert isinstance(native.venv, BatchedVecEnv)
     assert native.venv.batch.params.goal_velocity == 0.01
     rendering = make_vec_env("CartPole-v1", n_envs=2, env_kwargs={"render_mode": "rgb_array"})
-    assert isinstance(rendering, DummyVecEnv)
+    assert isinstance(rendering.venv, BatchedVecEnv)  # the batch draws its rows (issue 26)
     rendering.reset()
     assert rendering.get_images()[0].shape == (400, 600, 3)
     assert rendering.render().shape == (800, 600, 3)  # 2 frames tiled as SB3 tiles them

@@ -47,6 +47,7 @@ SETTINGS_KEYS = (
     "atari",
     "frame_stack",
     "env_wrapper",
+    "callback",
 )
 
 ACTIVATIONS = {"relu": "ReLU", "tanh": "Tanh", "elu": "ELU", "leaky_relu": "LeakyReLU"}

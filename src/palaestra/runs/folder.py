@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from palaestra import presets
-from palaestra.runs import algorithms, known_names, recipe
+from palaestra.runs import algorithms, known_names, recipe, run_callbacks
 from palaestra.runs.errors import RunError
 from palaestra.runs.files import CONFIG_FILE, note, read_json
 from palaestra.runs.recipe import wrapper_module
@@ -96,6 +96,8 @@ def modules_named(config: dict[str, Any]) -> list[tuple[str, str, str]]:
     for path, _ in recipe.wrapper_items(config.get("env_wrapper") or []):
         if known_names.palaestra_name("env_wrapper", path) is None:
             out.append(("env_wrapper", path, wrapper_module(path)[0]))
+    for path, module in run_callbacks.unmapped_callbacks(config.get("callback")):
+        out.append(("callback", path, module))
     return out
 
 
@@ -114,8 +116,9 @@ def check_imports(
         fix = f"pass {flags} to allow it"
         if "." not in module and recipe.locate_module(module) is None:  # finding runs no code
             fix = f"run from the folder that holds module {module!r}, and {fix}"
-        if setting == "env_wrapper":
-            fix += f"; wrapper names in {TABLE} need no flag"
+        if setting in ("env_wrapper", "callback"):
+            label = "wrapper" if setting == "env_wrapper" else setting
+            fix += f"; {label} names in {TABLE} need no flag"
         raise RunError(
             f"{source} names {setting} {value!r}, which would import module {module!r}; "
             f"palaestra runs no code named by a {what}",
@@ -282,6 +285,21 @@ def _check_pipeline(config: dict[str, Any], source: str) -> None:
             source,
             "env_wrapper",
             wrappers,
+            "'module:Class' or a list of them (each may be {'module:Class': {kwargs}})",
+        )
+    callbacks = config.get("callback")
+    listed = callbacks if isinstance(callbacks, list) else [callbacks]
+    if callbacks is not None and not (
+        len(listed) <= 16
+        and all(
+            isinstance(c, str) or (isinstance(c, dict) and len(c) == 1 and _wrapper_args(c))
+            for c in listed
+        )
+    ):
+        raise _fail(
+            source,
+            "callback",
+            callbacks,
             "'module:Class' or a list of them (each may be {'module:Class': {kwargs}})",
         )
     _check_atari(source, config.get("atari"))

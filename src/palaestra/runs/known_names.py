@@ -125,7 +125,7 @@ ACTIVATIONS: dict[str, str] = {
     for prefix in ("nn.", "th.nn.", "torch.nn.")
 }
 
-# callback (RL Zoo's key; palaestra's settings do not take callbacks yet): SB3 -> palaestra.
+# callback (RL Zoo's key, palaestra.runs.run_callbacks): SB3 -> palaestra.
 CALLBACKS: dict[str, str] = {
     f"stable_baselines3.common.callbacks.{n}": f"palaestra.algos.callbacks:{n}"
     for n in _SB3_CALLBACKS

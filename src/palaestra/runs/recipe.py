@@ -202,23 +202,25 @@ def uses_vec_pipeline(config: dict[str, Any]) -> bool:
 WRAPPER_FIX = "write env_wrapper as 'module:Class', e.g. shaping:BetterRewardShaping"
 
 
-def wrapper_module(path: Any) -> tuple[str, str]:
+def wrapper_module(path: Any, setting: str = "env_wrapper") -> tuple[str, str]:
     """``"module:Class"`` (or ``"module.Class"``) -> ``(module, class name)``; ``RunError``
-    for anything else. Imports nothing."""
+    naming ``setting`` for anything else. Imports nothing."""
+    fix = WRAPPER_FIX if setting == "env_wrapper" else f"write {setting} as 'module:Class'"
     if not isinstance(path, str) or not path.strip():
-        raise RunError(f"env_wrapper must be 'module:Class', got {path!r}", WRAPPER_FIX)
+        raise RunError(f"{setting} must be 'module:Class', got {path!r}", fix)
     module_name, sep, name = path.partition(":")
     if not sep:
         module_name, _, name = path.rpartition(".")
     if not module_name or not name:
-        raise RunError(f"env_wrapper {path!r} names no module and class", WRAPPER_FIX)
+        raise RunError(f"{setting} {path!r} names no module and class", fix)
     return module_name, name
 
 
-def wrapper_items(value: Any) -> list[tuple[str, dict[str, Any]]]:
-    """A run's ``env_wrapper`` as ``[(name, kwargs)]``, innermost first: a name, a one-key
-    mapping ``{name: kwargs}`` (RL Zoo's form, e.g. ``{"gymnasium.wrappers.TimeLimit":
-    {"max_episode_steps": 100}}``), or a list of them. Imports nothing.
+def wrapper_items(value: Any, setting: str = "env_wrapper") -> list[tuple[str, dict[str, Any]]]:
+    """A run's ``env_wrapper`` (or ``callback``: ``setting``) as ``[(name, kwargs)]``,
+    innermost first: a name, a one-key mapping ``{name: kwargs}`` (RL Zoo's form, e.g.
+    ``{"gymnasium.wrappers.TimeLimit": {"max_episode_steps": 100}}``), or a list of them.
+    Imports nothing.
 
     >>> wrapper_items(["a:W", {"b:V": {"k": 1}}, {"c:U": None}])
     [('a:W', {}), ('b:V', {'k': 1}), ('c:U', {})]
@@ -231,14 +233,14 @@ def wrapper_items(value: Any) -> list[tuple[str, dict[str, Any]]]:
                 kwargs = {}
             if not (isinstance(kwargs, dict) and all(isinstance(k, str) for k in kwargs)):
                 raise RunError(
-                    f"env_wrapper {name!r} takes a mapping of keyword arguments, got {kwargs!r}",
+                    f"{setting} {name!r} takes a mapping of keyword arguments, got {kwargs!r}",
                     "e.g. {'gymnasium.wrappers.TimeLimit': {'max_episode_steps': 100}}",
                 )
             out.append((name, dict(kwargs)))
         else:
             out.append((item, {}))
     for name, _ in out:
-        wrapper_module(name)
+        wrapper_module(name, setting)
     return out
 
 

@@ -26,7 +26,7 @@ from typing import Any
 
 from palaestra import presets
 from palaestra.error import dependency_not_installed
-from palaestra.runs import folder, known_names, zoo
+from palaestra.runs import folder, known_names, run_callbacks, zoo
 from palaestra.runs.algorithms import (
     ALGO_CLASSES,
     ALGOS,
@@ -346,3 +346,4 @@ def check_settings(settings: dict[str, Any], env_id: str) -> None:
             "fix it",
         )
     check_pipeline(settings, env_id)
+    run_callbacks.build_callbacks(settings)  # imports them: a bad name fails before training

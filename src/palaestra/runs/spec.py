@@ -45,6 +45,8 @@ class RunSpec:
     env_kwargs: dict[str, Any] = dataclasses.field(default_factory=dict)
     normalize: bool | dict[str, Any] = False
     env_wrapper: str | dict[str, Any] | list[str | dict[str, Any]] | None = None
+    # SB3 callbacks for learn, named as env_wrapper is (palaestra.runs.run_callbacks)
+    callback: str | dict[str, Any] | list[str | dict[str, Any]] | None = None
     atari: bool | dict[str, Any] | None = None
     frame_stack: int | None = None
     seed: int | None = None
@@ -123,7 +125,7 @@ class RunSpec:
         out: dict[str, Any] = {"algo": self.algo, "env_id": self.env_id, "preset": self.preset}
         for key in ("policy", "n_envs", "n_timesteps", "hyperparams", "env_kwargs", "normalize"):
             out[key] = getattr(self, key)
-        for key in ("atari", "frame_stack", "env_wrapper"):
+        for key in ("atari", "frame_stack", "env_wrapper", "callback"):
             if getattr(self, key) is not None:
                 out[key] = getattr(self, key)
         if self.module_sha256:

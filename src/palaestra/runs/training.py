@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 from palaestra import presets
 from palaestra.error import UnsupportedSpace
 from palaestra.runs import folder as run_folder
-from palaestra.runs import settings
+from palaestra.runs import run_callbacks, settings
 from palaestra.runs.errors import RunError, one_line
 from palaestra.runs.files import (
     CONFIG_FILE,
@@ -205,6 +205,7 @@ class Run:
         due = CheckpointDue(every, total)
         evaluation = CheckpointDue(evaluate_every if on_evaluate is not None else 0, total)
         periodic = [] if self.evaluation is None else [self.evaluation]
+        callbacks = [*run_callbacks.build_callbacks(self.spec.to_config()), *callbacks]
         start_steps = model.num_timesteps
         saved = latest_checkpoint(run_dir)  # what a stop at once leaves to resume from
         stopped = False

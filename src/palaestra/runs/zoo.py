@@ -22,8 +22,10 @@ algorithm's defaults, not over a palaestra preset (``--preset`` puts one beneath
   table or asks for ``--allow-import`` (:mod:`palaestra.runs.folder`);
 - ``noise_type``/``noise_std`` -> ``action_noise`` over the env's action dimensions, as the Zoo
   builds it (``normal``: ``NormalActionNoise``; ``ornstein-uhlenbeck``);
-- keys palaestra's settings cannot take (``callback``, ``vec_env_wrapper``,
-  ``monitor_kwargs``, ``replay_buffer_class``) are refused, each with why.
+- ``callback`` passes as it is: SB3's names map through the same table, other modules need
+  ``--allow-import`` (:mod:`palaestra.runs.run_callbacks`);
+- keys palaestra's settings cannot take (``vec_env_wrapper``, ``monitor_kwargs``,
+  ``replay_buffer_class``) are refused, each with why.
 """
 
 from __future__ import annotations
@@ -51,10 +53,6 @@ __all__ = [
 ATARI_WRAPPER = "palaestra.wrappers.atari:AtariWrapper"
 # Zoo keys palaestra's settings do not take, and why (the error says it).
 REFUSED: dict[str, str] = {
-    "callback": (
-        "palaestra's settings take no callbacks; `palaestra train --checkpoint-every N` and "
-        "`--eval-freq N` do what SB3's CheckpointCallback and EvalCallback do"
-    ),
     "vec_env_wrapper": (
         "palaestra's settings take no VecEnv wrapper; frame_stack and normalize are the "
         "VecFrameStack and VecNormalize of a run"

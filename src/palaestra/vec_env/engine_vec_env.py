@@ -211,6 +211,7 @@ class DummyVecEnv(EngineVecEnv):
             )
         self.envs = engine.envs
         super().__init__(engine, np.float32)
+        self.metadata = self.envs[0].metadata  # SB3's DummyVecEnv: the first env's, shared
 
 
 class SubprocVecEnv(EngineVecEnv):
@@ -252,7 +253,32 @@ class BatchedVecEnv(EngineVecEnv):
         batch: NativeBatch,
         max_episode_steps: int | None = None,
         metadata: dict[str, Any] | None = None,
+        render_mode: str | None = None,
     ) -> None:
         self.batch = batch
         self.spec: Any = None  # the EnvSpec when made from an id (make_vec_env sets it)
-        super().__init__(NativeEngine(batch, max_episode_steps, metadata), np.float32)
+        engine = self._native = NativeEngine(batch, max_episode_steps, metadata, render_mode)
+        super().__init__(engine, np.float32)
+        self.metadata = engine.metadata  # the env's, as SB3's DummyVecEnv of those envs has
+
+    def get_attr(self, attr_name: str, indices: Indices = None) -> list[Any]:
+        """As ``EngineVecEnv.get_attr``; ``"spec"`` is each env's ``EnvSpec`` (as
+        ``make_vec_env`` made them), which the batch itself does not hold."""
+        if attr_name == "spec":
+            self._check_open()
+            return [self.spec for _ in self._get_indices(indices)]
+        return super().get_attr(attr_name, indices)
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        """Each row's ``rgb_array`` frame, drawn from the batch (no env objects to ask)."""
+        self._check_open()
+        return list(self._native.render())
+
+    def env_method(
+        self, method_name: str, *method_args: Any, indices: Indices = None, **method_kwargs: Any
+    ) -> list[Any]:
+        """As ``EngineVecEnv.env_method``; ``"render"`` draws the rows, as each env would."""
+        if method_name == "render" and not method_args and not method_kwargs:
+            self._check_open()
+            return list(self._native.render(self._get_indices(indices)))
+        return super().env_method(method_name, *method_args, indices=indices, **method_kwargs)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from typing import Any
 
 import numpy as np
@@ -22,9 +22,14 @@ from palaestra.vector.native import BatchedVectorEnv, batched_vector_env
 from palaestra.wrappers.atari import AtariWrapper
 from palaestra.wrappers.monitor import Monitor
 
+# make()'s keywords that wrap a single env (SB3 passes them in env_kwargs): real envs for them.
+_MAKE_ONLY = frozenset({"disable_env_checker", "autoreset", "apply_api_compatibility"})
+
 
 def _native_batch(env_id: Any, env_kwargs: dict[str, Any], n_envs: int) -> BatchedVecEnv | None:
-    """The native batch for a built-in id, or None when the id has none."""
+    """The native batch for a built-in id, or None when the id has none (or ``env_kwargs``
+    ask for what only real envs do: a render mode other than ``rgb_array``, ``make``'s own
+    options other than ``max_episode_steps``)."""
     if not isinstance(env_id, str):
         return None
     spec = resolve_id(env_id)
@@ -32,14 +37,19 @@ def _native_batch(env_id: Any, env_kwargs: dict[str, Any], n_envs: int) -> Batch
     if classes is None or spec.additional_wrappers:
         return None
     kwargs = {**spec.kwargs, **env_kwargs}
-    if kwargs.pop("render_mode", None) is not None:
-        return None  # native batches do not render: build real envs instead
-    native = batched_vector_env(
-        *classes, num_envs=n_envs, max_episode_steps=spec.max_episode_steps, **kwargs
-    )
+    # SB3 asks for rgb_array frames unless told otherwise; batches that draw rows give them.
+    render_mode = kwargs.pop("render_mode", "rgb_array")
+    if render_mode == "rgb_array" and not hasattr(classes[0], "frame"):
+        render_mode = None
+    if render_mode not in (None, "rgb_array") or set(kwargs) & _MAKE_ONLY:
+        return None
+    # make()'s time limit, which gym.make takes among the env's keywords (SB3 passes them on)
+    limit = kwargs.pop("max_episode_steps", spec.max_episode_steps)
+    limit = None if limit == -1 else limit  # make(max_episode_steps=-1): no TimeLimit
+    native = batched_vector_env(*classes, num_envs=n_envs, max_episode_steps=limit, **kwargs)
     assert isinstance(native, BatchedVectorEnv)  # no render_mode: the batch itself
-    venv = BatchedVecEnv(native.batch, spec.max_episode_steps, native.metadata)
-    venv.spec = spec
+    venv = BatchedVecEnv(native.batch, limit, native.metadata, render_mode)
+    venv.spec = spec if limit == spec.max_episode_steps else replace(spec, max_episode_steps=limit)
     return venv
 
 
@@ -58,10 +68,13 @@ def make_vec_env(
 ) -> VecEnv:
     """``n_envs`` monitored envs as one ``VecEnv`` (SB3's signature and behaviour).
 
-    A built-in id with no ``wrapper_class``, ``vec_env_cls`` or ``render_mode`` gets its native
-    batch (``BatchedVecEnv``) under a ``VecMonitor``: the same observations, rewards, dones and
+    A built-in id with no ``wrapper_class`` or ``vec_env_cls`` gets its native batch
+    (``BatchedVecEnv``) under a ``VecMonitor``: the same observations, rewards, dones and
     ``infos[i]["episode"]`` as SB3's ``DummyVecEnv`` of ``Monitor``-wrapped envs, without a
     Python loop per step. Env ``i`` is seeded ``seed + start_index + i`` at the first reset.
+    As SB3's, the envs have ``render_mode="rgb_array"`` unless ``env_kwargs`` say otherwise
+    (the batch draws each row), so ``VecVideoRecorder(make_vec_env(id), ...)`` records; and
+    ``env_kwargs`` may hold ``make``'s ``max_episode_steps``.
 
     >>> vec_env = make_vec_env("MountainCar-v0", n_envs=4, seed=0)
     >>> vec_env.reset().shape

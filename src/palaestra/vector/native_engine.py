@@ -24,7 +24,8 @@ class NativeBatch(Protocol):
     """What the engine needs of a batch (classic control's ``BatchedEnv``, toy text's).
 
     A batch may also have ``last_infos() -> Infos``: the infos of its last reset or step
-    (toy text's ``prob``); without it every info is empty.
+    (toy text's ``prob``); without it every info is empty. ``frame(row, action)`` draws a row
+    (``render_mode="rgb_array"``).
     """
 
     num_envs: int
@@ -44,7 +45,11 @@ class NativeBatch(Protocol):
 
 
 class NativeEngine:
-    """Engine over a ``BatchedEnv``; ``max_episode_steps`` None means no time limit."""
+    """Engine over a ``BatchedEnv``; ``max_episode_steps`` None means no time limit.
+
+    With ``render_mode="rgb_array"`` (SB3's ``make_vec_env`` asks for it), ``render()`` draws
+    each row with the batch's ``frame``, from its state and the action it last took.
+    """
 
     # For exact resume (utils.run_state): the batch, the time-limit counters, and the last
     # step's outputs (``_truncated`` is only cleared when a comparison ran).
@@ -64,7 +69,12 @@ class NativeEngine:
         batch: NativeBatch,
         max_episode_steps: int | None,
         metadata: dict[str, Any] | None = None,
+        render_mode: str | None = None,
     ) -> None:
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(
+                f"a native batch draws rgb_array frames only, got render_mode={render_mode!r}"
+            )
         if max_episode_steps is not None and (
             not isinstance(max_episode_steps, (int, np.integer)) or max_episode_steps < 1
         ):
@@ -77,7 +87,7 @@ class NativeEngine:
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.metadata = dict(metadata or {})
-        self.render_mode: str | None = None
+        self.render_mode = render_mode
         n = self.num_envs
         self.obs = batch._obs  # [N, obs_dim] float32, rewritten in place by the batch
         # Steps since a row's reset = the engine's step count minus the count at that reset:
@@ -95,6 +105,9 @@ class NativeEngine:
         self._sent: tuple[Any, np.ndarray | None] = (None, None)
         self._limit = max_episode_steps
         self._infos = getattr(batch, "last_infos", None)  # None: the batch's infos are empty
+        # The actions of the last step, for frames (Pendulum's torque, the taxi's heading): a
+        # reference, not a copy, to keep the step free of work only pictures need.
+        self._last_actions: Any = None
 
     def reset(self, mask: np.ndarray | None, seeds: list[int | None], options: Any) -> Infos:
         """Re-sample the masked rows (all if None); infos from the batch (toy text's ``prob``),
@@ -114,6 +127,7 @@ class NativeEngine:
         """One array step for every row; rows in the reset mask are then re-sampled."""
         actions, reset_mask = self._sent
         self._sent = (None, None)
+        self._last_actions = actions
         # Classic control: the masked rows also step, harmless since a step draws no random
         # numbers and the reset overwrites the whole row state; toy text skips them (its
         # steps draw). The batch does both and writes obs once.
@@ -149,7 +163,9 @@ class NativeEngine:
         if name == "np_random":
             return tuple(self.batch._rngs[i] for i in rows)
         if name == "render_mode":
-            return tuple(None for _ in rows)
+            return tuple(self.render_mode for _ in rows)
+        if name == "metadata":  # each row's env's (SB3's VecVideoRecorder reads render_fps)
+            return tuple(self.metadata for _ in rows)
         if _is_param(self.batch, name):
             # What a single env exposes as `env.unwrapped.goal_velocity` lives in the batch's
             # params (made from make_vec_env's env_kwargs): SB3's get_attr reads it there.
@@ -177,9 +193,18 @@ class NativeEngine:
         else:
             setattr(self.batch, name, first)
 
-    def render(self) -> tuple[Any, ...]:
-        """Native batches do not render (use a single env or vectorization_mode='sync')."""
-        return tuple(None for _ in range(self.num_envs))
+    def render(self, rows: Rows = None) -> tuple[Any, ...]:
+        """Each row's frame (``rgb_array``), or one None per row without a render mode."""
+        rows = range(self.num_envs) if rows is None else rows
+        if self.render_mode is None:
+            return tuple(None for _ in rows)
+        frame = getattr(self.batch, "frame")  # noqa: B009 (not in the protocol: rendering only)
+        actions = self._last_actions
+        # A row reset since the last step (its reset count is this step's) has no last action.
+        return tuple(
+            frame(i, None if actions is None or self._reset_at[i] == self._steps else actions[i])
+            for i in rows
+        )
 
     def close(self) -> None:
         """Nothing to release."""

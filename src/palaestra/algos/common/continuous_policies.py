@@ -22,6 +22,8 @@ from palaestra.algos.common.networks import (
     mlp,
     preprocess_obs,
 )
+from palaestra.algos.learners.heads import squashed_gaussian_rsample
+from palaestra.algos.learners.xp import torch_ops
 
 __all__ = ["ContinuousCritic", "DeterministicActor", "SquashedGaussianActor", "split_net_arch"]
 
@@ -57,7 +59,27 @@ class _Extracting(nn.Module):
         return self.features_extractor(x)
 
 
-class SquashedGaussianActor(_Extracting):
+class _Actor(_Extracting, BasePolicy):
+    """What SB3's SAC and TD3 ``Actor`` (a ``BasePolicy``) offer on their own: ``predict``
+    (actions mapped from [-1, 1] to ``action_space``'s bounds), ``device``,
+    ``set_training_mode``, ``obs_to_tensor``. A policy file holds the whole policy."""
+
+    squash_output = True
+
+    def _set_action_space(self, action_dim: int, action_space: spaces.Box | None) -> None:
+        # None: the actor's own [-1, 1] (an actor built outside a policy)
+        self.action_space = action_space or spaces.Box(-1.0, 1.0, (action_dim,), np.float32)
+
+    def save(self, path: Any) -> None:
+        """Not offered: save the policy (``model.policy.save(path)``), which holds the actor."""
+        raise NotImplementedError(
+            f"{type(self).__name__}.save: palaestra saves whole policies; use "
+            "model.policy.save(path) and load it with its policy class's load (the actor is "
+            "its .actor)"
+        )
+
+
+class SquashedGaussianActor(_Actor):
     """SAC's actor: ``latent_pi`` then ``mu`` and ``log_std`` (clipped later to [-20, 2])."""
 
     def __init__(
@@ -68,8 +90,10 @@ class SquashedGaussianActor(_Extracting):
         net_arch: list[int],
         activation_fn: type[nn.Module],
         normalize_images: bool = True,
+        action_space: spaces.Box | None = None,
     ) -> None:
         super().__init__(observation_space, extractor, normalize_images)
+        self._set_action_space(action_dim, action_space)
         self.latent_pi = mlp(extractor.features_dim, net_arch, activation_fn)
         last = net_arch[-1] if net_arch else extractor.features_dim
         self.mu = nn.Linear(last, action_dim)
@@ -78,8 +102,17 @@ class SquashedGaussianActor(_Extracting):
     def latent(self, obs: Any) -> torch.Tensor:
         return self.latent_pi(self.features(obs))
 
+    def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
+        """``tanh`` of the Gaussian's mean, or of a sample (log-std clipped as in training)."""
+        latent = self.latent(observation)
+        mean = self.mu(latent)
+        if deterministic:
+            return torch.tanh(mean)
+        log_std = self.log_std(latent)
+        return squashed_gaussian_rsample(torch_ops, mean, log_std, torch.randn_like(mean))[0]
 
-class DeterministicActor(_Extracting):
+
+class DeterministicActor(_Actor):
     """TD3's and DDPG's actor: an MLP from the features to the action, tanh at the end."""
 
     def __init__(
@@ -90,14 +123,20 @@ class DeterministicActor(_Extracting):
         net_arch: list[int],
         activation_fn: type[nn.Module],
         normalize_images: bool = True,
+        action_space: spaces.Box | None = None,
     ) -> None:
         super().__init__(observation_space, extractor, normalize_images)
+        self._set_action_space(action_dim, action_space)
         body = mlp(extractor.features_dim, net_arch, activation_fn)
         last = net_arch[-1] if net_arch else extractor.features_dim
         self.mu = nn.Sequential(*body, nn.Linear(last, action_dim), nn.Tanh())
 
     def forward(self, obs: Any) -> torch.Tensor:
         return self.mu(self.features(obs))
+
+    def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
+        """The action in ``[-1, 1]`` (exploration noise is the algorithm's, as in SB3)."""
+        return self(observation)
 
 
 class ContinuousCritic(_Extracting):

@@ -18,8 +18,6 @@ from palaestra.algos.common.networks import (
     CombinedExtractor,
     NatureCNN,
 )
-from palaestra.algos.learners.heads import squashed_gaussian_rsample
-from palaestra.algos.learners.xp import torch_ops
 
 __all__ = ["CnnPolicy", "MlpPolicy", "MultiInputPolicy", "SACPolicy"]
 
@@ -93,16 +91,12 @@ class SACPolicy(_ContinuousPolicy):
             self.actor_arch,
             self.activation_fn,
             self.normalize_images,
+            action_space=self.action_space,
         )
 
     def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
-        """``tanh`` of the Gaussian's mean, or of a sample (log-std clipped as in training)."""
-        latent = self.actor.latent(observation)
-        mean = self.actor.mu(latent)
-        if deterministic:
-            return torch.tanh(mean)
-        log_std = self.actor.log_std(latent)
-        return squashed_gaussian_rsample(torch_ops, mean, log_std, torch.randn_like(mean))[0]
+        """The actor's action in ``[-1, 1]`` (SB3's ``SACPolicy._predict``)."""
+        return self.actor._predict(observation, deterministic)
 
 
 MlpPolicy = SACPolicy  # SB3's alias

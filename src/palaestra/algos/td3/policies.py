@@ -85,6 +85,7 @@ class TD3Policy(_ContinuousPolicy):
             self.actor_arch,
             self.activation_fn,
             self.normalize_images,
+            action_space=self.action_space,
         )
 
     def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:

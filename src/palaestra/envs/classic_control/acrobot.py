@@ -218,6 +218,10 @@ class AcrobotBatch(BatchedEnv):
         self.single_action_space = Discrete(3)
         super().__init__(num_envs)
 
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture (see :meth:`BatchedEnv.frame`)."""
+        return render_acrobot(self._state[row, 0], self._state[row, 1])
+
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.1, 0.1)
 

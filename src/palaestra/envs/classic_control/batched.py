@@ -107,6 +107,12 @@ class BatchedEnv:
         """The float64 state as a writable ``[N, k]`` array (row i is env i's Gymnasium state)."""
         return self._state
 
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture, as the single env in that state draws it;
+        ``action``: what the row did at its last step (None since its reset), for the envs
+        whose picture shows it (Pendulum's torque)."""
+        raise NotImplementedError(f"{type(self).__name__} draws no frames")
+
     @property
     def observation_space(self) -> Box:
         """The batched observation space ``[N, obs_dim]``."""

@@ -201,6 +201,10 @@ class CartPoleBatch(BatchedEnv):
         self._live = np.ones(n, dtype=bool)  # [N] not terminated since the last reset
         self._reward = np.zeros(n)  # [N] float64, rewritten every step
 
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture (see :meth:`BatchedEnv.frame`)."""
+        return render_cartpole(self._state[row])
+
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.05, 0.05)
 
@@ -277,8 +281,8 @@ def _vector_env_class() -> type:
                     'render_mode="rgb_array")'
                 )
                 return None
-            state = self.batch.state  # type: ignore[attr-defined]  # a CartPoleBatch
-            return tuple(render_cartpole(row) for row in state)
+            batch = self.batch  # a CartPoleBatch: it draws its rows
+            return tuple(batch.frame(i) for i in range(self.num_envs))  # type: ignore[attr-defined]
 
     CartPoleVectorEnv.__qualname__ = "CartPoleVectorEnv"  # pickled by this module's name
     return CartPoleVectorEnv

@@ -300,6 +300,10 @@ class ContinuousMountainCarBatch(BatchedEnv):
         self._fresh = np.ones(self.num_envs, dtype=bool)  # [N] no step since reset
         self._lims = (self.params, *all_limits(self.params))
 
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture (see :meth:`BatchedEnv.frame`)."""
+        return render_mountain_car(self._state[row, 0], self.params.goal_position)
+
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.6, -0.4)
 

@@ -159,6 +159,10 @@ class MountainCarBatch(BatchedEnv):
         super().__init__(num_envs)
         self._reward = np.full(self.num_envs, -1.0)  # [N], constant
 
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture (see :meth:`BatchedEnv.frame`)."""
+        return render_mountain_car(self._state[row, 0], self.params.goal_position)
+
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_reset_bounds(options, -0.6, -0.4)
 

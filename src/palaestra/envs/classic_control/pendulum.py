@@ -169,6 +169,15 @@ class PendulumBatch(BatchedEnv):
         self.single_observation_space, self.single_action_space = spaces(self.params)
         super().__init__(num_envs)
 
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture (see :meth:`BatchedEnv.frame`)."""
+        # The single env draws its last clipped torque (last_u), None right after a reset.
+        last_u = None
+        if action is not None:
+            torque = float(np.asarray(action, dtype=np.float32).reshape(-1)[0])
+            last_u = min(max(torque, -self.params.max_torque), self.params.max_torque)
+        return render_pendulum(self._state[row, 0], last_u)
+
     def _parse_options(self, options: dict[str, Any] | None) -> tuple[float, float]:
         return parse_options(options)
 

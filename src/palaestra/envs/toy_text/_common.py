@@ -75,6 +75,11 @@ class ToyTextBatch:
         self._all = np.arange(n)  # [N] every row, for the streams' gathers
         self._infos: Any = None
 
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture, as the single env in that state draws it;
+        ``action``: the row's last action (None since its reset)."""
+        raise NotImplementedError(f"{type(self).__name__} draws no frames")
+
     def reset(
         self,
         *,

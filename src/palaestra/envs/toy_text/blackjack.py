@@ -327,6 +327,14 @@ class BlackjackBatch(ToyTextBatch):
         np.copyto(self._suit, values[4] >> _U30, where=rows, casting="unsafe")
         np.copyto(self._face, (values[5] * _U3) >> _U32, where=rows & (d1 == 10), casting="unsafe")
 
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture, as the single env in that state draws it;
+        ``action``: the row's last action (None since its reset)."""
+        first = int(self._first[row])
+        value = "A" if first == 1 else FACES[int(self._face[row])] if first == 10 else str(first)
+        player_sum, dealer_value, ace = (int(part[row]) for part in self._obs)
+        return render_blackjack(player_sum, dealer_value, bool(ace), value + SUITS[self._suit[row]])
+
     def _observe_all(self) -> None:
         raw, ace = self._p_raw, self._p_ace
         np.copyto(self._obs[0], total(ARRAY, raw, ace))

@@ -100,3 +100,8 @@ class CliffWalkingBatch(TabularBatch):
         super().__init__(
             num_envs, TransitionTable(build_transitions(bool(is_slippery)), _initial())
         )
+
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture, as the single env in that state draws it;
+        ``action``: the row's last action (None since its reset)."""
+        return render_cliff_walking(int(self._state[row]))

@@ -257,3 +257,9 @@ class FrozenLakeBatch(TabularBatch):
         self.desc = _resolve_map(desc, map_name)
         P = build_transitions(self.desc, bool(is_slippery), success_rate, schedule)
         super().__init__(num_envs, TransitionTable(P, _initial(self.desc)))
+
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture, as the single env in that state draws it;
+        ``action``: the row's last action (None since its reset)."""
+        last = None if action is None else int(action)
+        return render_frozen_lake(self.desc, int(self._state[row]), last)

@@ -276,11 +276,22 @@ class TaxiBatch(TabularBatch):
         self.fickle_passenger = bool(fickle_passenger)
         self.fickle_probability = fickle_probability
         self._fickle_step = np.zeros(self.num_envs, dtype=bool)  # [N]
+        # [N] the way each taxi faces in pictures: 0 at reset, then its last move drawn, as
+        # the single env's taxi_orientation (only frames read it).
+        self._orientation = np.zeros(self.num_envs, dtype=np.int64)
+
+    def frame(self, row: int, action: Any = None) -> np.ndarray:
+        """Row ``row``'s ``rgb_array`` picture, as the single env in that state draws it;
+        ``action``: the row's last action (None since its reset)."""
+        if action is not None and int(action) < 4:
+            self._orientation[row] = int(action)  # the taxi faces its last move
+        return render_taxi(int(self._state[row]), int(self._orientation[row]))
 
     def _info_arrays(self, prob: np.ndarray) -> dict[str, np.ndarray]:
         return {"prob": prob, "action_mask": _MASKS[self._state]}  # [N, 6] int8, a new array
 
     def _after_reset(self, rows: np.ndarray) -> None:
+        self._orientation[rows] = 0
         if self.fickle_passenger:
             self._fickle_step[rows] = self._streams.doubles(rows) < self.fickle_probability
 
