@@ -78,7 +78,7 @@ def test_compute_reward_batched_as_sb3(kwargs: dict[str, Any]) -> None:
     got = ours.compute_reward(batch_a, batch_d, [{}] * 8)
     assert got.dtype == expected.dtype == np.float32 and got.shape == (8,)
     np.testing.assert_array_equal(got, expected)
-    np.testing.assert_array_equal(got, [0, 0, 0, *(-(bits[3:] != 1).any(axis=1))])
+    np.testing.assert_array_equal(got, [0, 0, 0, *-(bits[3:] != 1).any(axis=1).astype(float)])
     one = ours.compute_reward(achieved[0], desired[0], None)  # one pair: a batch of one
     np.testing.assert_array_equal(one, theirs.compute_reward(achieved[0], desired[0], None))
 
@@ -137,7 +137,7 @@ def test_render_modes(capsys: pytest.CaptureFixture[str]) -> None:
     env.reset(seed=0)
     frame = env.render()
     assert isinstance(frame, np.ndarray) and frame.dtype == np.uint8 and frame.shape == (32, 48, 3)
-    np.testing.assert_array_equal(frame[0, ::16, 0], env.state * 255)  # state row
+    np.testing.assert_array_equal(frame[0, ::16, 0], env.state.astype(int) * 255)  # state row
     np.testing.assert_array_equal(frame[16, ::16, 0], [255, 255, 255])  # desired goal row
     ansi = BitFlippingEnv(n_bits=3, render_mode="ansi")
     ansi.reset(seed=0)
