@@ -18,7 +18,7 @@ from palaestra.algos.callbacks import BaseCallback
 from palaestra.algos.common.model_io import ModelFileError
 from palaestra.algos.her import GoalSelectionStrategy, HerReplayBuffer
 from palaestra.envs.goal import BitFlippingEnv
-from palaestra.vec_env import DummyVecEnv, make_vec_env
+from palaestra.vec_env import make_vec_env
 
 STRATEGIES = ["future", "final", "episode"]
 
@@ -71,9 +71,9 @@ def test_samples_equal_sb3s(strategy: str, env_kwargs: dict[str, Any]) -> None:
     for step in range(45):
         obs = _fill_one([theirs, ours], venv, obs)
         if step >= 6:  # after the first episodes ended
-            np.random.seed(step)
+            np.random.seed(step)  # noqa: NPY002 - SB3's buffer draws from it
             expected = theirs.sample(16)
-            np.random.seed(step)
+            np.random.seed(step)  # noqa: NPY002 - SB3's buffer draws from it
             got = ours.sample(16)
             for field in ("observations", "actions", "next_observations", "dones", "rewards"):
                 _assert_equal(getattr(got, field), getattr(expected, field), field)
@@ -96,57 +96,56 @@ def _fill_one(buffers: list[Any], venv: Any, obs: Any) -> Any:
 
 
 def _assert_equal(got: Any, expected: Any, field: str) -> None:
-    pairs = [(got[k], expected[k]) for k in expected] if isinstance(expected, dict) else [(got, expected)]
+    pairs = (
+        [(got[k], expected[k]) for k in expected]
+        if isinstance(expected, dict)
+        else [(got, expected)]
+    )
     if isinstance(expected, dict):
         assert list(got) == list(expected), field
     for x, y in pairs:
-        assert x.shape == y.shape and x.dtype == y.dtype, (field, x.shape, y.shape, x.dtype, y.dtype)
+        assert x.shape == y.shape and x.dtype == y.dtype, (
+            field,
+            x.shape,
+            y.shape,
+            x.dtype,
+            y.dtype,
+        )
         assert torch.equal(x, y), field
 
 
 def test_truncate_last_trajectory_as_sb3(recwarn: pytest.WarningsRecorder) -> None:
-    """SB3's test_truncate_last_trajectory on both buffers: the same warning, dones, timeouts
-    and episode lengths, and the same samples after more steps."""
+    """SB3's test_truncate_last_trajectory on both buffers fed the same steps: the same
+    warning, dones, timeouts and episode bookkeeping, before and after more steps."""
     sb3 = pytest.importorskip("stable_baselines3")
+    to_gym = pytest.importorskip("palaestra.compat").to_gymnasium_space
     venv = _venv(2, continuous=True)
     ours = HerReplayBuffer(10_000, venv.observation_space, venv.action_space, venv, n_envs=2)
-    theirs = None
-    try:
-        from palaestra.compat import to_gymnasium_space
-
-        sb3_venv = pytest.importorskip("stable_baselines3.common.vec_env").DummyVecEnv(
-            [lambda: pytest.importorskip("stable_baselines3.common.envs").BitFlippingEnv(
-                n_bits=4, continuous=True)] * 2
-        )
-        theirs = sb3.HerReplayBuffer(
-            10_000,
-            to_gymnasium_space(venv.observation_space),
-            to_gymnasium_space(venv.action_space),
-            sb3_venv,
-            n_envs=2,
-        )
-    except ImportError:  # pragma: no cover - gymnasium missing
-        pytest.skip("gymnasium is needed for SB3's buffer")
+    theirs = sb3.HerReplayBuffer(
+        10_000, to_gym(venv.observation_space), to_gym(venv.action_space), venv, n_envs=2
+    )
     _fill([ours, theirs], venv, 5)
     pos = ours.pos
     open_envs = np.flatnonzero(ours._current_ep_start != pos)
     assert len(open_envs)  # 5 steps of 4-step episodes leave some open
     assert len(recwarn) == 0
-    with pytest.warns(UserWarning, match="The last trajectory in the replay buffer will be truncated"):
+    message = "The last trajectory in the replay buffer will be truncated"
+    with pytest.warns(UserWarning, match=message):
         ours.truncate_last_trajectory()
-    with pytest.warns(UserWarning, match="The last trajectory in the replay buffer will be truncated"):
+    with pytest.warns(UserWarning, match=message):
         theirs.truncate_last_trajectory()
     assert (ours._current_ep_start == pos).all()
     assert (ours.dones[pos - 1] == 1).all() and (ours.timeouts[pos - 1, open_envs] == 1).all()
-    for name in ("dones", "timeouts", "ep_length", "ep_start"):
+    for name in ("dones", "timeouts", "ep_length", "ep_start", "_current_ep_start"):
         np.testing.assert_array_equal(getattr(ours, name), getattr(theirs, name), name)
     _fill([ours, theirs], venv, 10, seed=1)
-    for name in ("dones", "timeouts", "ep_length", "ep_start", "rewards"):
+    for name in ("dones", "timeouts", "ep_length", "ep_start", "rewards", "_current_ep_start"):
         np.testing.assert_array_equal(getattr(ours, name), getattr(theirs, name), name)
     with warnings.catch_warnings():
-        warnings.simplefilter("error")  # nothing open after an episode end: no warning
-        closed = HerReplayBuffer(100, venv.observation_space, venv.action_space, venv, n_envs=2)
-        closed.truncate_last_trajectory()
+        warnings.simplefilter("error")  # nothing open: no warning
+        HerReplayBuffer(
+            100, venv.observation_space, venv.action_space, venv
+        ).truncate_last_trajectory()
 
 
 # -- relabelling by hand ---------------------------------------------------------------------
@@ -263,13 +262,22 @@ def test_sampling_before_the_first_episode_ends_is_sb3s_error() -> None:
 def test_bad_arguments() -> None:
     venv = _venv(1)
     spaces = (venv.observation_space, venv.action_space, venv)
-    with pytest.raises(ValueError, match=r"goal_selection_strategy must be one of \['episode', 'final', 'future'\] or a GoalSelectionStrategy, got 'later'"):
+    with pytest.raises(
+        ValueError,
+        match=r"goal_selection_strategy must be one of \['episode', 'final', 'future'\] or a "
+        r"GoalSelectionStrategy, got 'later'",
+    ):
         HerReplayBuffer(10, *spaces, goal_selection_strategy="later")
     with pytest.raises(ValueError, match=r"n_sampled_goal must be an integer >= 0, got -1"):
         HerReplayBuffer(10, *spaces, n_sampled_goal=-1)
-    with pytest.raises(ValueError, match="HerReplayBuffer does not support optimize_memory_usage=True"):
+    with pytest.raises(
+        ValueError, match="HerReplayBuffer does not support optimize_memory_usage=True"
+    ):
         HerReplayBuffer(10, *spaces, optimize_memory_usage=True)
-    assert HerReplayBuffer(10, *spaces, goal_selection_strategy="FINAL").goal_selection_strategy is GoalSelectionStrategy.FINAL
+    assert (
+        HerReplayBuffer(10, *spaces, goal_selection_strategy="FINAL").goal_selection_strategy
+        is GoalSelectionStrategy.FINAL
+    )
     from palaestra import spaces as sp
 
     no_goal = sp.Dict({"observation": sp.MultiBinary(3), "goal": sp.MultiBinary(3)})
@@ -287,29 +295,50 @@ def test_relabelling_needs_an_env() -> None:
         buffer.sample(4)
     buffer.set_env(venv)
     assert buffer.sample(4).rewards.shape == (4, 1)
-    with pytest.raises(ValueError, match="Trying to set env of already initialized environment."):
+    with pytest.raises(ValueError, match=r"Trying to set env of already initialized environment\."):
         buffer.set_env(venv)
 
 
 def test_other_buffer_classes_are_refused() -> None:
     from palaestra.algos.buffers import DictReplayBuffer
 
-    with pytest.raises(NotImplementedError, match=r"replay_buffer_class=<class .*DictReplayBuffer'> is not supported: .*None .*or HerReplayBuffer"):
+    with pytest.raises(
+        NotImplementedError,
+        match=r"replay_buffer_class=<class .*DictReplayBuffer'> is not supported: "
+        r".*None .*or HerReplayBuffer",
+    ):
         DQN("MultiInputPolicy", _venv(1), replay_buffer_class=DictReplayBuffer)
     with pytest.raises(NotImplementedError, match="replay_buffer_class='her' is not supported"):
         DQN("MultiInputPolicy", _venv(1), replay_buffer_class="her")
 
 
 def test_n_steps_is_ignored_with_a_buffer_class_as_sb3() -> None:
-    with pytest.warns(UserWarning, match=r"`n_steps=3` is ignored because a custom `replay_buffer_class` \(`HerReplayBuffer`\)"):
-        model = DQN("MultiInputPolicy", _venv(1), replay_buffer_class=HerReplayBuffer, n_steps=3, learning_starts=10)
+    with pytest.warns(
+        UserWarning,
+        match=r"`n_steps=3` is ignored because a custom `replay_buffer_class` "
+        r"\(`HerReplayBuffer`\)",
+    ):
+        model = DQN(
+            "MultiInputPolicy",
+            _venv(1),
+            replay_buffer_class=HerReplayBuffer,
+            n_steps=3,
+            learning_starts=10,
+        )
     model.learn(40)  # one-step targets: the HER buffer samples no discounts
     assert len(model._sample_batch(4)) == 5
 
 
 def test_optimize_memory_usage_is_refused() -> None:
-    with pytest.raises(ValueError, match="HerReplayBuffer does not support optimize_memory_usage=True"):
-        DQN("MultiInputPolicy", _venv(1), replay_buffer_class=HerReplayBuffer, optimize_memory_usage=True)
+    with pytest.raises(
+        ValueError, match="HerReplayBuffer does not support optimize_memory_usage=True"
+    ):
+        DQN(
+            "MultiInputPolicy",
+            _venv(1),
+            replay_buffer_class=HerReplayBuffer,
+            optimize_memory_usage=True,
+        )
 
 
 # -- the algorithms --------------------------------------------------------------------------
@@ -324,7 +353,9 @@ def test_algorithms_learn_with_her(algo: Any, backend: str, image: bool) -> None
         "MultiInputPolicy",
         venv,
         replay_buffer_class=HerReplayBuffer,
-        replay_buffer_kwargs=dict(n_sampled_goal=2, goal_selection_strategy="future", copy_info_dict=True),
+        replay_buffer_kwargs=dict(
+            n_sampled_goal=2, goal_selection_strategy="future", copy_info_dict=True
+        ),
         train_freq=4,
         gradient_steps=2,
         policy_kwargs=dict(net_arch=[32], backend=backend),
@@ -366,7 +397,9 @@ def test_model_file_keeps_the_buffer_class(tmp_path: Path) -> None:
         "MultiInputPolicy",
         venv,
         replay_buffer_class=HerReplayBuffer,
-        replay_buffer_kwargs=dict(n_sampled_goal=2, goal_selection_strategy=GoalSelectionStrategy.FINAL),
+        replay_buffer_kwargs=dict(
+            n_sampled_goal=2, goal_selection_strategy=GoalSelectionStrategy.FINAL
+        ),
         learning_starts=20,
         seed=0,
     )
@@ -375,12 +408,16 @@ def test_model_file_keeps_the_buffer_class(tmp_path: Path) -> None:
     loaded = DQN.load(tmp_path / "m.zip", env=venv)
     assert loaded.replay_buffer_class is HerReplayBuffer
     assert loaded.replay_buffer_kwargs == {"n_sampled_goal": 2, "goal_selection_strategy": "final"}
-    assert isinstance(loaded.replay_buffer, HerReplayBuffer) and loaded.replay_buffer.env is loaded.env
+    assert (
+        isinstance(loaded.replay_buffer, HerReplayBuffer) and loaded.replay_buffer.env is loaded.env
+    )
     assert loaded.replay_buffer.goal_selection_strategy is GoalSelectionStrategy.FINAL
     loaded.learn(40)
     predict_only = DQN.load(tmp_path / "m.zip")  # no env: it predicts; relabelling needs one
     obs = venv.reset()
-    np.testing.assert_array_equal(predict_only.predict(obs, deterministic=True)[0], model.predict(obs, deterministic=True)[0])
+    np.testing.assert_array_equal(
+        predict_only.predict(obs, deterministic=True)[0], model.predict(obs, deterministic=True)[0]
+    )
 
 
 @pytest.mark.parametrize("n_envs", [1, 2])
@@ -410,8 +447,12 @@ def test_save_and_load_replay_buffer(n_envs: int, truncate: bool, tmp_path: Path
     new = model.replay_buffer
     assert isinstance(new, HerReplayBuffer) and new.env is model.env and new.pos == old.pos
     for key in old.observations:
-        np.testing.assert_array_equal(new.observations[key][: old.pos], old.observations[key][: old.pos])
-        np.testing.assert_array_equal(new.next_observations[key][: old.pos], old.next_observations[key][: old.pos])
+        np.testing.assert_array_equal(
+            new.observations[key][: old.pos], old.observations[key][: old.pos]
+        )
+        np.testing.assert_array_equal(
+            new.next_observations[key][: old.pos], old.next_observations[key][: old.pos]
+        )
     for name in ("actions", "rewards"):
         np.testing.assert_array_equal(getattr(new, name), getattr(old, name))
     np.testing.assert_array_equal(new.dones[: old.pos - 1], old.dones[: old.pos - 1])
@@ -422,8 +463,10 @@ def test_save_and_load_replay_buffer(n_envs: int, truncate: bool, tmp_path: Path
     for a, b in zip(new.infos[: old.pos].ravel(), old.infos[: old.pos].ravel()):
         assert a.keys() == b.keys()
         for key in a:
-            np.testing.assert_array_equal(a[key] if key != "terminal_observation" else list(a[key].values()),
-                                          b[key] if key != "terminal_observation" else list(b[key].values()))
+            np.testing.assert_array_equal(
+                a[key] if key != "terminal_observation" else list(a[key].values()),
+                b[key] if key != "terminal_observation" else list(b[key].values()),
+            )
     model.learn(40, reset_num_timesteps=truncate)
 
 
@@ -435,18 +478,28 @@ def test_buffer_files_do_not_mix(tmp_path: Path) -> None:
     plain.learn(20)
     her.save_replay_buffer(tmp_path / "her.zip")
     plain.save_replay_buffer(tmp_path / "plain.zip")
-    with pytest.raises(ModelFileError, match="holds a HerReplayBuffer; this model has no replay_buffer_class"):
+    with pytest.raises(
+        ModelFileError, match="holds a HerReplayBuffer; this model has no replay_buffer_class"
+    ):
         plain.load_replay_buffer(tmp_path / "her.zip")
-    with pytest.raises(ModelFileError, match="without hindsight relabelling; this model uses HerReplayBuffer"):
+    with pytest.raises(
+        ModelFileError, match="without hindsight relabelling; this model uses HerReplayBuffer"
+    ):
         her.load_replay_buffer(tmp_path / "plain.zip")
 
 
 def test_infos_that_a_file_cannot_hold_are_refused(tmp_path: Path) -> None:
     venv = _venv(1)
-    buffer = HerReplayBuffer(50, venv.observation_space, venv.action_space, venv, copy_info_dict=True)
+    buffer = HerReplayBuffer(
+        50, venv.observation_space, venv.action_space, venv, copy_info_dict=True
+    )
     _fill([buffer], venv, 2)
     buffer.infos[0, 0] = {"callback": print}
-    with pytest.raises(ValueError, match=r"cannot save info value <built-in function print> of type builtin_function_or_method"):
+    with pytest.raises(
+        ValueError,
+        match=r"cannot save info value <built-in function print> of type "
+        r"builtin_function_or_method",
+    ):
         buffer.state()
 
 
@@ -497,11 +550,15 @@ def test_exact_resume_with_her(algo: Any, through_files: bool, tmp_path: Path) -
         assert torch.equal(value, cut[key]), key
     assert model_a._rng.bit_generator.state == model_b._rng.bit_generator.state
     for name in ("ep_start", "ep_length", "_current_ep_start", "rewards", "dones"):
-        np.testing.assert_array_equal(getattr(model_a.replay_buffer, name), getattr(model_b.replay_buffer, name))
+        np.testing.assert_array_equal(
+            getattr(model_a.replay_buffer, name), getattr(model_b.replay_buffer, name)
+        )
 
 
 def test_set_env_relabels_with_the_new_env() -> None:
-    model = DQN("MultiInputPolicy", _venv(2), replay_buffer_class=HerReplayBuffer, learning_starts=10)
+    model = DQN(
+        "MultiInputPolicy", _venv(2), replay_buffer_class=HerReplayBuffer, learning_starts=10
+    )
     model.learn(20)
     other = _venv(2)
     model.set_env(other)
@@ -510,10 +567,46 @@ def test_set_env_relabels_with_the_new_env() -> None:
 
 
 def test_a_new_env_episode_closes_the_open_ones() -> None:
-    model = DQN("MultiInputPolicy", _venv(1, max_steps=50), replay_buffer_class=HerReplayBuffer, learning_starts=1000)
+    model = DQN(
+        "MultiInputPolicy",
+        _venv(1, max_steps=50),
+        replay_buffer_class=HerReplayBuffer,
+        learning_starts=1000,
+    )
     model.learn(7)  # one open episode of 7 steps (the goal is rarely met in 7 random flips)
     buffer = model.replay_buffer
     open_before = buffer._current_ep_start[0] != buffer.pos
     model.learn(3)  # reset_num_timesteps=True resets the env: the open episode ends there
     if open_before:
         assert buffer.ep_length[0, 0] > 0 and buffer.timeouts[6, 0] == 1
+
+
+# -- the preset (slow: BENCHMARKS.md has all five seeds) ------------------------------------
+def _preset_success(seed: int, her: bool) -> float:
+    from palaestra import make, presets
+    from palaestra.algos import evaluate_policy
+
+    preset = presets.get_preset("dqn", "BitFlipping15-v0")
+    hyper = presets.resolve(preset["hyperparams"])
+    if not her:
+        hyper["replay_buffer_class"] = None
+    venv = make_vec_env("BitFlipping15-v0", n_envs=preset["n_envs"], seed=seed)
+    model = DQN(preset["policy"], venv, seed=seed, **hyper)
+    model.learn(preset["n_timesteps"])
+    env = make("BitFlipping15-v0")
+    env.reset(seed=10_000 + seed)
+    ends: list[bool] = []
+
+    def on_step(locals_: dict[str, Any], globals_: dict[str, Any]) -> None:
+        if locals_["done"]:
+            ends.append(bool(locals_["info"]["is_success"]))
+
+    evaluate_policy(model, env, n_eval_episodes=100, deterministic=True, callback=on_step)
+    assert len(ends) == 100
+    return float(np.mean(ends))
+
+
+@pytest.mark.slow
+def test_the_preset_solves_15_bits_where_plain_dqn_does_not() -> None:
+    assert _preset_success(0, her=True) >= 0.9
+    assert _preset_success(0, her=False) < 0.1

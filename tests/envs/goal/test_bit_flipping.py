@@ -85,7 +85,10 @@ def test_compute_reward_batched_as_sb3(kwargs: dict[str, Any]) -> None:
 
 def test_conversions_as_sb3() -> None:
     for kwargs in VARIANTS[:5]:
-        ours, theirs = BitFlippingEnv(n_bits=6, **kwargs), sb3_envs.BitFlippingEnv(n_bits=6, **kwargs)
+        ours, theirs = (
+            BitFlippingEnv(n_bits=6, **kwargs),
+            sb3_envs.BitFlippingEnv(n_bits=6, **kwargs),
+        )
         theirs.reset(seed=0)
         state = np.array([1, 0, 1, 1, 0, 1], dtype=np.int8)
         converted = ours.convert_if_needed(state)

@@ -222,9 +222,7 @@ class HerReplayBuffer(DictReplayBuffer):
             infos: Any = copy.deepcopy(self.infos[rows, cols])
         else:
             infos = [{} for _ in range(len(rows))]
-        rewards = self.env.env_method(
-            "compute_reward", next_achieved, goals, infos, indices=[0]
-        )[0]
+        rewards = self.env.env_method("compute_reward", next_achieved, goals, infos, indices=[0])[0]
         return np.asarray(rewards, dtype=np.float32).reshape(len(rows))
 
     def _batch(
@@ -253,7 +251,7 @@ class HerReplayBuffer(DictReplayBuffer):
         rows, cols, n_virtual, goals = self._draw(
             batch_size,
             lambda valid, n: np.random.choice(valid, size=n, replace=True),  # noqa: NPY002
-            np.random.randint,  # noqa: NPY002 - SB3's draws
+            np.random.randint,
         )
         obs, actions, next_obs, rewards, terminated = self._batch(rows, cols, n_virtual, goals)
         obs, next_obs = self._normalize_obs(obs, env), self._normalize_obs(next_obs, env)
@@ -374,9 +372,13 @@ class HerReplayBuffer(DictReplayBuffer):
         pos = pos % self.buffer_size if full else n
         for key in ("ep_start", "current_ep_start"):  # row indices
             if ((arrays[key] < 0) | (arrays[key] >= self.buffer_size)).any():
-                raise ValueError(f"replay buffer {key!r} holds rows outside [0, {self.buffer_size})")
+                raise ValueError(
+                    f"replay buffer {key!r} holds rows outside [0, {self.buffer_size})"
+                )
         if ((arrays["ep_length"] < 0) | (arrays["ep_length"] > self.buffer_size)).any():
-            raise ValueError(f"replay buffer 'ep_length' holds lengths outside [0, {self.buffer_size}]")
+            raise ValueError(
+                f"replay buffer 'ep_length' holds lengths outside [0, {self.buffer_size}]"
+            )
         if not np.isfinite(arrays["rewards"]).all():
             raise ValueError("replay buffer rewards hold NaN or infinite values")
         if isinstance(self.action_space, spaces.Discrete):
