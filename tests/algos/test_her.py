@@ -588,8 +588,8 @@ def _preset_success(seed: int, her: bool) -> float:
 
     preset = presets.get_preset("dqn", "BitFlipping15-v0")
     hyper = presets.resolve(preset["hyperparams"])
-    if not her:
-        hyper["replay_buffer_class"] = None
+    if not her:  # plain DQN, the same settings otherwise
+        hyper["replay_buffer_class"] = hyper["replay_buffer_kwargs"] = None
     venv = make_vec_env("BitFlipping15-v0", n_envs=preset["n_envs"], seed=seed)
     model = DQN(preset["policy"], venv, seed=seed, **hyper)
     model.learn(preset["n_timesteps"])

@@ -93,6 +93,7 @@ class HerReplayBuffer(DictReplayBuffer):
             optimize_memory_usage=False,
             handle_timeout_termination=handle_timeout_termination,
         )
+        assert isinstance(self.observation_space, spaces.Dict)  # DictReplayBuffer checked it
         missing = [k for k in GOAL_KEYS if k not in self.observation_space.spaces]
         if missing:
             raise ValueError(
@@ -131,7 +132,7 @@ class HerReplayBuffer(DictReplayBuffer):
         self.env = env
 
     # -- storing -----------------------------------------------------------------------------
-    def add(  # type: ignore[override]
+    def add(
         self,
         obs: dict[str, np.ndarray],
         next_obs: dict[str, np.ndarray],
@@ -245,7 +246,7 @@ class HerReplayBuffer(DictReplayBuffer):
         terminated = self.dones[rows, cols] * (1 - self.timeouts[rows, cols])
         return obs, self.actions[rows, cols], next_obs, rewards, terminated
 
-    def sample(self, batch_size: int, env: Any = None) -> DictReplayBufferSamples:  # type: ignore[override]
+    def sample(self, batch_size: int, env: Any = None) -> DictReplayBufferSamples:
         """SB3's ``sample``: numpy's global generator, torch tensors (real transitions first),
         observations and rewards normalised by ``env`` (a ``VecNormalize``) when given."""
         rows, cols, n_virtual, goals = self._draw(
@@ -283,6 +284,7 @@ class HerReplayBuffer(DictReplayBuffer):
         )
 
     def _space_shaped(self, obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        assert isinstance(self.observation_space, spaces.Dict)
         space = self.observation_space.spaces
         return {
             k: v.reshape(len(v)) if isinstance(space[k], spaces.Discrete) else v
