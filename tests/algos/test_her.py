@@ -162,24 +162,37 @@ class _Recorder:
         return [self.env.compute_reward(*args)]
 
 
-def _episode_buffer(strategy: str, n_sampled_goal: int = 4) -> tuple[HerReplayBuffer, Any]:
-    """One env, two finished episodes of 3 and 2 steps and an open one of 1 step, the state
-    after step t of episode e being the bits of 10 * e + t (achieved goals differ)."""
+def _episode_buffer(
+    strategy: str,
+    n_sampled_goal: int = 4,
+    lengths: tuple[int, ...] = (3, 2, 1),
+    size: int = 100,
+    buffer_class: Any = HerReplayBuffer,
+) -> tuple[Any, Any]:
+    """One env and episodes of ``lengths`` steps, all finished but the last; the state after
+    step t of episode e is the bits of ``3 * e + t`` (episode starts differ by 3, so the
+    first two episodes' achieved goals are told apart) and the action stored is t."""
     env = _Recorder()
-    buffer = HerReplayBuffer(
-        100,
-        env.env.observation_space,
-        env.env.action_space,
+    space, actions = env.env.observation_space, env.env.action_space
+    if buffer_class is HerReplayBuffer:
+        extra: dict[str, Any] = {"device": "cpu"}
+    else:  # SB3's, on Gymnasium spaces
+        to_gym = pytest.importorskip("palaestra.compat").to_gymnasium_space
+        space, actions, extra = to_gym(space), to_gym(actions), {}
+    buffer = buffer_class(
+        size,
+        space,
+        actions,
         env,
-        device="cpu",
         n_sampled_goal=n_sampled_goal,
         goal_selection_strategy=strategy,
+        **extra,
     )
 
     def bits(code: int) -> np.ndarray:
         return ((code >> np.arange(3)) & 1).astype(np.int8)[None]
 
-    for episode, length in enumerate([3, 2, 1]):
+    for episode, length in enumerate(lengths):
         for t in range(length):
             obs = {
                 "observation": bits(episode * 3 + t),
@@ -187,7 +200,7 @@ def _episode_buffer(strategy: str, n_sampled_goal: int = 4) -> tuple[HerReplayBu
                 "desired_goal": np.ones((1, 3), np.int8),
             }
             nxt = {**obs, "achieved_goal": bits(episode * 3 + t + 1)}
-            done = np.array([t == length - 1 and episode < 2])
+            done = np.array([t == length - 1 and episode < len(lengths) - 1])
             buffer.add(obs, nxt, np.array([t]), np.array([-1.0]), done, [{}])
     return buffer, env
 
@@ -225,7 +238,9 @@ def test_relabelled_goals_come_from_the_transitions_episode(strategy: str) -> No
     np.testing.assert_array_equal(rewards[n_real:], np.where(achieved == goal, 0.0, -1.0))
     (call,) = env.calls
     assert call[0].shape == call[1].shape == (400, 3) and len(call[2]) == 400
-    assert terminated.dtype == np.float32 and (terminated == 0).all()
+    # the last step of each finished episode terminated (no time limit in its info)
+    np.testing.assert_array_equal(terminated, (row == length - 1).astype(np.float32))
+    assert terminated.dtype == np.float32
 
 
 def test_n_sampled_goal_sets_the_relabelled_share() -> None:
@@ -238,16 +253,25 @@ def test_n_sampled_goal_sets_the_relabelled_share() -> None:
             assert len(env.calls[0][0]) == 64 - real
 
 
-def test_an_overwritten_episode_is_no_longer_sampled() -> None:
-    venv = _venv(1, max_steps=3)
-    buffer = HerReplayBuffer(8, venv.observation_space, venv.action_space, venv, n_envs=1)
-    _fill([buffer], venv, 9)  # 3 episodes of at most 3 steps in 8 rows: the first is overwritten
+@pytest.mark.parametrize("buffer_class", ["ours", "sb3"])
+def test_an_overwritten_episode_is_no_longer_sampled(buffer_class: str) -> None:
+    """A ring of 5 rows: episode A (rows 0-2), episode B (rows 3, 4, 0) overwrites A's first
+    row, so all of A stops being sampled; then the open episode C (rows 1, 2)."""
+    cls = (
+        HerReplayBuffer
+        if buffer_class == "ours"
+        else pytest.importorskip("stable_baselines3").HerReplayBuffer
+    )
+    buffer, _ = _episode_buffer("future", lengths=(3, 3, 0), size=5, buffer_class=cls)
+    np.testing.assert_array_equal(buffer.ep_length[:, 0], [3, 0, 0, 3, 3])
+    np.testing.assert_array_equal(buffer.ep_start[:, 0], [3, 0, 0, 3, 3])
     assert buffer.full and buffer.pos == 1
-    assert buffer.ep_length[0, 0] == 0  # the row being written belongs to an open episode
-    first = buffer.ep_start[1, 0]
-    assert buffer.ep_length[1, 0] == 0 or first != 0  # the first episode is forgotten whole
-    rows = np.flatnonzero(buffer.ep_length[:, 0])
-    assert len(rows) and not (set(rows) & {0})
+    buffer, _ = _episode_buffer("future", lengths=(3, 3, 2), size=5, buffer_class=cls)
+    np.testing.assert_array_equal(buffer.ep_length[:, 0], [3, 0, 0, 3, 3])  # C is open
+    if buffer_class == "ours":
+        obs, *_ = buffer.sample_arrays(200, np.random.default_rng(0))
+        codes = obs["observation"] @ (1 << np.arange(3))
+        assert set(codes.tolist()) == {3, 4, 5}  # only episode B
 
 
 def test_sampling_before_the_first_episode_ends_is_sb3s_error() -> None:
@@ -573,12 +597,16 @@ def test_a_new_env_episode_closes_the_open_ones() -> None:
         replay_buffer_class=HerReplayBuffer,
         learning_starts=1000,
     )
-    model.learn(7)  # one open episode of 7 steps (the goal is rarely met in 7 random flips)
+    model.learn(7)  # 8 steps (whole collections of train_freq=4) of one open episode
     buffer = model.replay_buffer
+    last = buffer.pos - 1
     open_before = buffer._current_ep_start[0] != buffer.pos
     model.learn(3)  # reset_num_timesteps=True resets the env: the open episode ends there
-    if open_before:
-        assert buffer.ep_length[0, 0] > 0 and buffer.timeouts[6, 0] == 1
+    assert open_before  # seeded: no success in the first steps
+    start = buffer.ep_start[last, 0]
+    assert buffer.ep_length[last, 0] == last - start + 1
+    assert buffer.dones[last, 0] == 1 and buffer.timeouts[last, 0] == 1
+    assert buffer.ep_start[last + 1, 0] == last + 1  # the new episode starts after it
 
 
 # -- the preset (slow: BENCHMARKS.md has all five seeds) ------------------------------------

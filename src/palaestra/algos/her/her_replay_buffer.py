@@ -14,9 +14,7 @@ transition's own step as in SB3, ``final`` or ``episode``), and whose reward is 
 Bookkeeping as SB3's: only transitions of finished episodes are sampled (sampling before the
 first episode ends is SB3's ``RuntimeError``); when the ring overwrites a row of an old episode,
 that whole episode stops being sampled; ``truncate_last_trajectory`` ends the open episodes
-(after ``load_replay_buffer`` of a run that will not continue them). Where SB3 forgets more
-rows than the overwritten episode (an episode stored across the ring's end), this buffer
-forgets exactly that episode.
+(after ``load_replay_buffer`` of a run that will not continue them).
 
 Two ways to sample the same thing: ``sample(batch_size, env)`` draws from numpy's global
 generator in SB3's order (the same rows and goals as SB3's buffer after ``np.random.seed``)
