@@ -139,7 +139,7 @@ OUT_OF_RANGE = [
     ("DQN", H + "replay_buffer_class", "ReplayBuffer",
      "replay_buffer_class='ReplayBuffer' is refused: expected null or 'HerReplayBuffer'"),
     ("DQN", H + "replay_buffer_kwargs", {"goal_selection_strategy": "later"},
-     "expected 'future', 'final' or 'episode'"),
+     "expected goal_selection_strategy to be 'future', 'final' or 'episode', not 'later'"),
     ("DQN", H + "exploration_final_eps", 2, "expected a number in [0.0, 1.0]"),
     ("PPO", P + "net_arch", [10**6, 10**6],
      "net_arch=[1000000, 1000000] is refused: expected null or a list of at most 64 layer"),
