@@ -396,7 +396,7 @@ def test_algorithms_learn_with_her(algo: Any, backend: str, image: bool) -> None
     assert model.replay_buffer.infos is not None and "is_success" in model.replay_buffer.infos[0, 0]
 
 
-@pytest.mark.parametrize("algo", [DQN, SAC])
+@pytest.mark.parametrize("algo", [DQN, SAC, TD3, DDPG])
 def test_same_bits_on_both_learners(algo: Any) -> None:
     params = []
     for backend in ("numpy", "torch"):
