@@ -134,7 +134,12 @@ OUT_OF_RANGE = [
     ("DQN", H + "seed", -1, "seed=-1 is refused: expected null or an integer from 0 to"),
     ("DQN", H + "train_freq", [4, "hour"], 'a positive integer or [n, "step"|"episode"]'),
     ("DQN", H + "replay_buffer_kwargs", {"device": "cuda"},
-     "keys among ['frame_margin', 'handle_timeout_termination', 'layout'] (not 'device')"),
+     "keys among ['copy_info_dict', 'frame_margin', 'goal_selection_strategy', "
+     "'handle_timeout_termination', 'layout', 'n_sampled_goal'] (not 'device')"),
+    ("DQN", H + "replay_buffer_class", "ReplayBuffer",
+     "replay_buffer_class='ReplayBuffer' is refused: expected null or 'HerReplayBuffer'"),
+    ("DQN", H + "replay_buffer_kwargs", {"goal_selection_strategy": "later"},
+     "expected goal_selection_strategy to be 'future', 'final' or 'episode', not 'later'"),
     ("DQN", H + "exploration_final_eps", 2, "expected a number in [0.0, 1.0]"),
     ("PPO", P + "net_arch", [10**6, 10**6],
      "net_arch=[1000000, 1000000] is refused: expected null or a list of at most 64 layer"),

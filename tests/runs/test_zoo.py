@@ -70,10 +70,6 @@ EXPECTED: dict[tuple[str, str], str] = {
         "section 'atari': policy_kwargs: 'RMSpropTFLike' in 'dict(optimizer_class=RMSpropTFLike, "
         "optimizer_kwargs=dict(eps=1e-5))' is refused: unknown name 'RMSpropTFLike'"
     ),
-    ("sac", "FetchReach-v1"): (
-        "section 'FetchReach-v1': replay_buffer_class 'HerReplayBuffer' is refused: palaestra's "
-        "settings name no replay buffer class"
-    ),
     # rl_zoo3's own wrappers (FrameSkip, HistoryWrapper) have no palaestra equivalent
     ("sac", "CarRacing-v3"): (
         "section 'CarRacing-v3' names env_wrapper 'rl_zoo3.wrappers.FrameSkip', which would "
@@ -138,6 +134,18 @@ def test_every_section_parses_or_names_what_it_cannot_take() -> None:
         )
     assert set(EXPECTED) <= seen, sorted(set(EXPECTED) - seen)  # no stale expectation
     assert parsed == len(seen) - len(EXPECTED) and parsed >= 100, parsed
+
+
+@needs_zoo
+def test_a_her_section_names_palaestras_her_buffer() -> None:
+    assert ZOO is not None
+    sac = load_config_file(str(ZOO / "sac.yml"))
+    hyper = _parse("sac", "FetchReach-v1", sac["FetchReach-v1"])["hyperparams"]
+    assert hyper["replay_buffer_class"] == "HerReplayBuffer"
+    assert hyper["replay_buffer_kwargs"] == {
+        "goal_selection_strategy": "future",
+        "n_sampled_goal": 4,
+    }
 
 
 @needs_zoo
@@ -290,6 +298,9 @@ def test_keys_palaestra_cannot_take_are_refused_with_why(key: str) -> None:
         ({"normalize": "[1]"},
          "zoo: normalize must give VecNormalize kwargs as {...}, got [1]"),
         ({"noise_std": 0.1}, "zoo: noise_std 0.1 without noise_type"),
+        ({"replay_buffer_class": "DictReplayBuffer"},
+         "zoo: replay_buffer_class 'DictReplayBuffer' is refused: palaestra's algorithms take "
+         "HerReplayBuffer or none"),
         ({"noise_type": "adaptive-param", "noise_std": 0.1},
          "zoo: noise_type 'adaptive-param' is refused: expected one of ['normal', "
          "'ornstein-uhlenbeck']"),

@@ -40,7 +40,7 @@ surprising, palaestra differs on purpose:
   also works with Dict observations (SB3 asserts ``n_steps == 1`` there).
 
 Not supported yet: ``use_sde`` (gSDE; PPO, A2C and SAC raise ``NotImplementedError``),
-custom buffer classes, recurrent policies, VecNormalize-aware replay
+buffer classes other than ``HerReplayBuffer``, recurrent policies, VecNormalize-aware replay
 (observations are stored as the env returns them).
 """
 
@@ -68,6 +68,7 @@ from palaestra.algos.common.action_noise import (
 )
 from palaestra.algos.ppo import PPO
 from palaestra.algos.qrdqn import QRDQN
+from palaestra.algos.her import HerReplayBuffer
 from palaestra.algos.common.evaluation import evaluate_policy
 from palaestra.algos.common.model_io import ModelFileError
 from palaestra.algos.common.schedules import ConstantSchedule, LinearSchedule
@@ -81,6 +82,7 @@ __all__ = [
     "SAC",
     "TD3",
     "ConstantSchedule",
+    "HerReplayBuffer",
     "LinearSchedule",
     "ModelFileError",
     "NormalActionNoise",

@@ -131,6 +131,19 @@ for _id, _kwargs in _TOY_TEXT.items():
     if _id not in registry:
         register(id=_id, **_kwargs)
 
+# Goal envs (palaestra's own ids; SB3's test env, which HER learns on): see envs.goal.
+_GOAL = "palaestra.envs.goal.bit_flipping:BitFlippingEnv"
+_GOAL_ENVS: dict[str, dict] = {
+    "BitFlipping-v0": dict(entry_point=_GOAL, kwargs={"render_mode": None}),
+    "BitFlippingContinuous-v0": dict(
+        entry_point=_GOAL, kwargs={"continuous": True, "render_mode": None}
+    ),
+    "BitFlipping15-v0": dict(entry_point=_GOAL, kwargs={"n_bits": 15, "render_mode": None}),
+}
+for _id, _kwargs in _GOAL_ENVS.items():
+    if _id not in registry:
+        register(id=_id, **_kwargs)
+
 # Atari: every id ale-py registers for v5, plus the NoFrameskip-v4 ids of SB3/RL-Zoo pipelines,
 # from a static game list so that this import does not load ale-py.
 for _id, _kwargs in atari_specs().items():

@@ -433,7 +433,9 @@ def _open_resume(
             checkpoint / MODEL_FILE, env=venv, device=spec.device
         )
         if spec.algo in REPLAY_ALGOS and (checkpoint / REPLAY_FILE).is_file():
-            model.load_replay_buffer(checkpoint / REPLAY_FILE)
+            # an exact resume continues the saved episodes; where learn() resets the env
+            # instead, a HerReplayBuffer ends its open episodes itself
+            model.load_replay_buffer(checkpoint / REPLAY_FILE, truncate_last_traj=False)
     except FileNotFoundError:
         raise RunError(f"{run_dir} has no {MODEL_FILE} to resume from", "check DIR") from None
     except (ModelFileError, ValueError) as exc:

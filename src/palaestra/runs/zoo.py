@@ -24,8 +24,10 @@ algorithm's defaults, not over a palaestra preset (``--preset`` puts one beneath
   builds it (``normal``: ``NormalActionNoise``; ``ornstein-uhlenbeck``);
 - ``callback`` passes as it is: SB3's names map through the same table, other modules need
   ``--allow-import`` (:mod:`palaestra.runs.run_callbacks`);
-- keys palaestra's settings cannot take (``vec_env_wrapper``, ``monitor_kwargs``,
-  ``replay_buffer_class``) are refused, each with why.
+- ``replay_buffer_class: HerReplayBuffer`` names palaestra's ``HerReplayBuffer``; another
+  class is refused;
+- keys palaestra's settings cannot take (``vec_env_wrapper``, ``monitor_kwargs``) are refused,
+  each with why.
 """
 
 from __future__ import annotations
@@ -58,10 +60,13 @@ REFUSED: dict[str, str] = {
         "VecFrameStack and VecNormalize of a run"
     ),
     "monitor_kwargs": "every palaestra run logs each episode itself (episodes.csv)",
-    "replay_buffer_class": (
-        "palaestra's settings name no replay buffer class; palaestra.runs.known_names maps "
-        "none of SB3's"
-    ),
+}
+# The replay buffer classes a section may name (the Zoo writes SB3's class name; palaestra's
+# settings name HerReplayBuffer so too, see off_policy.REPLAY_BUFFER_CLASSES).
+_BUFFER_CLASSES = {
+    "HerReplayBuffer": "HerReplayBuffer",
+    "stable_baselines3.HerReplayBuffer": "HerReplayBuffer",
+    "stable_baselines3.her.HerReplayBuffer": "HerReplayBuffer",
 }
 _NOISES = {"normal": "NormalActionNoise", "ornstein-uhlenbeck": "OrnsteinUhlenbeckActionNoise"}
 
@@ -127,6 +132,14 @@ def section_settings(
             out[key] = value
         elif key == "normalize":
             out[key] = _normalize(value, source)
+        elif key == "replay_buffer_class":
+            if value not in _BUFFER_CLASSES:
+                raise RunError(
+                    f"{source}: replay_buffer_class {value!r} is refused: palaestra's "
+                    "algorithms take HerReplayBuffer or none",
+                    "remove it",
+                )
+            out[key] = _BUFFER_CLASSES[value]
         elif key in ("policy_kwargs", "replay_buffer_kwargs"):
             out[key] = kwargs_value(key, value, source)
             if key == "policy_kwargs":

@@ -232,9 +232,18 @@ _REPLAY: dict[str, Check] = {
     "tau": _PROBABILITY,
     "train_freq": _train_freq,
     "gradient_steps": _integer(-1, MAX_BATCH_SIZE),  # -1: as many as env steps collected
+    "replay_buffer_class": lambda v: (
+        None if v is None or v == "HerReplayBuffer" else "null or 'HerReplayBuffer'"
+    ),
     "replay_buffer_kwargs": _mapping(
         {
             "handle_timeout_termination": _boolean,
+            # HerReplayBuffer's
+            "n_sampled_goal": _integer(0, 1_000_000),
+            "goal_selection_strategy": lambda v: (
+                None if v in ("future", "final", "episode") else "'future', 'final' or 'episode'"
+            ),
+            "copy_info_dict": _boolean,
             "frame_margin": _number(0.0, 10.0),
             "layout": lambda v: (
                 None

@@ -25,8 +25,32 @@ from palaestra.algos.common.nstep import check_n_steps
 from palaestra.algos.common.schedules import as_schedule
 from palaestra.algos.common.settings import Settings
 from palaestra.algos.common.transition_ring import BATCH_KEYS, TransitionRing
+from palaestra.algos.her.goal_selection_strategy import GoalSelectionStrategy
+from palaestra.algos.her.her_replay_buffer import HerReplayBuffer
 
-__all__ = ["OffPolicyAlgorithm", "train_freq_pair"]
+__all__ = ["REPLAY_BUFFER_CLASSES", "OffPolicyAlgorithm", "replay_buffer_class", "train_freq_pair"]
+
+# The buffer classes ``replay_buffer_class`` takes, by the names settings files and model
+# files use for them (None: palaestra's own ring).
+REPLAY_BUFFER_CLASSES: dict[str, type] = {"HerReplayBuffer": HerReplayBuffer}
+
+
+def replay_buffer_class(value: Any) -> type | None:
+    """``replay_buffer_class`` as a class: None, ``HerReplayBuffer`` (or a subclass), or its
+    name. Other classes are refused: palaestra's learners sample the buffer as arrays with the
+    model's seeded generator and save it without pickle, which SB3's other buffer classes
+    (and users' subclasses of them) do not offer."""
+    if value is None:
+        return None
+    if isinstance(value, str) and value in REPLAY_BUFFER_CLASSES:
+        return REPLAY_BUFFER_CLASSES[value]
+    if isinstance(value, type) and issubclass(value, HerReplayBuffer):
+        return value
+    raise NotImplementedError(
+        f"replay_buffer_class={value!r} is not supported: palaestra's off-policy algorithms "
+        f"take None (their own replay buffer) or HerReplayBuffer (also by its name "
+        f"'HerReplayBuffer')"
+    )
 
 
 def train_freq_pair(value: Any) -> tuple[int, str]:
@@ -55,9 +79,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
     # The collection counters make a run stopped mid-collection train at the same steps
     # after a resume as without the stop.
     _extra_counters: tuple[str, ...] = ("_n_calls", "_collected_steps", "_collected_episodes")
-    # Only its default is accepted (NotImplementedError otherwise): nothing to keep.
-    _not_saved = BaseAlgorithm._not_saved | {"replay_buffer_class"}
-    replay_buffer: TransitionRing | FrameReplayBuffer | None
+    replay_buffer: TransitionRing | FrameReplayBuffer | HerReplayBuffer | None
 
     def _build_policy(self, policy_kwargs: dict[str, Any]) -> Any:
         """The policy module: the class given (or the one its name stands for) built as SB3
@@ -88,9 +110,16 @@ class OffPolicyAlgorithm(BaseAlgorithm):
 
     def _take_settings(self, settings: Settings) -> None:
         """The settings every off-policy algorithm takes (SB3's names and meanings)."""
-        if settings["replay_buffer_class"] is not None:
-            raise NotImplementedError("replay_buffer_class is not supported yet")
+        self.replay_buffer_class = replay_buffer_class(settings["replay_buffer_class"])
         self.n_steps = check_n_steps(settings["n_steps"])
+        if self.n_steps > 1 and self.replay_buffer_class is not None:
+            # SB3's rule and words: a buffer class given sets up its own sampling
+            warnings.warn(
+                f"`n_steps={self.n_steps}` is ignored because a custom `replay_buffer_class` "
+                f"(`{self.replay_buffer_class.__name__}`) was passed: n-step returns are only "
+                "set up automatically when `replay_buffer_class` is `None`.",
+                stacklevel=4,
+            )
         self.optimize_memory_usage = bool(settings["optimize_memory_usage"])
         if self.n_steps > 1 and self.optimize_memory_usage:
             raise NotImplementedError(
@@ -120,6 +149,18 @@ class OffPolicyAlgorithm(BaseAlgorithm):
 
     def _make_replay_buffer(self) -> None:
         self._no_timeouts = np.zeros(self.n_envs, dtype=bool)
+        if self.replay_buffer_class is not None:  # HerReplayBuffer: SB3's arguments
+            self.replay_buffer = self.replay_buffer_class(
+                self.buffer_size,
+                self.observation_space,
+                self.action_space,
+                env=self.env,
+                device=self.device,
+                n_envs=self.n_envs,
+                optimize_memory_usage=self.optimize_memory_usage,
+                **self.replay_buffer_kwargs,
+            )
+            return
         if self.optimize_memory_usage:
             self.replay_buffer = FrameReplayBuffer(
                 self.buffer_size,
@@ -227,7 +268,12 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         next_obs, timeouts = new_obs, self._no_timeouts  # [n_envs] all False
         if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
             next_obs, timeouts = self._real_next_obs(new_obs, dones, infos)
-        self.replay_buffer.add(self._last_obs, next_obs, buffer_actions, rewards, dones, timeouts)
+        if isinstance(self.replay_buffer, HerReplayBuffer):  # SB3's add: it reads the infos
+            self.replay_buffer.add(self._last_obs, next_obs, buffer_actions, rewards, dones, infos)
+        else:
+            self.replay_buffer.add(
+                self._last_obs, next_obs, buffer_actions, rewards, dones, timeouts
+            )
         self._last_obs = new_obs
         self._update_progress()
         self._n_calls += 1
@@ -244,6 +290,28 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         # The open collection counted steps of the old episodes (which a buffer loaded from
         # a checkpoint may not hold): start a new one.
         self._collected_steps = self._collected_episodes = 0
+        if isinstance(self.replay_buffer, HerReplayBuffer):
+            # The episodes the buffer holds open end here: the env starts new ones (SB3 would
+            # join the old and the new steps into one episode).
+            self.replay_buffer._close_open_episodes()
+
+    def set_env(self, env: Any, force_reset: bool = True) -> None:
+        """Train on another env with the same spaces; a ``HerReplayBuffer`` relabels with the
+        new env's ``compute_reward`` from then on."""
+        super().set_env(env, force_reset)
+        if isinstance(self.replay_buffer, HerReplayBuffer):
+            self.replay_buffer.env = self.env
+
+    def _saved_value(self, name: str) -> Any:
+        if name == "replay_buffer_class":  # by its name (model files hold data only)
+            cls = self.replay_buffer_class
+            return None if cls is None else cls.__name__
+        value = super()._saved_value(name)
+        if name == "replay_buffer_kwargs":
+            strategy = value.get("goal_selection_strategy")
+            if isinstance(strategy, GoalSelectionStrategy):
+                value = {**value, "goal_selection_strategy": strategy.name.lower()}
+        return value
 
     def _real_next_obs(
         self, new_obs: Any, dones: np.ndarray, infos: list[dict[str, Any]]
@@ -287,6 +355,10 @@ class OffPolicyAlgorithm(BaseAlgorithm):
     ) -> None:
         """Restore a buffer written by ``save_replay_buffer`` (its n_envs must match).
 
+        ``truncate_last_traj`` (``HerReplayBuffer`` only, as SB3): end the episodes the file
+        holds open, for a run that starts new ones; ``False`` when the model continues the
+        episodes it was saved in (exact resume). The buffer relabels with this model's env.
+
         A file may hold at most what this model's buffer holds (``max_bytes`` overrides that
         bound): a crafted file cannot make the reader allocate more than the buffer itself.
         A model whose ``replay_buffer`` is None (set so to free memory) gets a new one with
@@ -306,3 +378,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
             ) from exc
         # samples go where the model is now (SB3 GH#1561: model.device may have changed)
         self.replay_buffer.device = self.device
+        if isinstance(self.replay_buffer, HerReplayBuffer):
+            self.replay_buffer.env = self.env
+            if truncate_last_traj:
+                self.replay_buffer.truncate_last_trajectory()

@@ -61,6 +61,18 @@ def _numpy_input_problem(
     space: spaces.Space[Any], extractor: nn.Module, normalize_images: bool
 ) -> str:
     """Why a net's input is not the raw observation flattened to float32 ("" if it is)."""
+    if isinstance(extractor, CombinedExtractor) and isinstance(space, spaces.Dict):
+        # every entry flattened and cast, side by side in key order: the numpy learner's
+        # input (learner._flat_input concatenates a dict's entries in sorted key order)
+        if list(space.spaces) != sorted(space.spaces):
+            return "the Dict observation's keys are not in sorted order"
+        for key, sub in space.spaces.items():
+            flat = isinstance(sub, spaces.MultiBinary) or (
+                isinstance(sub, spaces.Box) and not is_image_space(sub)
+            )
+            if not flat or not isinstance(extractor.extractors[key], nn.Flatten):
+                return f"the Dict observation's {key!r} entry is {sub}, preprocessed in torch"
+        return ""
     if not isinstance(extractor, FlattenExtractor):
         return f"the features extractor is {type(extractor).__name__}"
     if not isinstance(space, spaces.Box):

@@ -171,6 +171,11 @@ class TransitionRing:
 
     def load_state(self, meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
         """Restore from ``state()`` output; ``ValueError`` if it does not fit this buffer."""
+        if meta.get("kind") == "her":
+            raise ValueError(
+                "the file holds a HerReplayBuffer; this model has no replay_buffer_class "
+                "(pass replay_buffer_class=HerReplayBuffer)"
+            )
         if meta.get("kind") == "frames":
             raise ValueError(
                 "the file holds a frame buffer (optimize_memory_usage=True); "

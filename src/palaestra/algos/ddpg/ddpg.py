@@ -33,7 +33,7 @@ class DDPG(TD3):
         train_freq: int | tuple[int, str] = 1,
         gradient_steps: int = 1,
         action_noise: Any = None,
-        replay_buffer_class: None = None,
+        replay_buffer_class: type | str | None = None,
         replay_buffer_kwargs: dict[str, Any] | None = None,
         optimize_memory_usage: bool = False,
         n_steps: int = 1,

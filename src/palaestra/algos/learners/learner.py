@@ -436,9 +436,14 @@ class NumpyLearner(Learner):
 
 def _flat_input(x: Any) -> np.ndarray:
     """An MLP's input ``[B, in]`` float32: a batch flattened, or a tuple of batches (a
-    critic's observation and action) flattened and side by side."""
+    critic's observation and action) flattened and side by side; a dict of batches (Dict
+    observations) is its entries side by side in sorted key order, CombinedExtractor's order
+    for the spaces the numpy learner takes (``policies._numpy_input_problem``)."""
     if isinstance(x, tuple):
-        parts = [np.asarray(p).reshape(len(p), -1) for p in x]
+        parts = [_flat_input(p) for p in x]
+        return np.concatenate(parts, axis=1).astype(np.float32, copy=False)
+    if isinstance(x, dict):
+        parts = [np.asarray(x[k]).reshape(len(x[k]), -1) for k in sorted(x)]
         return np.concatenate(parts, axis=1).astype(np.float32, copy=False)
     x = np.asarray(x)
     return x.reshape(x.shape[0], -1).astype(np.float32, copy=False)

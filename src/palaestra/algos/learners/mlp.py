@@ -19,7 +19,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from palaestra.algos.common.networks import FlattenExtractor
+from palaestra.algos.common.networks import CombinedExtractor, FlattenExtractor
 
 __all__ = [
     "ACTIVATIONS",
@@ -64,6 +64,10 @@ def _leaves(module: nn.Module) -> list[nn.Module]:
     and ``describe`` refuses it: its forward may be anything."""
     if isinstance(module, nn.Sequential | FlattenExtractor):
         return [leaf for child in module.children() for leaf in _leaves(child)]
+    if type(module) is CombinedExtractor and all(
+        type(sub) is nn.Flatten for sub in module.extractors.values()
+    ):  # Dict entries flattened side by side: one flattening of the concatenated input
+        return [nn.Flatten()]
     return [module]
 
 
