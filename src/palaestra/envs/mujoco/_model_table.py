@@ -1,10 +1,11 @@
-"""The MJCF models of palaestra"s MuJoCo envs, as a table of their numbers, and what writes them.
+# ruff: noqa: E501  (a table: one MJCF element per line reads better than wrapped)
+"""The MJCF models of palaestra's MuJoCo envs, as a table of their numbers, and what writes them.
 
 Each model is a tree of :class:`E` (an MJCF element: its tag, attributes and children) holding
-the published models" facts: bodies, joints, geoms, sizes, ranges, masses, gears, options and
+the published models' facts: bodies, joints, geoms, sizes, ranges, masses, gears, options and
 colours. ``python -m palaestra.envs.mujoco._model_table`` writes them as the XML files under
 ``assets/`` that the envs load; ``tests/envs/mujoco/test_models.py`` checks that the committed
-files are this module"s output and that each compiles to the same ``MjModel`` (every numeric
+files are this module's output and that each compiles to the same ``MjModel`` (every numeric
 array) as the model Gymnasium 1.4.0"s v5 env compiles. Nothing imports this module at run time.
 """
 
@@ -74,7 +75,7 @@ def write_all(folder: Path = ASSETS) -> list[Path]:
 
 
 def _textured_floor_assets(sky: tuple[float, ...], repeat: int) -> E:
-    """The skybox, the checker floor material and the geoms" textured material."""
+    """The skybox, the checker floor material and the geoms' textured material."""
     return E("asset", kids=[
         E("texture", builtin="gradient", height=100, rgb1=sky, rgb2=(0, 0, 0), type="skybox", width=100),
         E("texture", builtin="flat", height=1278, mark="cross", markrgb=(1, 1, 1), name="texgeom", random=0.01, rgb1=(0.8, 0.6, 0.4), rgb2=(0.8, 0.6, 0.4), type="cube", width=127),
