@@ -11,6 +11,7 @@ array) as the model Gymnasium 1.4.0"s v5 env compiles. Nothing imports this modu
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -34,7 +35,8 @@ class E:
 def _number(value: float | int) -> str:
     # repr: the shortest text that reads back as the same double, so the compiler sees our bits
     if isinstance(value, float) and value.is_integer() and abs(value) < 1e15:
-        return str(int(value))
+        # "-0", not "0": the sign of a zero reaches the model (a light's direction)
+        return "-0" if math.copysign(1.0, value) < 0 else str(int(value))
     return repr(value)
 
 
@@ -76,16 +78,65 @@ def write_all(folder: Path = ASSETS) -> list[Path]:
 
 def _textured_floor_assets(sky: tuple[float, ...], repeat: int) -> E:
     """The skybox, the checker floor material and the geoms' textured material."""
-    return E("asset", kids=[
-        E("texture", builtin="gradient", height=100, rgb1=sky, rgb2=(0, 0, 0), type="skybox", width=100),
-        E("texture", builtin="flat", height=1278, mark="cross", markrgb=(1, 1, 1), name="texgeom", random=0.01, rgb1=(0.8, 0.6, 0.4), rgb2=(0.8, 0.6, 0.4), type="cube", width=127),
-        E("texture", builtin="checker", height=100, name="texplane", rgb1=(0, 0, 0), rgb2=(0.8, 0.8, 0.8), type="2d", width=100),
-        E("material", name="MatPlane", reflectance=0.5, shininess=1, specular=1, texrepeat=(repeat, repeat), texture="texplane"),
-        E("material", name="geom", texture="texgeom", texuniform="true"),
-    ])
+    return E(
+        "asset",
+        kids=[
+            E(
+                "texture",
+                builtin="gradient",
+                height=100,
+                rgb1=sky,
+                rgb2=(0, 0, 0),
+                type="skybox",
+                width=100,
+            ),
+            E(
+                "texture",
+                builtin="flat",
+                height=1278,
+                mark="cross",
+                markrgb=(1, 1, 1),
+                name="texgeom",
+                random=0.01,
+                rgb1=(0.8, 0.6, 0.4),
+                rgb2=(0.8, 0.6, 0.4),
+                type="cube",
+                width=127,
+            ),
+            E(
+                "texture",
+                builtin="checker",
+                height=100,
+                name="texplane",
+                rgb1=(0, 0, 0),
+                rgb2=(0.8, 0.8, 0.8),
+                type="2d",
+                width=100,
+            ),
+            E(
+                "material",
+                name="MatPlane",
+                reflectance=0.5,
+                shininess=1,
+                specular=1,
+                texrepeat=(repeat, repeat),
+                texture="texplane",
+            ),
+            E("material", name="geom", texture="texgeom", texuniform="true"),
+        ],
+    )
 
 
-_TOP_LIGHT = E("light", cutoff=100, diffuse=(1, 1, 1), dir=(0, 0, -1.3), directional="true", exponent=1, pos=(0, 0, 1.3), specular=(0.1, 0.1, 0.1))
+_TOP_LIGHT = E(
+    "light",
+    cutoff=100,
+    diffuse=(1, 1, 1),
+    dir=(-0.0, 0, -1.3),
+    directional="true",
+    exponent=1,
+    pos=(0, 0, 1.3),
+    specular=(0.1, 0.1, 0.1),
+)
 
 # fmt: off
 MODELS: dict[str, E] = {
