@@ -16,9 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from palaestra import error
+from palaestra import error, logger
 from palaestra.core import Env
 from palaestra.envs.box2d._common import box_action, check_bool, check_real
+from palaestra.envs.mujoco._render import OFFSCREEN_MODES, OffscreenRenderer
 from palaestra.spaces import Box
 
 ASSETS = Path(__file__).parent / "assets"
@@ -128,10 +129,11 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
     noisy start state; it returns the first observation) and optionally ``_get_reset_info``.
     The rendering keywords (``render_mode``, ``width``, ``height``, ``camera_id``,
     ``camera_name``, ``default_camera_config``, ``max_geom``, ``visual_options``) are
-    Gymnasium's; only ``render_mode=None`` is served so far.
+    Gymnasium's; frames are drawn offscreen (:mod:`palaestra.envs.mujoco._render`), and
+    ``render_mode="human"`` shows them through ``make``'s ``HumanRendering`` wrapper.
     """
 
-    metadata: dict[str, Any] = {"render_modes": []}
+    metadata: dict[str, Any] = {"render_modes": list(OFFSCREEN_MODES)}
 
     def __init__(
         self,
@@ -146,16 +148,23 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         max_geom: int = 1000,
         visual_options: dict[int, bool] | None = None,
     ) -> None:
-        if render_mode is not None:
+        if render_mode is not None and render_mode not in OFFSCREEN_MODES:
             raise error.UnsupportedMode(
-                f"render_mode={render_mode!r}: palaestra's MuJoCo envs do not render yet "
-                "(use render_mode=None, or the gymnasium: bridge to watch one)"
+                f"render_mode={render_mode!r}: expected None or one of {list(OFFSCREEN_MODES)} "
+                "(make(..., render_mode='human') shows rgb_array frames in a window)"
+            )
+        for name, size in (("width", width), ("height", height), ("max_geom", max_geom)):
+            if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1:
+                raise ValueError(f"{name} must be a positive int, got {size!r}")
+        if camera_id is not None and camera_name is not None:
+            raise ValueError(
+                f"give camera_id ({camera_id!r}) or camera_name ({camera_name!r}), not both"
             )
         self.render_mode = render_mode
         self.frame_skip = check_frame_skip(frame_skip)
         self.xml_file = xml_file
         self.width, self.height = width, height
-        self.camera_id, self.camera_name = camera_id, camera_name
+        self.camera_name = camera_name
         self.default_camera_config = default_camera_config
         self.max_geom, self.visual_options = max_geom, visual_options
         self._mujoco = import_mujoco()
@@ -172,6 +181,62 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         low, high = self.model.actuator_ctrlrange.copy().astype(np.float32).T
         self.action_space = Box(low=low, high=high, dtype=np.float32)
         self.metadata = {**type(self).metadata, "render_fps": int(np.round(1.0 / self.dt))}
+        self.camera_id = self._camera(camera_id, camera_name)
+        self._renderer: OffscreenRenderer | None = None
+
+    def _camera(self, camera_id: int | None, camera_name: str | None) -> int:
+        """The camera to draw from: -1 (the free camera, Gymnasium's default even where the
+        model has a ``track`` camera) or a fixed camera of the model, given by id or name."""
+        mujoco, model = self._mujoco, self.model
+        names = [model.camera(i).name for i in range(model.ncam)]
+        if camera_name is not None:
+            found = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera_name)
+            if found == -1:
+                raise ValueError(
+                    f"camera_name {camera_name!r} is not a camera of {self.fullpath!r}: "
+                    f"expected one of {names}"
+                )
+            return int(found)
+        if camera_id is None:
+            return -1
+        if isinstance(camera_id, bool) or not isinstance(camera_id, (int, np.integer)):
+            raise TypeError(f"camera_id must be an int, got {camera_id!r}")
+        if not -1 <= camera_id < model.ncam:
+            raise ValueError(
+                f"camera_id {camera_id!r} is not a camera of {self.fullpath!r}: expected -1 "
+                f"(the free camera) or an id in [0, {model.ncam}) ({names})"
+            )
+        return int(camera_id)
+
+    def render(self) -> Any:
+        """The current frame in ``render_mode`` (``None``: warns and returns nothing)."""
+        if self.render_mode is None:
+            logger.warn(
+                "You are calling render method without specifying any render mode. "
+                "You can specify the render_mode at initialization, "
+                f'e.g. make("{self.spec.id if self.spec else type(self).__name__}", '
+                'render_mode="rgb_array")'
+            )
+            return None
+        if self._renderer is None:
+            self._renderer = OffscreenRenderer(
+                self._mujoco,
+                self.model,
+                self.data,
+                self.width,
+                self.height,
+                self.camera_id,
+                self.default_camera_config,
+                self.max_geom,
+                self.visual_options,
+            )
+        return self._renderer.render(self.render_mode)
+
+    def close(self) -> None:
+        """Free the renderer's OpenGL context, if one was made."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
 
     @staticmethod
     def _float_box(size: int) -> Box:
@@ -180,6 +245,7 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         del state["_mujoco"]  # a module: imported again by the copy
+        state["_renderer"] = None  # an OpenGL context: the copy makes its own when it draws
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:

@@ -215,8 +215,11 @@ MODELS: dict[str, E] = {
             E("motor", ctrllimited="true", ctrlrange=(-1, 1), joint="ankle_3", gear=150),
         ]),
     ]),
+    # The published cheetah gets its masses from its geoms scaled to a total of 14 kg by the
+    # compiler's settotalmass, which MuJoCo deprecates (it warns, into MUJOCO_LOG.TXT in the
+    # working folder): each body's resulting mass and inertia are written instead.
     "half_cheetah.xml": E("mujoco", model="cheetah", kids=[
-        E("compiler", angle="radian", coordinate="local", inertiafromgeom="true", settotalmass=14),
+        E("compiler", angle="radian", coordinate="local", inertiafromgeom="false"),
         E("default", kids=[
             E("joint", armature=0.1, damping=0.01, limited="true", solimplimit=(0, 0.8, 0.03), solreflimit=(0.02, 1), stiffness=8),
             E("geom", conaffinity=0, condim=3, contype=1, friction=(0.4, 0.1, 0.1), rgba=(0.8, 0.6, 0.4, 1), solimp=(0, 0.8, 0.01), solref=(0.02, 1)),
@@ -229,6 +232,7 @@ MODELS: dict[str, E] = {
             _TOP_LIGHT,
             E("geom", conaffinity=1, condim=3, material="MatPlane", name="floor", pos=(0, 0, 0), rgba=(0.8, 0.9, 0.8, 1), size=(40, 40, 40), type="plane"),
             E("body", name="torso", pos=(0, 0, 0.7), kids=[
+                E("inertial", diaginertia=(0.8971176881117434, 0.8856554522351578, 0.01796092340796636), mass=6.25020920502092, pos=(0.15238987816307403, 0.0, 0.025398313027179008), quat=(0.5224297915933479, 0.4765155956059912, 0.4765155956059912, 0.5224297915933479)),
                 E("camera", name="track", mode="trackcom", pos=(0, -3, 0.3), xyaxes=(1, 0, 0, 0, 0, 1)),
                 E("joint", armature=0, axis=(1, 0, 0), damping=0, limited="false", name="rootx", pos=(0, 0, 0), stiffness=0, type="slide"),
                 E("joint", armature=0, axis=(0, 0, 1), damping=0, limited="false", name="rootz", pos=(0, 0, 0), stiffness=0, type="slide"),
@@ -236,24 +240,30 @@ MODELS: dict[str, E] = {
                 E("geom", fromto=(-0.5, 0, 0, 0.5, 0, 0), name="torso", size=0.046, type="capsule"),
                 E("geom", axisangle=(0, 1, 0, 0.87), name="head", pos=(0.6, 0, 0.1), size=(0.046, 0.15), type="capsule"),
                 E("body", name="bthigh", pos=(-0.5, 0, 0), kids=[
+                    E("inertial", diaginertia=(0.01684433958158996, 0.01684433958158996, 0.0015760215899581589), mass=1.5435146443514645, pos=(0.1, 0.0, -0.13), quat=(-0.32328956686350335, -0.0, -0.9463000876874145, -0.0)),
                     E("joint", axis=(0, 1, 0), damping=6, name="bthigh", pos=(0, 0, 0), range=(-0.52, 1.05), stiffness=240, type="hinge"),
                     E("geom", axisangle=(0, 1, 0, -3.8), name="bthigh", pos=(0.1, 0, -0.13), size=(0.046, 0.145), type="capsule"),
                     E("body", name="bshin", pos=(0.16, 0, -0.25), kids=[
+                        E("inertial", diaginertia=(0.018267419079497905, 0.018267419079497905, 0.0016225027615062756), mass=1.5874476987447697, pos=(-0.14, 0.0, -0.07), quat=(0.5276199315484069, -0.0, -0.8494805517684643, -0.0)),
                         E("joint", axis=(0, 1, 0), damping=4.5, name="bshin", pos=(0, 0, 0), range=(-0.785, 0.785), stiffness=180, type="hinge"),
                         E("geom", axisangle=(0, 1, 0, -2.03), name="bshin", pos=(-0.14, 0, -0.07), rgba=(0.9, 0.6, 0.6, 1), size=(0.046, 0.15), type="capsule"),
                         E("body", name="bfoot", pos=(-0.28, 0, -0.14), kids=[
+                            E("inertial", diaginertia=(0.0063524232635983275, 0.0063524232635983275, 0.0011019136401673642), mass=1.0953974895397491, pos=(0.03, 0.0, -0.097), quat=(0.9909013312045479, -0.0, -0.1345903110073483, -0.0)),
                             E("joint", axis=(0, 1, 0), damping=3, name="bfoot", pos=(0, 0, 0), range=(-0.4, 0.785), stiffness=120, type="hinge"),
                             E("geom", axisangle=(0, 1, 0, -0.27), name="bfoot", pos=(0.03, 0, -0.097), rgba=(0.9, 0.6, 0.6, 1), size=(0.046, 0.094), type="capsule"),
                         ]),
                     ]),
                 ]),
                 E("body", name="fthigh", pos=(0.5, 0, 0), kids=[
+                    E("inertial", diaginertia=(0.013739643347280341, 0.013739643347280341, 0.0014644667782426782), mass=1.4380753138075317, pos=(-0.07, 0.0, -0.12), quat=(0.9663899781345132, 0.0, 0.2570805518921551, 0.0)),
                     E("joint", axis=(0, 1, 0), damping=4.5, name="fthigh", pos=(0, 0, 0), range=(-1, 0.7), stiffness=180, type="hinge"),
                     E("geom", axisangle=(0, 1, 0, 0.52), name="fthigh", pos=(-0.07, 0, -0.12), size=(0.046, 0.133), type="capsule"),
                     E("body", name="fshin", pos=(-0.14, 0, -0.24), kids=[
+                        E("inertial", diaginertia=(0.008222108619246861, 0.008222108619246861, 0.001213468451882845), mass=1.200836820083682, pos=(0.065, 0.0, -0.09), quat=(0.955336489125606, -0.0, -0.29552020666133955, -0.0)),
                         E("joint", axis=(0, 1, 0), damping=3, name="fshin", pos=(0, 0, 0), range=(-1.2, 0.87), stiffness=120, type="hinge"),
                         E("geom", axisangle=(0, 1, 0, -0.6), name="fshin", pos=(0.065, 0, -0.09), rgba=(0.9, 0.6, 0.6, 1), size=(0.046, 0.106), type="capsule"),
                         E("body", name="ffoot", pos=(0.13, 0, -0.18), kids=[
+                            E("inertial", diaginertia=(0.003529109456066946, 0.003529109456066946, 0.0008788040167364017), mass=0.8845188284518829, pos=(0.045, 0.0, -0.07), quat=(0.955336489125606, -0.0, -0.29552020666133955, -0.0)),
                             E("joint", axis=(0, 1, 0), damping=1.5, name="ffoot", pos=(0, 0, 0), range=(-0.5, 0.5), stiffness=60, type="hinge"),
                             E("geom", axisangle=(0, 1, 0, -0.6), name="ffoot", pos=(0.045, 0, -0.07), rgba=(0.9, 0.6, 0.6, 1), size=(0.046, 0.07), type="capsule"),
                         ]),
