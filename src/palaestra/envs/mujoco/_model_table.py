@@ -6,7 +6,11 @@ the published models' facts: bodies, joints, geoms, sizes, ranges, masses, gears
 colours. ``python -m palaestra.envs.mujoco._model_table`` writes them as the XML files under
 ``assets/`` that the envs load; ``tests/envs/mujoco/test_models.py`` checks that the committed
 files are this module's output and that each compiles to the same ``MjModel`` (every numeric
-array) as the model Gymnasium 1.4.0"s v5 env compiles. Nothing imports this module at run time.
+array) as the model Gymnasium 1.4.0's v5 env compiles. Nothing imports this module at run time.
+
+The cheetah's bodies carry their masses and inertias (the published file derives them from
+its geoms with the compiler's deprecated ``settotalmass``, which makes MuJoCo warn into a
+``MUJOCO_LOG.TXT`` in the working folder); the compiled model is the same either way.
 """
 
 from __future__ import annotations
