@@ -266,16 +266,18 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         """Write ``ctrl`` and advance ``n_frames`` MuJoCo steps; MuJoCo's warnings of those
         steps are raised as :class:`MujocoWarning` and kept in ``self._step_warnings``."""
         mujoco, data = self._mujoco, self.data
-        before = [w.number for w in data.warning]
+        # the counters as one array, compared as bytes (iterating data.warning costs ~0.25 ms)
+        counters = data.warning.number  # a view: it changes as MuJoCo counts
+        before = counters.copy()
         data.ctrl[:] = ctrl
         mujoco.mj_step(self.model, data, nstep=n_frames)
         # cfrc_ext and friends are only computed on request (no force sensors in the models)
         mujoco.mj_rnePostConstraint(self.model, data)
-        self._step_warnings = [
-            mujoco.mjtWarning(i).name
-            for i, (w, n) in enumerate(zip(data.warning, before))
-            if w.number > n
-        ]
+        if counters.tobytes() == before.tobytes():
+            self._step_warnings = []
+            return
+        raised = np.flatnonzero(counters > before)
+        self._step_warnings = [mujoco.mjtWarning(int(i)).name for i in raised]
         if self._step_warnings:
             warnings.warn(
                 f"{type(self).__name__}: MuJoCo reported {', '.join(self._step_warnings)} at "
