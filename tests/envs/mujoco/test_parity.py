@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import pickle
 import subprocess
 import sys
@@ -37,6 +38,7 @@ def palaestra_records(runs: list[Run], tmp_path: Path) -> dict[str, Any]:
         text=True,
         check=True,
         cwd=PACKAGE.parents[1],
+        env={**os.environ, "PYTHONPATH": f"{PACKAGE.parent}{os.pathsep}{PACKAGE.parents[1]}"},
         timeout=900,
     )
     with open(out, "rb") as file:
