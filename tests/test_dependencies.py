@@ -33,6 +33,7 @@ DISTRIBUTIONS = {
     "torch": "torch",
     "ale_py": "ale-py",
     "Box2D": "box2d",
+    "mujoco": "mujoco",
     "PIL": "Pillow",
     "matplotlib": "matplotlib",
     "imageio": "imageio",

@@ -50,6 +50,11 @@ class UnsupportedMode(Error):
     """A render mode the environment does not support was requested."""
 
 
+class InvalidModelFile(Error, ValueError):
+    """A model file (a MuJoCo env's ``xml_file``) that does not compile; the message names the
+    path and the simulator's own message."""
+
+
 class InvalidMetadata(Error):
     """The environment's ``metadata`` is malformed."""
 

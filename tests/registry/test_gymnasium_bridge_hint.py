@@ -11,10 +11,10 @@ from palaestra import error
 @pytest.mark.parametrize(
     ("env_id", "bridged"),
     [
-        # (Taxi, FrozenLake and LunarLander are palaestra's own now: MuJoCo ids stand in.)
-        ("HalfCheetah-v5", "gymnasium:HalfCheetah-v5"),
-        ("Reacher-v5", "gymnasium:Reacher-v5"),
-        ("Hopper", "gymnasium:Hopper-v5"),
+        # (Taxi, FrozenLake, LunarLander and the MuJoCo envs are palaestra's own now: the
+        # Shimmy compatibility ids stand in.)
+        ("GymV26Environment-v0", "gymnasium:GymV26Environment-v0"),
+        ("GymV21Environment", "gymnasium:GymV21Environment-v0"),
     ],
 )
 def test_gymnasium_only_id_names_the_bridge(env_id, bridged):
@@ -37,9 +37,18 @@ def test_other_unknown_names_keep_gymnasiums_message():
         gym.make("Cartpole-v1")
 
 
-def test_the_hint_names_the_mujoco_install():
-    with pytest.raises(error.NameNotFound, match=r'pip install "gymnasium\[mujoco\]"'):
-        gym.make("Ant-v5")
+def test_the_hint_names_the_dependencies_to_install():
+    with pytest.raises(error.NameNotFound, match=r"with gymnasium and that env's own dependencies"):
+        gym.make("GymV26Environment-v0")
+
+
+def test_mujoco_ids_are_native_and_get_no_bridge_hint():
+    from palaestra.envs.lookup import GYMNASIUM_ONLY
+
+    for name in ("Ant", "HalfCheetah", "Hopper", "Reacher"):
+        assert name not in GYMNASIUM_ONLY
+        spec = gym.spec(f"{name}-v5")
+        assert spec.entry_point.startswith("palaestra.envs.mujoco."), spec.entry_point
 
 
 def test_the_bridge_table_lists_no_native_env():

@@ -87,6 +87,51 @@ for _id, _kwargs in _BOX2D.items():
     if _id not in registry:
         register(id=_id, **_kwargs)
 
+# MuJoCo (on the optional mujoco package, imported when one of these envs is made): Gymnasium
+# 1.4.0's v5 ids, limits and thresholds. Only v5 is registered: making a v2-v4 id raises
+# DeprecatedEnv naming v5 (their models and rewards differ; they are not aliases of v5).
+_MJ = "palaestra.envs.mujoco"
+_MUJOCO: dict[str, dict] = {
+    "Reacher-v5": dict(
+        entry_point=f"{_MJ}.fixed_base:ReacherEnv", max_episode_steps=50, reward_threshold=-3.75
+    ),
+    "Pusher-v5": dict(
+        entry_point=f"{_MJ}.fixed_base:PusherEnv", max_episode_steps=100, reward_threshold=0.0
+    ),
+    "InvertedPendulum-v5": dict(
+        entry_point=f"{_MJ}.fixed_base:InvertedPendulumEnv",
+        max_episode_steps=1000,
+        reward_threshold=950.0,
+    ),
+    "InvertedDoublePendulum-v5": dict(
+        entry_point=f"{_MJ}.fixed_base:InvertedDoublePendulumEnv",
+        max_episode_steps=1000,
+        reward_threshold=9100.0,
+    ),
+    "HalfCheetah-v5": dict(
+        entry_point=f"{_MJ}.locomotion:HalfCheetahEnv",
+        max_episode_steps=1000,
+        reward_threshold=4800.0,
+    ),
+    "Hopper-v5": dict(
+        entry_point=f"{_MJ}.locomotion:HopperEnv", max_episode_steps=1000, reward_threshold=3800.0
+    ),
+    "Swimmer-v5": dict(
+        entry_point=f"{_MJ}.locomotion:SwimmerEnv", max_episode_steps=1000, reward_threshold=360.0
+    ),
+    "Walker2d-v5": dict(entry_point=f"{_MJ}.locomotion:Walker2dEnv", max_episode_steps=1000),
+    "Ant-v5": dict(
+        entry_point=f"{_MJ}.locomotion:AntEnv", max_episode_steps=1000, reward_threshold=6000.0
+    ),
+    "Humanoid-v5": dict(entry_point=f"{_MJ}.locomotion:HumanoidEnv", max_episode_steps=1000),
+    "HumanoidStandup-v5": dict(
+        entry_point=f"{_MJ}.locomotion:HumanoidStandupEnv", max_episode_steps=1000
+    ),
+}
+for _id, _kwargs in _MUJOCO.items():
+    if _id not in registry:
+        register(id=_id, **_kwargs)
+
 # Toy text: Gymnasium 1.4's ids, kwargs, limits and thresholds. Older versions (Taxi-v3,
 # CliffWalking-v0, FrozenLake-v0, Blackjack-v0) are not registered, as in Gymnasium: making one
 # raises DeprecatedEnv naming the current version.

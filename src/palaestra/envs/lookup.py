@@ -97,15 +97,9 @@ def _check_namespace_exists(ns: str | None) -> None:
 
 # Gymnasium 1.x's own envs that palaestra does not implement (name -> latest version): an id
 # naming one of them gets the `gymnasium:` bridge in its error instead of a bare "not found".
-# (Toy text and Box2D are native since issue 15; MuJoCo is what is left.)
-GYMNASIUM_ONLY: dict[str, int] = {
-    **dict.fromkeys(
-        "Ant HalfCheetah Hopper Humanoid HumanoidStandup Pusher Reacher Swimmer Walker2d".split(),
-        5,
-    ),
-    "InvertedPendulum": 5,
-    "InvertedDoublePendulum": 5,
-}
+# (Toy text and Box2D are native since issue 15, MuJoCo since issue 27: what is left are the
+# Shimmy compatibility ids, which need `shimmy` beside Gymnasium.)
+GYMNASIUM_ONLY: dict[str, int] = {"GymV21Environment": 0, "GymV26Environment": 0}
 
 
 def _check_name_exists(ns: str | None, name: str) -> None:
@@ -121,8 +115,8 @@ def _check_name_exists(ns: str | None, name: str) -> None:
         env_id = get_env_id(None, name, GYMNASIUM_ONLY[name])
         suggestion_msg = (
             f" Gymnasium has it: make it through the bridge with "
-            f'`make("gymnasium:{env_id}")` (needs `pip install "gymnasium[mujoco]"` '
-            f"for the MuJoCo envs)."
+            f'`make("gymnasium:{env_id}")` (with gymnasium and that env\'s own dependencies '
+            "installed)."
         )
     raise error.NameNotFound(f"Environment `{name}` doesn't exist{namespace_msg}.{suggestion_msg}")
 

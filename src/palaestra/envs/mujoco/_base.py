@@ -1,0 +1,352 @@
+"""What the MuJoCo envs share: the lazy ``mujoco`` import, model loading, stepping and resets.
+
+:class:`MujocoEnv` holds one ``MjModel`` and its ``MjData``; a step writes the action into
+``data.ctrl``, advances ``frame_skip`` MuJoCo steps and then computes the constraint forces
+(``mj_rnePostConstraint``) that the observations read (``cfrc_ext``), as Gymnasium 1.4.0's
+``MujocoEnv`` does, so the same model, seed and actions give the same bits.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from palaestra import error, logger
+from palaestra.core import Env
+from palaestra.envs.box2d._common import box_action, check_bool, check_real
+from palaestra.envs.mujoco._render import OFFSCREEN_MODES, OffscreenRenderer
+from palaestra.spaces import Box
+
+ASSETS = Path(__file__).parent / "assets"
+
+# The mujoco release the parity tests (tests/envs/mujoco) were recorded on: MuJoCo does not
+# promise equal bits across releases, so another one warns once.
+PARITY_MUJOCO_VERSION = "4.0.0"
+_version_checked = False
+
+MUJOCO_ENVS = (
+    "the MuJoCo environments: Ant, HalfCheetah, Hopper, Humanoid, HumanoidStandup, "
+    "InvertedDoublePendulum, InvertedPendulum, Pusher, Reacher, Swimmer, Walker2d"
+)
+
+
+class MujocoWarning(UserWarning):
+    """MuJoCo flagged the simulation (e.g. a NaN or huge acceleration: it reset the state)."""
+
+
+def import_mujoco() -> Any:
+    """The ``mujoco`` module, or ``DependencyNotInstalled`` naming the extra to install.
+
+    The first import with another version than :data:`PARITY_MUJOCO_VERSION` warns once.
+    """
+    global _version_checked
+    try:
+        import mujoco
+    except ImportError as e:
+        raise error.dependency_not_installed("mujoco", "mujoco", MUJOCO_ENVS) from e
+    if not _version_checked:
+        _version_checked = True
+        if mujoco.__version__ != PARITY_MUJOCO_VERSION:
+            warnings.warn(
+                f"mujoco {mujoco.__version__} is installed; palaestra's MuJoCo envs were checked "
+                f"to give Gymnasium's trajectories bit for bit on mujoco {PARITY_MUJOCO_VERSION} "
+                "only (other releases may differ in the last bits)",
+                stacklevel=3,
+            )
+    return mujoco
+
+
+def model_path(xml_file: str | os.PathLike[str]) -> Path:
+    """Where ``xml_file`` is: a bare name is one of palaestra's models (``assets/``); a path
+    starting with ``.``, ``/`` or ``~`` is the user's file (Gymnasium's rule)."""
+    if not isinstance(xml_file, (str, os.PathLike)):
+        raise TypeError(f"xml_file must be a path, got {xml_file!r} ({type(xml_file).__name__})")
+    text = os.fspath(xml_file)
+    if text.startswith(("/", ".")):
+        path = Path(text)
+    elif text.startswith("~"):
+        path = Path(text).expanduser()
+    else:
+        path = ASSETS / text
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"xml_file {text!r}: no MJCF file at {str(path)!r} (a bare name is looked up in "
+            f"{str(ASSETS)!r}; start a path of your own with '.', '/' or '~')"
+        )
+    return path
+
+
+def load_model(mujoco: Any, xml_file: str | os.PathLike[str]) -> Any:
+    """The compiled ``MjModel`` of ``xml_file``; a file MuJoCo cannot compile raises
+    ``InvalidModelFile`` naming the path and MuJoCo's message."""
+    path = model_path(xml_file)
+    try:
+        return mujoco.MjModel.from_xml_path(str(path))
+    except ValueError as e:
+        raise error.InvalidModelFile(
+            f"xml_file {os.fspath(xml_file)!r} ({str(path)!r}) does not compile: {e}"
+        ) from e
+
+
+def check_frame_skip(frame_skip: Any) -> int:
+    """A positive integer, else ``TypeError``/``ValueError`` naming it."""
+    if isinstance(frame_skip, (bool, np.bool_)) or not isinstance(frame_skip, (int, np.integer)):
+        raise TypeError(f"frame_skip must be an int, got {frame_skip!r}")
+    if frame_skip < 1:
+        raise ValueError(f"frame_skip must be >= 1, got {frame_skip!r}")
+    return int(frame_skip)
+
+
+def check_range(name: str, value: Any) -> tuple[float, float]:
+    """A ``(low, high)`` pair of numbers (infinities allowed, NaN not), ``low <= high``."""
+    if not isinstance(value, (tuple, list, np.ndarray)) or len(value) != 2:
+        raise TypeError(f"{name} must be a (low, high) pair, got {value!r}")
+    low, high = value
+    for bound in (low, high):
+        if isinstance(bound, (bool, np.bool_)) or not isinstance(bound, (int, float, np.number)):
+            raise TypeError(f"{name} must hold two numbers, got {value!r}")
+        if math.isnan(bound):
+            raise ValueError(f"{name} must not hold NaN, got {value!r}")
+    if low > high:
+        raise ValueError(f"{name} must have low <= high, got {value!r}")
+    return float(low), float(high)
+
+
+def check_weights(**weights: Any) -> list[float]:
+    """Each keyword a finite real number (``check_real``), in order."""
+    return [check_real(name, value) for name, value in weights.items()]
+
+
+class MujocoEnv(Env[np.ndarray, np.ndarray]):
+    """One MuJoCo model stepped ``frame_skip`` times per action.
+
+    Subclasses build their observation space, then implement ``step``, ``reset_model`` (the
+    noisy start state; it returns the first observation) and optionally ``_get_reset_info``.
+    The rendering keywords (``render_mode``, ``width``, ``height``, ``camera_id``,
+    ``camera_name``, ``default_camera_config``, ``max_geom``, ``visual_options``) are
+    Gymnasium's; frames are drawn offscreen (:mod:`palaestra.envs.mujoco._render`), and
+    ``render_mode="human"`` shows them through ``make``'s ``HumanRendering`` wrapper.
+    """
+
+    metadata: dict[str, Any] = {"render_modes": list(OFFSCREEN_MODES)}
+
+    def __init__(
+        self,
+        xml_file: str | os.PathLike[str],
+        frame_skip: int,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+        camera_id: int | None = None,
+        camera_name: str | None = None,
+        default_camera_config: dict[str, Any] | None = None,
+        max_geom: int = 1000,
+        visual_options: dict[int, bool] | None = None,
+    ) -> None:
+        if render_mode is not None and render_mode not in OFFSCREEN_MODES:
+            raise error.UnsupportedMode(
+                f"render_mode={render_mode!r}: expected None or one of {list(OFFSCREEN_MODES)} "
+                "(make(..., render_mode='human') shows rgb_array frames in a window)"
+            )
+        for name, size in (("width", width), ("height", height), ("max_geom", max_geom)):
+            if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1:
+                raise ValueError(f"{name} must be a positive int, got {size!r}")
+        if camera_id is not None and camera_name is not None:
+            raise ValueError(
+                f"give camera_id ({camera_id!r}) or camera_name ({camera_name!r}), not both"
+            )
+        self.render_mode = render_mode
+        self.frame_skip = check_frame_skip(frame_skip)
+        self.xml_file = xml_file
+        self.width, self.height = width, height
+        self.camera_name = camera_name
+        self.default_camera_config = default_camera_config
+        self.max_geom, self.visual_options = max_geom, visual_options
+        self._mujoco = import_mujoco()
+        self.fullpath = str(model_path(xml_file))
+        self.model = load_model(self._mujoco, xml_file)
+        # Gymnasium grows the offscreen buffer to the frame size (never shrinks it); done here
+        # too so that the two models stay equal field for field.
+        glob = self.model.vis.global_
+        glob.offwidth = max(glob.offwidth, width)
+        glob.offheight = max(glob.offheight, height)
+        self.data = self._mujoco.MjData(self.model)
+        self.init_qpos = self.data.qpos.ravel().copy()
+        self.init_qvel = self.data.qvel.ravel().copy()
+        low, high = self.model.actuator_ctrlrange.copy().astype(np.float32).T
+        self.action_space = Box(low=low, high=high, dtype=np.float32)
+        self.metadata = {**type(self).metadata, "render_fps": int(np.round(1.0 / self.dt))}
+        self.camera_id = self._camera(camera_id, camera_name)
+        self._renderer: OffscreenRenderer | None = None
+
+    def _camera(self, camera_id: int | None, camera_name: str | None) -> int:
+        """The camera to draw from: -1 (the free camera, Gymnasium's default even where the
+        model has a ``track`` camera) or a fixed camera of the model, given by id or name."""
+        mujoco, model = self._mujoco, self.model
+        names = [model.camera(i).name for i in range(model.ncam)]
+        if camera_name is not None:
+            found = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera_name)
+            if found == -1:
+                raise ValueError(
+                    f"camera_name {camera_name!r} is not a camera of {self.fullpath!r}: "
+                    f"expected one of {names}"
+                )
+            return int(found)
+        if camera_id is None:
+            return -1
+        if isinstance(camera_id, bool) or not isinstance(camera_id, (int, np.integer)):
+            raise TypeError(f"camera_id must be an int, got {camera_id!r}")
+        if not -1 <= camera_id < model.ncam:
+            raise ValueError(
+                f"camera_id {camera_id!r} is not a camera of {self.fullpath!r}: expected -1 "
+                f"(the free camera) or an id in [0, {model.ncam}) ({names})"
+            )
+        return int(camera_id)
+
+    def render(self) -> Any:
+        """The current frame in ``render_mode`` (``None``: warns and returns nothing)."""
+        if self.render_mode is None:
+            logger.warn(
+                "You are calling render method without specifying any render mode. "
+                "You can specify the render_mode at initialization, "
+                f'e.g. make("{self.spec.id if self.spec else type(self).__name__}", '
+                'render_mode="rgb_array")'
+            )
+            return None
+        if self._renderer is None:
+            self._renderer = OffscreenRenderer(
+                self._mujoco,
+                self.model,
+                self.data,
+                self.width,
+                self.height,
+                self.camera_id,
+                self.default_camera_config,
+                self.max_geom,
+                self.visual_options,
+            )
+        return self._renderer.render(self.render_mode)
+
+    def close(self) -> None:
+        """Free the renderer's OpenGL context, if one was made."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    @staticmethod
+    def _float_box(size: int) -> Box:
+        return Box(low=-np.inf, high=np.inf, shape=(size,), dtype=np.float64)
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        del state["_mujoco"]  # a module: imported again by the copy
+        state["_renderer"] = None  # an OpenGL context: the copy makes its own when it draws
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._mujoco = import_mujoco()
+
+    @property
+    def dt(self) -> float:
+        """Seconds of simulated time per ``step``: the model's timestep times ``frame_skip``."""
+        return float(self.model.opt.timestep * self.frame_skip)
+
+    def _check_action(self, action: Any) -> np.ndarray:
+        # A float action keeps its dtype: the control costs square it as Gymnasium does (a
+        # float32 action's cost is a float32 sum).
+        return box_action(action, self.action_space, keep_float_dtype=True)
+
+    def do_simulation(self, ctrl: np.ndarray, n_frames: int) -> None:
+        """Write ``ctrl`` and advance ``n_frames`` MuJoCo steps; MuJoCo's warnings of those
+        steps are raised as :class:`MujocoWarning` and kept in ``self._step_warnings``."""
+        mujoco, data = self._mujoco, self.data
+        # the counters as one array, compared as bytes (iterating data.warning costs ~0.25 ms)
+        counters = data.warning.number  # a view: it changes as MuJoCo counts
+        before = counters.copy()
+        data.ctrl[:] = ctrl
+        mujoco.mj_step(self.model, data, nstep=n_frames)
+        # cfrc_ext and friends are only computed on request (no force sensors in the models)
+        mujoco.mj_rnePostConstraint(self.model, data)
+        if counters.tobytes() == before.tobytes():
+            self._step_warnings = []
+            return
+        raised = np.flatnonzero(counters > before)
+        self._step_warnings = [mujoco.mjtWarning(int(i)).name for i in raised]
+        if self._step_warnings:
+            warnings.warn(
+                f"{type(self).__name__}: MuJoCo reported {', '.join(self._step_warnings)} at "
+                f"time {data.time:.4f} (the simulation is unstable; MuJoCo may have reset it)",
+                MujocoWarning,
+                stacklevel=3,
+            )
+
+    def _add_warnings(self, info: dict[str, Any]) -> dict[str, Any]:
+        """``info`` with ``"mujoco_warnings"`` when MuJoCo flagged this step."""
+        if self._step_warnings:
+            info["mujoco_warnings"] = list(self._step_warnings)
+        return info
+
+    def set_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """Set joint positions and velocities and recompute what follows from them."""
+        qpos, qvel = np.asarray(qpos), np.asarray(qvel)
+        if qpos.shape != (self.model.nq,) or qvel.shape != (self.model.nv,):
+            raise ValueError(
+                f"set_state expects qpos of shape {(self.model.nq,)} and qvel of shape "
+                f"{(self.model.nv,)}, got {qpos.shape} and {qvel.shape}"
+            )
+        self.data.qpos[:] = qpos
+        self.data.qvel[:] = qvel
+        self._mujoco.mj_forward(self.model, self.data)
+
+    def state_vector(self) -> np.ndarray:
+        """``qpos`` then ``qvel``, one float64 vector."""
+        return np.concatenate([self.data.qpos.flat, self.data.qvel.flat])
+
+    def get_body_com(self, body_name: str) -> np.ndarray:
+        """The world position of the body's frame (a view into ``data.xpos``)."""
+        return self.data.body(body_name).xpos
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Back to the model's initial state plus the env's reset noise."""
+        super().reset(seed=seed)
+        self._mujoco.mj_resetData(self.model, self.data)
+        self._step_warnings = []
+        observation = self.reset_model()
+        return observation, self._get_reset_info()
+
+    def reset_model(self) -> np.ndarray:
+        """Put the noisy start state into ``data``; return the first observation."""
+        raise NotImplementedError
+
+    def _get_reset_info(self) -> dict[str, Any]:
+        return {}
+
+    def _uniform_noise(self, size: int) -> np.ndarray:
+        scale = self._reset_noise_scale
+        return self.np_random.uniform(low=-scale, high=scale, size=size)
+
+    def _noisy_reset(self, normal_qvel: bool) -> None:
+        """``init_qpos`` plus uniform noise, ``init_qvel`` plus uniform or scaled normal noise."""
+        qpos = self.init_qpos + self._uniform_noise(self.model.nq)
+        if normal_qvel:
+            qvel = self.init_qvel + self._reset_noise_scale * self.np_random.standard_normal(
+                self.model.nv
+            )
+        else:
+            qvel = self.init_qvel + self._uniform_noise(self.model.nv)
+        self.set_state(qpos, qvel)
+
+    _reset_noise_scale: float
+
+
+def check_flags(**flags: Any) -> list[bool]:
+    """Each keyword a bool (``check_bool``), in order."""
+    return [check_bool(name, value) for name, value in flags.items()]

@@ -1,0 +1,238 @@
+"""The MuJoCo tasks on a fixed base: InvertedPendulum, InvertedDoublePendulum (balance a pole
+on a cart), Reacher (a two-joint arm touches a target) and Pusher (an arm pushes a cylinder
+to a goal), v5.
+
+Rewards, terminations, observations and reset draws follow Gymnasium 1.4.0's v5 envs, in the
+same order and on the same dtypes, so the same seed and actions give the same bits.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from palaestra.envs.mujoco._base import MujocoEnv, check_weights
+
+__all__ = ["InvertedDoublePendulumEnv", "InvertedPendulumEnv", "PusherEnv", "ReacherEnv"]
+
+
+class InvertedPendulumEnv(MujocoEnv):
+    """Push a cart so that the pole hinged on it stays up; +1 a step until it tips past 0.2 rad."""
+
+    def __init__(
+        self,
+        xml_file: str | os.PathLike[str] = "inverted_pendulum.xml",
+        frame_skip: int = 2,
+        default_camera_config: dict[str, Any] | None = None,
+        reset_noise_scale: float = 0.01,
+        **kwargs: Any,
+    ) -> None:
+        (self._reset_noise_scale,) = check_weights(reset_noise_scale=reset_noise_scale)
+        if default_camera_config is None:
+            default_camera_config = {"trackbodyid": 0, "distance": 2.04}
+        super().__init__(
+            xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
+        )
+        self.observation_structure = {"qpos": self.data.qpos.size, "qvel": self.data.qvel.size}
+        self.observation_space = self._float_box(4)
+
+    def step(self, action: Any) -> tuple[np.ndarray, int, bool, bool, dict[str, Any]]:
+        action = self._check_action(action)
+        self.do_simulation(action, self.frame_skip)
+        observation = self._get_obs()
+        terminated = bool(not np.isfinite(observation).all() or np.abs(observation[1]) > 0.2)
+        reward = int(not terminated)
+        info = {"reward_survive": reward}
+        return observation, reward, terminated, False, self._add_warnings(info)
+
+    def _get_obs(self) -> np.ndarray:
+        return np.concatenate([self.data.qpos, self.data.qvel])
+
+    def reset_model(self) -> np.ndarray:
+        self._noisy_reset(normal_qvel=False)
+        return self._get_obs()
+
+
+class InvertedDoublePendulumEnv(MujocoEnv):
+    """Balance two poles stacked on a cart: a survival bonus minus the tip's distance from its
+    upright place and the joints' speeds; ends when the tip drops to y <= 1."""
+
+    def __init__(
+        self,
+        xml_file: str | os.PathLike[str] = "inverted_double_pendulum.xml",
+        frame_skip: int = 5,
+        default_camera_config: dict[str, Any] | None = None,
+        healthy_reward: float = 10.0,
+        reset_noise_scale: float = 0.1,
+        **kwargs: Any,
+    ) -> None:
+        self._healthy_reward, self._reset_noise_scale = check_weights(
+            healthy_reward=healthy_reward, reset_noise_scale=reset_noise_scale
+        )
+        super().__init__(
+            xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
+        )
+        self.observation_space = self._float_box(9)
+
+    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
+        action = self._check_action(action)
+        self.do_simulation(action, self.frame_skip)
+        x, _, y = self.data.site_xpos[0]
+        observation = self._get_obs()
+        terminated = bool(y <= 1)
+        v1, v2 = self.data.qvel[1:3]
+        dist_penalty = 0.01 * x**2 + (y - 2) ** 2
+        vel_penalty = 1e-3 * v1**2 + 5e-3 * v2**2
+        alive_bonus = self._healthy_reward * int(not terminated)
+        reward = alive_bonus - dist_penalty - vel_penalty
+        info = {
+            "reward_survive": alive_bonus,
+            "distance_penalty": -dist_penalty,
+            "velocity_penalty": -vel_penalty,
+        }
+        return observation, reward, terminated, False, self._add_warnings(info)
+
+    def _get_obs(self) -> np.ndarray:
+        qpos, data = self.data.qpos, self.data
+        return np.concatenate(
+            [
+                qpos[:1],
+                np.sin(qpos[1:]),
+                np.cos(qpos[1:]),
+                np.clip(data.qvel, -10, 10),
+                np.clip(data.qfrc_constraint, -10, 10)[:1],
+            ]
+        )
+
+    def reset_model(self) -> np.ndarray:
+        self._noisy_reset(normal_qvel=True)
+        return self._get_obs()
+
+
+class ReacherEnv(MujocoEnv):
+    """A two-joint arm rewarded for bringing its fingertip to a random target cheaply."""
+
+    def __init__(
+        self,
+        xml_file: str | os.PathLike[str] = "reacher.xml",
+        frame_skip: int = 2,
+        default_camera_config: dict[str, Any] | None = None,
+        reward_dist_weight: float = 1,
+        reward_control_weight: float = 1,
+        **kwargs: Any,
+    ) -> None:
+        self._reward_dist_weight, self._reward_control_weight = check_weights(
+            reward_dist_weight=reward_dist_weight, reward_control_weight=reward_control_weight
+        )
+        if default_camera_config is None:
+            default_camera_config = {"trackbodyid": 0}
+        super().__init__(
+            xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
+        )
+        self.observation_space = self._float_box(10)
+
+    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
+        action = self._check_action(action)
+        self.do_simulation(action, self.frame_skip)
+        observation = self._get_obs()
+        to_target = self.get_body_com("fingertip") - self.get_body_com("target")
+        reward_dist = -np.linalg.norm(to_target) * self._reward_dist_weight
+        reward_ctrl = -np.square(action).sum() * self._reward_control_weight
+        reward = reward_dist + reward_ctrl
+        info = {"reward_dist": reward_dist, "reward_ctrl": reward_ctrl}
+        return observation, reward, False, False, self._add_warnings(info)
+
+    def reset_model(self) -> np.ndarray:
+        qpos = self.np_random.uniform(low=-0.1, high=0.1, size=self.model.nq) + self.init_qpos
+        while True:  # a target inside the disc of radius 0.2
+            self.goal = self.np_random.uniform(low=-0.2, high=0.2, size=2)
+            if np.linalg.norm(self.goal) < 0.2:
+                break
+        qpos[-2:] = self.goal
+        qvel = self.init_qvel + self.np_random.uniform(low=-0.005, high=0.005, size=self.model.nv)
+        qvel[-2:] = 0
+        self.set_state(qpos, qvel)
+        return self._get_obs()
+
+    def _get_obs(self) -> np.ndarray:
+        qpos = self.data.qpos.flatten()
+        theta = qpos[:2]
+        to_target = self.get_body_com("fingertip") - self.get_body_com("target")
+        return np.concatenate(
+            [np.cos(theta), np.sin(theta), qpos[2:], self.data.qvel.flatten()[:2], to_target[:2]]
+        )
+
+
+class PusherEnv(MujocoEnv):
+    """A seven-joint arm rewarded for pushing a cylinder onto a goal (and keeping near it)."""
+
+    def __init__(
+        self,
+        xml_file: str | os.PathLike[str] = "pusher_v5.xml",
+        frame_skip: int = 5,
+        default_camera_config: dict[str, Any] | None = None,
+        reward_near_weight: float = 0.5,
+        reward_dist_weight: float = 1,
+        reward_control_weight: float = 0.1,
+        **kwargs: Any,
+    ) -> None:
+        self._reward_near_weight, self._reward_dist_weight, self._reward_control_weight = (
+            check_weights(
+                reward_near_weight=reward_near_weight,
+                reward_dist_weight=reward_dist_weight,
+                reward_control_weight=reward_control_weight,
+            )
+        )
+        if default_camera_config is None:
+            default_camera_config = {"trackbodyid": -1, "distance": 4.0}
+        super().__init__(
+            xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
+        )
+        self.observation_space = self._float_box(23)
+
+    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
+        action = self._check_action(action)
+        self.do_simulation(action, self.frame_skip)
+        observation = self._get_obs()
+        obj = self.get_body_com("object")
+        reward_near = (
+            -np.linalg.norm(obj - self.get_body_com("tips_arm")) * self._reward_near_weight
+        )
+        reward_dist = -np.linalg.norm(obj - self.get_body_com("goal")) * self._reward_dist_weight
+        reward_ctrl = -np.square(action).sum() * self._reward_control_weight
+        reward = reward_dist + reward_ctrl + reward_near
+        info = {"reward_dist": reward_dist, "reward_ctrl": reward_ctrl, "reward_near": reward_near}
+        return observation, reward, False, False, self._add_warnings(info)
+
+    def reset_model(self) -> np.ndarray:
+        qpos = self.init_qpos.copy()
+        self.goal_pos = np.asarray([0, 0])
+        while True:  # the cylinder starts more than 0.17 from the goal
+            self.cylinder_pos = np.concatenate(
+                [
+                    self.np_random.uniform(low=-0.3, high=0, size=1),
+                    self.np_random.uniform(low=-0.2, high=0.2, size=1),
+                ]
+            )
+            if np.linalg.norm(self.cylinder_pos - self.goal_pos) > 0.17:
+                break
+        qpos[-4:-2] = self.cylinder_pos
+        qpos[-2:] = self.goal_pos
+        qvel = self.init_qvel + self.np_random.uniform(low=-0.005, high=0.005, size=self.model.nv)
+        qvel[-4:] = 0
+        self.set_state(qpos, qvel)
+        return self._get_obs()
+
+    def _get_obs(self) -> np.ndarray:
+        qpos, qvel = self.data.qpos.flatten(), self.data.qvel.flatten()
+        return np.concatenate(
+            [
+                qpos[:7],
+                qvel[:7],
+                self.get_body_com("tips_arm"),
+                self.get_body_com("object"),
+                self.get_body_com("goal"),
+            ]
+        )
