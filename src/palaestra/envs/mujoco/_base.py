@@ -17,8 +17,14 @@ from typing import Any
 import numpy as np
 
 from palaestra import error
-from palaestra.core import Env
 from palaestra.envs.box2d._common import box_action, check_bool, check_real
+from palaestra.envs.mujoco.rendering import (
+    RENDER_MODES,
+    MujocoRenderer,
+    check_display,
+    check_size,
+)
+from palaestra.envs.rendered import RenderedEnv
 from palaestra.spaces import Box
 
 ASSETS = Path(__file__).parent / "assets"
@@ -121,17 +127,19 @@ def check_weights(**weights: Any) -> list[float]:
     return [check_real(name, value) for name, value in weights.items()]
 
 
-class MujocoEnv(Env[np.ndarray, np.ndarray]):
+class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
     """One MuJoCo model stepped ``frame_skip`` times per action.
 
     Subclasses build their observation space, then implement ``step``, ``reset_model`` (the
     noisy start state; it returns the first observation) and optionally ``_get_reset_info``.
     The rendering keywords (``render_mode``, ``width``, ``height``, ``camera_id``,
     ``camera_name``, ``default_camera_config``, ``max_geom``, ``visual_options``) are
-    Gymnasium's; only ``render_mode=None`` is served so far.
+    Gymnasium's; frames come from :class:`~palaestra.envs.mujoco.rendering.MujocoRenderer`
+    (MuJoCo's own renderer, made on the first frame) and ``"human"`` shows the ``rgb_array``
+    frame in palaestra's window after every reset and step.
     """
 
-    metadata: dict[str, Any] = {"render_modes": []}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES)}
 
     def __init__(
         self,
@@ -146,15 +154,12 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         max_geom: int = 1000,
         visual_options: dict[int, bool] | None = None,
     ) -> None:
-        if render_mode is not None:
-            raise error.UnsupportedMode(
-                f"render_mode={render_mode!r}: palaestra's MuJoCo envs do not render yet "
-                "(use render_mode=None, or the gymnasium: bridge to watch one)"
-            )
-        self.render_mode = render_mode
+        self._init_render(render_mode)
+        if render_mode == "human":
+            check_display()
         self.frame_skip = check_frame_skip(frame_skip)
         self.xml_file = xml_file
-        self.width, self.height = width, height
+        self.width, self.height = check_size("width", width), check_size("height", height)
         self.camera_id, self.camera_name = camera_id, camera_name
         self.default_camera_config = default_camera_config
         self.max_geom, self.visual_options = max_geom, visual_options
@@ -172,6 +177,16 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         low, high = self.model.actuator_ctrlrange.copy().astype(np.float32).T
         self.action_space = Box(low=low, high=high, dtype=np.float32)
         self.metadata = {**type(self).metadata, "render_fps": int(np.round(1.0 / self.dt))}
+        self._renderer = MujocoRenderer(
+            self.model,
+            width=width,
+            height=height,
+            camera_id=camera_id,
+            camera_name=camera_name,
+            default_camera_config=default_camera_config,
+            max_geom=max_geom,
+            visual_options=visual_options,
+        )
 
     @staticmethod
     def _float_box(size: int) -> Box:
@@ -180,11 +195,23 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         del state["_mujoco"]  # a module: imported again by the copy
+        state.pop("_window", None)  # a human window stays with the original
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._mujoco = import_mujoco()
+
+    def _frame(self) -> Any:
+        mode = str(self.render_mode)  # render() calls this only with a mode
+        if mode in ("human", "rgb_array_list"):  # the window and the list take rgb frames
+            mode = "rgb_array"
+        return self._renderer.render(self.model, self.data, mode)
+
+    def close(self) -> None:
+        """Free the renderer's OpenGL resources and close the human window, if any."""
+        self._renderer.close()
+        super().close()
 
     @property
     def dt(self) -> float:
@@ -217,6 +244,8 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
                 MujocoWarning,
                 stacklevel=3,
             )
+        if self.render_mode == "human":  # every step calls this once: Gymnasium's step's frame
+            self.render()
 
     def _add_warnings(self, info: dict[str, Any]) -> dict[str, Any]:
         """``info`` with ``"mujoco_warnings"`` when MuJoCo flagged this step."""
@@ -252,7 +281,10 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         self._mujoco.mj_resetData(self.model, self.data)
         self._step_warnings = []
         observation = self.reset_model()
-        return observation, self._get_reset_info()
+        info = self._get_reset_info()
+        if self.render_mode == "human":
+            self.render()
+        return observation, info
 
     def reset_model(self) -> np.ndarray:
         """Put the noisy start state into ``data``; return the first observation."""
