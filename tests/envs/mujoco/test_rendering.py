@@ -144,22 +144,25 @@ def test_rgb_and_depth_arrays() -> None:
 
 @pytest.mark.usefixtures("gl")
 def test_depth_to_meters_is_the_distance_along_the_view() -> None:
-    """The middle pixel's depth, in meters, is how far a ray from the camera travels to the
-    first geom it hits (MuJoCo's ``mj_ray``), to the depth buffer's precision."""
+    """The middle pixel's depth, in meters, is how far the camera's axis runs to the first geom
+    it meets (MuJoCo's ``mj_ray``): 1.9400 against 1.9406 with llvmpipe's depth buffer, which
+    resolves about 0.3 mm there (0.1% is allowed; far objects resolve worse)."""
     from palaestra.envs.mujoco.rendering import depth_to_meters
 
-    env = palaestra.make("Walker2d-v5", render_mode="depth_array", width=201, height=201)
+    env = palaestra.make("InvertedPendulum-v5", render_mode="depth_array", width=201, height=201)
     env.reset(seed=0)
     depth = env.render()
     unwrapped = env.unwrapped
-    scene_camera = unwrapped._renderer._gl["scene"].camera[0]
-    eye = (np.asarray(scene_camera.pos) + np.asarray(scene_camera.forward) * 0).astype(np.float64)
-    forward = np.asarray(scene_camera.forward, dtype=np.float64)
+    camera = unwrapped._renderer._gl["scene"].camera[0]  # where MuJoCo drew from
+    eye = np.asarray(camera.pos, dtype=np.float64)
+    forward = np.asarray(camera.forward, dtype=np.float64)
     geom = np.zeros(1, np.int32)
     hit = mujoco.mj_ray(unwrapped.model, unwrapped.data, eye, forward, None, 1, -1, geom)
-    assert hit > 0
+    assert hit > 0 and geom[0] >= 0
     meters = depth_to_meters(depth, unwrapped.model)
-    assert meters[100, 100] == pytest.approx(hit, rel=2e-3)
+    assert meters.dtype == np.float64 and meters.shape == depth.shape
+    assert meters[100, 100] == pytest.approx(hit, rel=1e-3)
+    assert meters.max() > 10 * hit  # the background is far away
     env.close()
 
 

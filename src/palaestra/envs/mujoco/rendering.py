@@ -134,12 +134,16 @@ def gl_context(width: int, height: int) -> tuple[Any, str]:
     if _working_backend in order:
         order = (_working_backend, *(b for b in order if b != _working_backend))
     failures = []
+    platform_before = os.environ.get("PYOPENGL_PLATFORM")
     for backend in order:
         try:
             context = _context_class(backend)(width, height)
             context.make_current()
         except Exception as e:  # an ImportError, OSError or GL error, depending on the backend
             failures.append(f"{backend}: {type(e).__name__}: {e}")
+            # mujoco.egl/osmesa claim PyOpenGL's platform on import; give it back for the next
+            if platform_before is None:
+                os.environ.pop("PYOPENGL_PLATFORM", None)
             continue
         _working_backend = backend
         return context, backend
