@@ -213,13 +213,6 @@ def test_bad_kwargs_raise_naming_the_value(
         palaestra.make(env_id, **kwargs)
 
 
-def test_render_modes_are_refused_clearly_until_rendering_exists() -> None:
-    with pytest.raises(error.UnsupportedMode, match="render_mode='rgb_array': palaestra's MuJoCo"):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # make() warns that the mode is not declared
-            palaestra.make("Reacher-v5", render_mode="rgb_array")
-
-
 def test_instability_is_a_warning_and_in_info_not_a_silent_reset() -> None:
     env = palaestra.make("HalfCheetah-v5")
     env.reset(seed=0)

@@ -67,43 +67,59 @@ def gl(monkeypatch: pytest.MonkeyPatch) -> str:
     return backend
 
 
-def _draw(side: str, out: Path, backend: str) -> dict[str, np.ndarray]:
-    subprocess.run(
-        [sys.executable, "-m", "tests.envs.mujoco.frames", side, str(out)],
-        env={
-            **os.environ,
-            "MUJOCO_GL": backend,
-            "PYTHONPATH": f"{PACKAGE.parent}{os.pathsep}{ROOT}",
-        },
-        cwd=ROOT,
-        check=True,
-        timeout=900,
-    )
-    with np.load(out) as data:
-        return {key: data[key] for key in data.files}
+def _draw(backend: str, which: str, folder: Path) -> list[dict[str, np.ndarray]]:
+    """Both sides' frames, drawn at once in two interpreters."""
+    env = {**os.environ, "MUJOCO_GL": backend, "PYTHONPATH": f"{PACKAGE.parent}{os.pathsep}{ROOT}"}
+    outs = [folder / f"{side}-{which}.npz" for side in ("palaestra", "gymnasium")]
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-m", "tests.envs.mujoco.frames", side, str(out), which],
+            env=env,
+            cwd=ROOT,
+        )
+        for side, out in zip(("palaestra", "gymnasium"), outs)
+    ]
+    for proc in procs:
+        assert proc.wait(timeout=900) == 0, proc.args
+    result = []
+    for out in outs:
+        with np.load(out) as data:
+            result.append({key: data[key] for key in data.files})
+    return result
+
+
+_drawn: dict[str, tuple[dict[str, Any], dict[str, Any]]] = {}
+
+
+def drawn(which: str, folder: Path) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The ``which`` (fast or slow) cases of ``frames.CASES`` drawn by palaestra and by
+    Gymnasium, once per test session."""
+    pytest.importorskip("gymnasium")
+    if which not in _drawn:
+        ours, theirs = _draw(gl_backend(), which, folder)
+        _drawn[which] = ours, theirs
+    return _drawn[which]
 
 
 @pytest.fixture(scope="module")
-def drawn(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Every case of ``frames.CASES`` drawn by palaestra and by Gymnasium."""
-    pytest.importorskip("gymnasium")
-    backend = gl_backend()
-    folder = tmp_path_factory.mktemp("frames")
-    ours = _draw("palaestra", folder / "palaestra.npz", backend)
-    theirs = _draw("gymnasium", folder / "gymnasium.npz", backend)
-    return ours, theirs
+def frames_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("frames")
 
 
-def test_palaestra_side_is_palaestra(drawn: tuple[dict[str, Any], dict[str, Any]]) -> None:
-    ours, _ = drawn
+def test_palaestra_side_is_palaestra(frames_folder: Path) -> None:
+    ours, _ = drawn("fast", frames_folder)
     assert str(ours["package"]).startswith(str(PACKAGE))
     assert list(ours["gymnasium_loaded"]) == []
     assert str(ours["backend"]) == gl_backend()
 
 
-@pytest.mark.parametrize("case", [name for name, _, _ in CASES])
-def test_frames_equal_gymnasium(case: str, drawn: tuple[dict[str, Any], dict[str, Any]]) -> None:
-    ours, theirs = drawn
+@pytest.mark.parametrize(
+    "case",
+    [pytest.param(name, marks=[pytest.mark.slow] if slow else []) for name, _, _, slow in CASES],
+)
+def test_frames_equal_gymnasium(case: str, frames_folder: Path) -> None:
+    slow = {name: is_slow for name, _, _, is_slow in CASES}[case]
+    ours, theirs = drawn("slow" if slow else "fast", frames_folder)
     keys = sorted(k for k in theirs if k.startswith(case + "/"))
     assert keys and keys == sorted(k for k in ours if k.startswith(case + "/"))
     for key in keys:
@@ -365,7 +381,8 @@ def test_human_without_a_display_says_so(monkeypatch: pytest.MonkeyPatch) -> Non
 
 
 def test_every_env_is_covered() -> None:
-    assert {env_id for _, env_id, _ in CASES} == set(MUJOCO_IDS)
+    fast = {env_id for _, env_id, kwargs, slow in CASES if not slow}
+    assert fast == set(MUJOCO_IDS)  # the default suite draws every env
 
 
 @pytest.mark.slow
