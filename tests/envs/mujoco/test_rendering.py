@@ -75,7 +75,7 @@ def _draw(backend: str, which: str, folder: Path) -> list[dict[str, np.ndarray]]
         subprocess.Popen(
             [sys.executable, "-m", "tests.envs.mujoco.frames", side, str(out), which],
             env=env,
-            cwd=ROOT,
+            cwd=folder,  # MuJoCo writes MUJOCO_LOG.TXT where it runs (Gymnasium's Ant warns)
         )
         for side, out in zip(("palaestra", "gymnasium"), outs)
     ]
