@@ -16,10 +16,15 @@ from typing import Any
 
 import numpy as np
 
-from palaestra import error, logger
-from palaestra.core import Env
+from palaestra import error
 from palaestra.envs.box2d._common import box_action, check_bool, check_real
-from palaestra.envs.mujoco._render import OFFSCREEN_MODES, OffscreenRenderer
+from palaestra.envs.mujoco.rendering import (
+    RENDER_MODES,
+    MujocoRenderer,
+    check_display,
+    check_size,
+)
+from palaestra.envs.rendered import RenderedEnv
 from palaestra.spaces import Box
 
 ASSETS = Path(__file__).parent / "assets"
@@ -122,18 +127,19 @@ def check_weights(**weights: Any) -> list[float]:
     return [check_real(name, value) for name, value in weights.items()]
 
 
-class MujocoEnv(Env[np.ndarray, np.ndarray]):
+class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
     """One MuJoCo model stepped ``frame_skip`` times per action.
 
     Subclasses build their observation space, then implement ``step``, ``reset_model`` (the
     noisy start state; it returns the first observation) and optionally ``_get_reset_info``.
     The rendering keywords (``render_mode``, ``width``, ``height``, ``camera_id``,
     ``camera_name``, ``default_camera_config``, ``max_geom``, ``visual_options``) are
-    Gymnasium's; frames are drawn offscreen (:mod:`palaestra.envs.mujoco._render`), and
-    ``render_mode="human"`` shows them through ``make``'s ``HumanRendering`` wrapper.
+    Gymnasium's; frames come from :class:`~palaestra.envs.mujoco.rendering.MujocoRenderer`
+    (MuJoCo's own renderer, made on the first frame) and ``"human"`` shows the ``rgb_array``
+    frame in palaestra's window after every reset and step.
     """
 
-    metadata: dict[str, Any] = {"render_modes": list(OFFSCREEN_MODES)}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES)}
 
     def __init__(
         self,
@@ -148,23 +154,13 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         max_geom: int = 1000,
         visual_options: dict[int, bool] | None = None,
     ) -> None:
-        if render_mode is not None and render_mode not in OFFSCREEN_MODES:
-            raise error.UnsupportedMode(
-                f"render_mode={render_mode!r}: expected None or one of {list(OFFSCREEN_MODES)} "
-                "(make(..., render_mode='human') shows rgb_array frames in a window)"
-            )
-        for name, size in (("width", width), ("height", height), ("max_geom", max_geom)):
-            if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1:
-                raise ValueError(f"{name} must be a positive int, got {size!r}")
-        if camera_id is not None and camera_name is not None:
-            raise ValueError(
-                f"give camera_id ({camera_id!r}) or camera_name ({camera_name!r}), not both"
-            )
-        self.render_mode = render_mode
+        self._init_render(render_mode)
+        if render_mode == "human":
+            check_display()
         self.frame_skip = check_frame_skip(frame_skip)
         self.xml_file = xml_file
-        self.width, self.height = width, height
-        self.camera_name = camera_name
+        self.width, self.height = check_size("width", width), check_size("height", height)
+        self.camera_id, self.camera_name = camera_id, camera_name
         self.default_camera_config = default_camera_config
         self.max_geom, self.visual_options = max_geom, visual_options
         self._mujoco = import_mujoco()
@@ -181,62 +177,16 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         low, high = self.model.actuator_ctrlrange.copy().astype(np.float32).T
         self.action_space = Box(low=low, high=high, dtype=np.float32)
         self.metadata = {**type(self).metadata, "render_fps": int(np.round(1.0 / self.dt))}
-        self.camera_id = self._camera(camera_id, camera_name)
-        self._renderer: OffscreenRenderer | None = None
-
-    def _camera(self, camera_id: int | None, camera_name: str | None) -> int:
-        """The camera to draw from: -1 (the free camera, Gymnasium's default even where the
-        model has a ``track`` camera) or a fixed camera of the model, given by id or name."""
-        mujoco, model = self._mujoco, self.model
-        names = [model.camera(i).name for i in range(model.ncam)]
-        if camera_name is not None:
-            found = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera_name)
-            if found == -1:
-                raise ValueError(
-                    f"camera_name {camera_name!r} is not a camera of {self.fullpath!r}: "
-                    f"expected one of {names}"
-                )
-            return int(found)
-        if camera_id is None:
-            return -1
-        if isinstance(camera_id, bool) or not isinstance(camera_id, (int, np.integer)):
-            raise TypeError(f"camera_id must be an int, got {camera_id!r}")
-        if not -1 <= camera_id < model.ncam:
-            raise ValueError(
-                f"camera_id {camera_id!r} is not a camera of {self.fullpath!r}: expected -1 "
-                f"(the free camera) or an id in [0, {model.ncam}) ({names})"
-            )
-        return int(camera_id)
-
-    def render(self) -> Any:
-        """The current frame in ``render_mode`` (``None``: warns and returns nothing)."""
-        if self.render_mode is None:
-            logger.warn(
-                "You are calling render method without specifying any render mode. "
-                "You can specify the render_mode at initialization, "
-                f'e.g. make("{self.spec.id if self.spec else type(self).__name__}", '
-                'render_mode="rgb_array")'
-            )
-            return None
-        if self._renderer is None:
-            self._renderer = OffscreenRenderer(
-                self._mujoco,
-                self.model,
-                self.data,
-                self.width,
-                self.height,
-                self.camera_id,
-                self.default_camera_config,
-                self.max_geom,
-                self.visual_options,
-            )
-        return self._renderer.render(self.render_mode)
-
-    def close(self) -> None:
-        """Free the renderer's OpenGL context, if one was made."""
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        self._renderer = MujocoRenderer(
+            self.model,
+            width=width,
+            height=height,
+            camera_id=camera_id,
+            camera_name=camera_name,
+            default_camera_config=default_camera_config,
+            max_geom=max_geom,
+            visual_options=visual_options,
+        )
 
     @staticmethod
     def _float_box(size: int) -> Box:
@@ -245,12 +195,23 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         del state["_mujoco"]  # a module: imported again by the copy
-        state["_renderer"] = None  # an OpenGL context: the copy makes its own when it draws
+        state.pop("_window", None)  # a human window stays with the original
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._mujoco = import_mujoco()
+
+    def _frame(self) -> Any:
+        mode = str(self.render_mode)  # render() calls this only with a mode
+        if mode in ("human", "rgb_array_list"):  # the window and the list take rgb frames
+            mode = "rgb_array"
+        return self._renderer.render(self.model, self.data, mode)
+
+    def close(self) -> None:
+        """Free the renderer's OpenGL resources and close the human window, if any."""
+        self._renderer.close()
+        super().close()
 
     @property
     def dt(self) -> float:
@@ -266,18 +227,16 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         """Write ``ctrl`` and advance ``n_frames`` MuJoCo steps; MuJoCo's warnings of those
         steps are raised as :class:`MujocoWarning` and kept in ``self._step_warnings``."""
         mujoco, data = self._mujoco, self.data
-        # the counters as one array, compared as bytes (iterating data.warning costs ~0.25 ms)
-        counters = data.warning.number  # a view: it changes as MuJoCo counts
-        before = counters.copy()
+        before = [w.number for w in data.warning]
         data.ctrl[:] = ctrl
         mujoco.mj_step(self.model, data, nstep=n_frames)
         # cfrc_ext and friends are only computed on request (no force sensors in the models)
         mujoco.mj_rnePostConstraint(self.model, data)
-        if counters.tobytes() == before.tobytes():
-            self._step_warnings = []
-            return
-        raised = np.flatnonzero(counters > before)
-        self._step_warnings = [mujoco.mjtWarning(int(i)).name for i in raised]
+        self._step_warnings = [
+            mujoco.mjtWarning(i).name
+            for i, (w, n) in enumerate(zip(data.warning, before))
+            if w.number > n
+        ]
         if self._step_warnings:
             warnings.warn(
                 f"{type(self).__name__}: MuJoCo reported {', '.join(self._step_warnings)} at "
@@ -285,6 +244,8 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
                 MujocoWarning,
                 stacklevel=3,
             )
+        if self.render_mode == "human":  # every step calls this once: Gymnasium's step's frame
+            self.render()
 
     def _add_warnings(self, info: dict[str, Any]) -> dict[str, Any]:
         """``info`` with ``"mujoco_warnings"`` when MuJoCo flagged this step."""
@@ -320,7 +281,10 @@ class MujocoEnv(Env[np.ndarray, np.ndarray]):
         self._mujoco.mj_resetData(self.model, self.data)
         self._step_warnings = []
         observation = self.reset_model()
-        return observation, self._get_reset_info()
+        info = self._get_reset_info()
+        if self.render_mode == "human":
+            self.render()
+        return observation, info
 
     def reset_model(self) -> np.ndarray:
         """Put the noisy start state into ``data``; return the first observation."""
