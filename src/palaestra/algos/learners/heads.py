@@ -46,6 +46,7 @@ __all__ = [
     "sde_rsample_vjp",
     "sde_std",
     "sde_std_vjp",
+    "squash_correction",
     "squashed_gaussian_rsample",
     "squashed_gaussian_rsample_vjp",
     "tanh_action",
@@ -195,7 +196,10 @@ def gaussian_evaluate(xp: Any, mean: Any, log_std: Any, actions: Any) -> tuple[A
     inv_std = xp.exp(-log_std)
     z = (actions - mean) * inv_std
     log_prob = xp.sum_rows(-0.5 * z * z - log_std - LOG_SQRT_2PI)
-    entropy = xp.sum(0.5 + LOG_SQRT_2PI + log_std)
+    if log_std.ndim == 1:
+        entropy = xp.sum(0.5 + LOG_SQRT_2PI + log_std)
+    else:  # a log-std per row (SB3's distributions accept one; the algorithms do not use it)
+        entropy = xp.sum_rows(0.5 + LOG_SQRT_2PI + log_std + 0.0 * mean)
     return log_prob, entropy, (z, inv_std)
 
 
@@ -255,6 +259,12 @@ def tanh_action(xp: Any, x: Any) -> tuple[Any, Any]:
 
 def tanh_action_vjp(tape: Any, g_action: np.ndarray) -> np.ndarray:
     return g_action * (1.0 - tape * tape)
+
+
+def squash_correction(xp: Any, actions: Any) -> Any:
+    """``sum log(1 - a^2 + 1e-6)`` per row: what tanh takes off a Gaussian's log-density
+    (the original SAC's correction, with SB3's epsilon)."""
+    return xp.sum_rows(xp.log(1.0 - actions * actions + SQUASH_EPS))
 
 
 def tanh_inverse(xp: Any, y: Any) -> Any:
@@ -318,7 +328,7 @@ def sde_log_prob(
     entropy = squashed = None
     if squash:
         squashed = xp.tanh(gaussian_actions)
-        log_prob = log_prob - xp.sum_rows(xp.log(1.0 - squashed * squashed + SQUASH_EPS))
+        log_prob = log_prob - squash_correction(xp, squashed)
     else:
         entropy = xp.sum_rows(0.5 + LOG_SQRT_2PI + log_sigma)
     return log_prob, entropy, (latent, lat2, std, sigma, z, squashed)
