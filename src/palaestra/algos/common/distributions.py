@@ -22,7 +22,7 @@ from torch.distributions import Bernoulli, Categorical, Normal
 
 from palaestra import spaces
 from palaestra.algos.learners import heads
-from palaestra.algos.learners.xp import torch_ops
+from palaestra.algos.learners.xp import numpy_ops, torch_ops
 from palaestra.error import UnsupportedSpace
 
 __all__ = [
@@ -544,14 +544,38 @@ def kl_divergence(dist_true: Distribution, dist_pred: Distribution) -> torch.Ten
 
 
 class ActionHead(nn.Module):
-    """``latent -> distribution parameters`` for one action space."""
+    """``latent -> distribution parameters`` for one action space, and ``dist``: the SB3
+    distribution object of the same kind (the policy's ``action_dist``).
 
-    def __init__(self, action_space: spaces.Space[Any], latent_dim: int, log_std_init: float = 0.0):
+    With ``use_sde`` a Box is gSDE's ``StateDependentNoiseDistribution`` (features not
+    learned, as SB3's on-policy algorithms): ``log_std`` is ``[latent_dim, d or 1]``, and the
+    exploration matrices live in ``dist`` (torch, as SB3) with a numpy copy for acting."""
+
+    def __init__(
+        self,
+        action_space: spaces.Space[Any],
+        latent_dim: int,
+        log_std_init: float = 0.0,
+        use_sde: bool = False,
+        full_std: bool = True,
+        use_expln: bool = False,
+        squash_output: bool = False,
+    ):
         super().__init__()
         self.offset: np.ndarray | None = None
+        self.squash = False
+        self._noise: tuple[np.ndarray, np.ndarray] | None = None  # gSDE: (matrix, per env)
+        if use_sde and not isinstance(action_space, spaces.Box):
+            raise ValueError(
+                f"use_sde (gSDE) needs a Box action space, got {type(action_space).__name__}"
+            )
+        if squash_output and not use_sde:
+            raise ValueError("squash_output=True is only available when using gSDE (use_sde=True)")
+        self.dist: Distribution
         if isinstance(action_space, spaces.Discrete):
             self.kind, self.sizes, out = "categorical", [int(action_space.n)], int(action_space.n)
             self.offset = np.asarray(int(action_space.start)) if int(action_space.start) else None
+            self.dist = CategoricalDistribution(out)
         elif isinstance(action_space, spaces.MultiDiscrete):
             if action_space.nvec.ndim != 1:
                 raise ValueError(
@@ -561,19 +585,94 @@ class ActionHead(nn.Module):
             out = sum(self.sizes)
             start = np.asarray(action_space.start, dtype=np.int64)
             self.offset = start if start.any() else None
+            self.dist = MultiCategoricalDistribution(self.sizes)
         elif isinstance(action_space, spaces.MultiBinary):
             self.kind, self.sizes = "bernoulli", [int(np.prod(action_space.shape))]
             out = self.sizes[0]
+            self.dist = BernoulliDistribution(out)
+        elif isinstance(action_space, spaces.Box) and use_sde:
+            self.kind, self.sizes = "sde", [int(np.prod(action_space.shape))]
+            self.squash, self.full_std, self.use_expln = squash_output, full_std, use_expln
+            self.dist = StateDependentNoiseDistribution(
+                self.sizes[0], full_std, use_expln, squash_output, learn_features=False
+            )
+            # SB3's order: the mean's layer, the log-std, a first exploration matrix.
+            self.net, self.log_std = self.dist.proba_distribution_net(latent_dim, log_std_init)
+            self._noise_from_dist()
         elif isinstance(action_space, spaces.Box):
             self.kind, self.sizes = "gaussian", [int(np.prod(action_space.shape))]
             out = self.sizes[0]
             self.log_std = nn.Parameter(torch.full((out,), float(log_std_init)))
+            self.dist = DiagGaussianDistribution(out)
         else:
             raise UnsupportedSpace(
                 f"PPO does not support {type(action_space).__name__} action spaces"
             )
         self.action_shape: tuple[int, ...] = tuple(action_space.shape or ())
-        self.net = nn.Linear(latent_dim, out)
+        if self.kind != "sde":
+            self.net = nn.Linear(latent_dim, out)
+
+    # -- gSDE's exploration matrices ------------------------------------------------------------
+    def _noise_from_dist(self) -> None:
+        dist = self.dist
+        assert isinstance(dist, StateDependentNoiseDistribution)
+        self._noise = (
+            dist.exploration_mat.detach().cpu().numpy(),
+            dist.exploration_matrices.detach().cpu().numpy(),
+        )
+
+    def reset_noise(
+        self, log_std: Any, n_envs: int, rng: np.random.Generator | None = None
+    ) -> None:
+        """Draw new exploration matrices (one, and one per env) for the std of ``log_std``
+        (a tensor, or the learner's numpy array), from ``rng`` or torch's generator."""
+        dist = self.dist
+        if not isinstance(dist, StateDependentNoiseDistribution):
+            raise ValueError("reset_noise() is only available when using gSDE")
+        log_std = torch.as_tensor(log_std, device=self.log_std.device)
+        dist.sample_weights(log_std, batch_size=n_envs, rng=rng)
+        self._noise_from_dist()
+
+    def noise_state(self) -> dict[str, np.ndarray]:
+        """The exploration matrices, for a model file (empty without gSDE)."""
+        if self._noise is None:
+            return {}
+        return {"exploration_mat": self._noise[0], "exploration_matrices": self._noise[1]}
+
+    def load_noise_state(self, arrays: dict[str, np.ndarray]) -> None:
+        """Restore ``noise_state`` output."""
+        dist = self.dist
+        if not isinstance(dist, StateDependentNoiseDistribution):
+            return
+        mat, mats = arrays["exploration_mat"], arrays["exploration_matrices"]
+        assert self._noise is not None
+        if mat.shape != self._noise[0].shape or mats.shape[1:] != self._noise[0].shape:
+            raise ValueError(
+                f"gSDE exploration matrices of shape {mat.shape} and {mats.shape} do not fit "
+                f"the policy's {self._noise[0].shape}"
+            )
+        device = self.log_std.device
+        dist.exploration_mat = torch.as_tensor(mat, device=device)
+        dist.exploration_matrices = torch.as_tensor(mats, device=device)
+        self._noise_from_dist()
+
+    # -- the networks' outputs -----------------------------------------------------------------
+    def run(self, run: Any, obs: Any) -> tuple[Any, Any]:
+        """``(head outputs, latent or None)`` through the learner's ``run``: gSDE's variance
+        needs the policy latent, so its nets are ``pi`` (to the latent) and ``act`` (the
+        mean's layer); other heads run ``pi`` whole."""
+        if self.kind == "sde":
+            latent = run("pi", obs)
+            return run("act", latent), latent
+        return run("pi", obs), None
+
+    def backprop(self, backprop: Any, g_params: np.ndarray) -> None:
+        """Send d(loss)/d(head outputs) back through the nets ``run`` ran."""
+        if self.kind == "sde":
+            g_latent = backprop("act", g_params, input_grad=True)
+            backprop("pi", g_latent)
+        else:
+            backprop("pi", g_params)
 
     def sample(
         self,
@@ -581,9 +680,11 @@ class ActionHead(nn.Module):
         log_std: np.ndarray | None,
         rng: np.random.Generator,
         deterministic: bool,
+        latent: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Actions ``[B, *shape]`` (or their modes) from head outputs ``params``, drawn from
-        ``rng``, and their log-probabilities ``[B]`` float32."""
+        ``rng`` (gSDE: the exploration matrices and the ``latent``), and their
+        log-probabilities ``[B]`` float32."""
         n = params.shape[0]
         if self.kind == "categorical":
             actions, log_prob = heads.categorical_sample(params, rng, deterministic)
@@ -593,6 +694,15 @@ class ActionHead(nn.Module):
             )
         elif self.kind == "bernoulli":
             actions, log_prob = heads.bernoulli_sample(params, rng, deterministic)
+        elif self.kind == "sde":
+            assert log_std is not None and latent is not None and self._noise is not None
+            std = heads.sde_std(numpy_ops, log_std, self.use_expln, self.full_std, self.sizes[0])[0]
+            gaussian = params
+            if not deterministic:
+                gaussian = params + heads.sde_noise(numpy_ops, latent, *self._noise)
+            log_prob = heads.sde_log_prob(numpy_ops, params, std, latent, gaussian, self.squash)[0]
+            actions = np.tanh(gaussian) if self.squash else gaussian
+            log_prob = log_prob.astype(np.float32, copy=False)
         else:
             assert log_std is not None
             actions, log_prob = heads.gaussian_sample(params, log_std, rng, deterministic)
@@ -612,14 +722,25 @@ class ActionHead(nn.Module):
             return actions.reshape(n, -1).astype(np.float32, copy=False)
         return idx if self.offset is None else idx - self.offset
 
-    def evaluate(self, xp: Any, params: Any, log_std: Any, actions: Any) -> tuple[Any, Any, Any]:
-        """``(log_prob [B], entropy, tape)`` of ``index``-ed actions (see ``learners.heads``)."""
+    def evaluate(
+        self, xp: Any, params: Any, log_std: Any, actions: Any, latent: Any = None
+    ) -> tuple[Any, Any, Any]:
+        """``(log_prob [B], entropy, tape)`` of ``index``-ed actions (see ``learners.heads``);
+        gSDE also takes the policy ``latent`` (not differentiated through the variance)."""
         if self.kind == "categorical":
             return heads.categorical_evaluate(xp, params, actions)
         if self.kind == "multi_categorical":
             return heads.multi_categorical_evaluate(xp, params, actions, self.sizes)
         if self.kind == "bernoulli":
             return heads.bernoulli_evaluate(xp, params, actions)
+        if self.kind == "sde":
+            d = self.sizes[0]
+            std, std_tape = heads.sde_std(xp, log_std, self.use_expln, self.full_std, d)
+            gaussian = heads.tanh_inverse(xp, actions) if self.squash else actions
+            log_prob, entropy, tape = heads.sde_log_prob(
+                xp, params, std, xp.stop_gradient(latent), gaussian, self.squash
+            )
+            return log_prob, entropy, (std_tape, tape)
         return heads.gaussian_evaluate(xp, params, log_std, actions)
 
     def evaluate_vjp(
@@ -632,4 +753,16 @@ class ActionHead(nn.Module):
             return heads.multi_categorical_evaluate_vjp(tape, g_log_prob, g_mean_entropy), None
         if self.kind == "bernoulli":
             return heads.bernoulli_evaluate_vjp(tape, g_log_prob, g_mean_entropy), None
+        if self.kind == "sde":
+            std_tape, lp_tape = tape
+            g_mean, g_std, _, _ = heads.sde_log_prob_vjp(lp_tape, g_log_prob, g_mean_entropy, False)
+            return g_mean, heads.sde_std_vjp(std_tape, g_std)
         return heads.gaussian_evaluate_vjp(tape, g_log_prob, g_mean_entropy)
+
+    def distribution(self, params: Any, log_std: Any, latent: Any = None) -> Distribution:
+        """``dist`` set to these torch parameters (SB3's ``_get_action_dist_from_latent``)."""
+        if self.kind == "sde":
+            return self.dist.proba_distribution(params, log_std, latent)
+        if self.kind == "gaussian":
+            return self.dist.proba_distribution(params, log_std)
+        return self.dist.proba_distribution(params)
