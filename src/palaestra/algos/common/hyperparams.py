@@ -294,7 +294,8 @@ _ON_POLICY_ACTOR_CRITIC = {  # PPO's and A2C's ActorCritic
     **_POLICY_COMMON,
     "ortho_init": _boolean,
     "log_std_init": _number(-20.0, 20.0),
-    "full_std": _boolean,  # gSDE's
+    "use_sde": _boolean,  # gSDE's (the algorithm's use_sde; equal if given)
+    "full_std": _boolean,
     "use_expln": _boolean,
     "squash_output": _boolean,
 }

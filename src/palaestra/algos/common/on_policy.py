@@ -91,6 +91,11 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         self._optimizer_choice(kwargs)  # takes its keys out of the policy's
         kwargs.pop("backend", None)
         kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
+        if kwargs.pop("use_sde", self.use_sde) != self.use_sde:
+            raise ValueError(
+                f"policy_kwargs use_sde={self.policy_kwargs['use_sde']!r} contradicts "
+                f"use_sde={self.use_sde!r}: give it once, as {type(self).__name__}(use_sde=...)"
+            )
         policy: ActorCritic
         if isinstance(self.policy_name, type):  # an ActorCriticPolicy subclass (SB3's guide)
             policy_class: Any = self.policy_name

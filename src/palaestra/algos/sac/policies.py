@@ -13,6 +13,7 @@ from palaestra.algos.common.continuous_policies import (
     SquashedGaussianActor,
     _ContinuousPolicy,
 )
+from palaestra.algos.common.distributions import StateDependentNoiseDistribution
 from palaestra.algos.common.networks import (
     BaseFeaturesExtractor,
     CombinedExtractor,
@@ -30,7 +31,7 @@ class SACPolicy(_ContinuousPolicy):
     ``make_critic``. ``SAC(MyPolicy, env)`` builds it as
     ``MyPolicy(observation_space, action_space, lr_schedule, **policy_kwargs)`` and trains a
     subclass on the torch learner. ``log_std_init``, ``use_expln`` and ``clip_mean`` only
-    matter with ``use_sde``, which is not supported yet."""
+    matter with ``use_sde`` (gSDE), which ``SAC(use_sde=True)`` passes."""
 
     _frozen = ("critic_target",)
     _not_policy_state = ("ent_coef.",)  # SAC's learned temperature, the algorithm's
@@ -54,8 +55,6 @@ class SACPolicy(_ContinuousPolicy):
         n_critics: int = 2,
         share_features_extractor: bool = False,
     ) -> None:
-        if use_sde:
-            raise NotImplementedError("use_sde (gSDE) is not supported by palaestra's SAC yet")
         super().__init__(
             observation_space,
             action_space,
@@ -93,7 +92,15 @@ class SACPolicy(_ContinuousPolicy):
             self.actor_arch,
             self.activation_fn,
             self.normalize_images,
+            use_sde=self.use_sde,
+            log_std_init=self.log_std_init,
+            use_expln=self.use_expln,
+            clip_mean=self.clip_mean,
         )
+
+    def reset_noise(self, batch_size: int = 1) -> None:
+        """New gSDE exploration matrices for the actor (SB3's ``SACPolicy.reset_noise``)."""
+        self.actor.reset_noise(batch_size=batch_size)
 
     def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
         """``tanh`` of the Gaussian's mean, or of a sample (log-std clipped as in training)."""
@@ -101,6 +108,10 @@ class SACPolicy(_ContinuousPolicy):
         mean = self.actor.mu(latent)
         if deterministic:
             return torch.tanh(mean)
+        if self.use_sde:
+            dist = self.actor.action_dist
+            assert isinstance(dist, StateDependentNoiseDistribution)
+            return torch.tanh(mean + dist.get_noise(latent))
         log_std = self.actor.log_std(latent)
         return squashed_gaussian_rsample(torch_ops, mean, log_std, torch.randn_like(mean))[0]
 
