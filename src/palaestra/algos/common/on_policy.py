@@ -321,6 +321,10 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         arrays.update({f"sde/{k}": v for k, v in self._head.noise_state().items()})
         return meta, arrays
 
+    def _sde_matrix_shape(self) -> tuple[int, ...] | None:
+        noise = self._head.noise_state()
+        return tuple(noise["exploration_mat"].shape) if noise else None
+
     def _load_loop_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
         noise = {k[4:]: arrays.pop(k) for k in list(arrays) if k.startswith("sde/")}
         if noise:

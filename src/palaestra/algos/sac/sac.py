@@ -276,6 +276,9 @@ class SAC(ActorCriticOffPolicy):
             arrays["sde/exploration_matrices"] = dist.exploration_matrices.detach().cpu().numpy()
         return meta, arrays
 
+    def _sde_matrix_shape(self) -> tuple[int, ...] | None:
+        return None if self._sde is None else tuple(self._sde_dist.exploration_mat.shape)
+
     def _load_loop_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
         super()._load_loop_state(meta, arrays)
         if self._sde is not None and "sde/exploration_mat" in arrays:
