@@ -90,6 +90,8 @@ class SquashedGaussianActor(_Extracting):
         self.use_sde, self.use_expln, self.clip_mean = use_sde, use_expln, clip_mean
         self.full_std = full_std
         self.action_dist: Distribution
+        self.mu: nn.Module
+        self.log_std: nn.Module | nn.Parameter  # a layer, or gSDE's weights' log-std
         if use_sde:
             self.action_dist = StateDependentNoiseDistribution(
                 action_dim, full_std, use_expln, squash_output=True, learn_features=True

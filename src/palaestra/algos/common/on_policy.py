@@ -175,8 +175,8 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         if head.kind == "sde":
             latent = self.learner.forward("pi", obs)
             mean = self.learner.forward("act", latent)
-            log_std = self.learner.extra("log_std")
-            return head.sample(mean, log_std, self._rng, deterministic, latent)
+            sde_log_std = self.learner.extra("log_std")
+            return head.sample(mean, sde_log_std, self._rng, deterministic, latent)
         log_std = self.learner.extra("log_std") if head.kind == "gaussian" else None
         return head.sample(self.learner.forward("pi", obs), log_std, self._rng, deterministic)
 

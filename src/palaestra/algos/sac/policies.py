@@ -112,6 +112,7 @@ class SACPolicy(_ContinuousPolicy):
             dist = self.actor.action_dist
             assert isinstance(dist, StateDependentNoiseDistribution)
             return torch.tanh(mean + dist.get_noise(latent))
+        assert isinstance(self.actor.log_std, nn.Module)
         log_std = self.actor.log_std(latent)
         return squashed_gaussian_rsample(torch_ops, mean, log_std, torch.randn_like(mean))[0]
 
