@@ -277,11 +277,14 @@ def compare_gsde(results: list[Result]) -> None:
         speed = {
             lib: statistics.median(r.steps / r.train_wall_s for r in rows[lib]) for lib in rows
         }
+        # CPU seconds too: on a shared machine the wall clock also counts other processes
+        cpu = {lib: statistics.median(r.steps / r.train_cpu_s for r in rows[lib]) for lib in rows}
         print(
             f"{algo}: IQM palaestra {ours:.1f}, sb3 {theirs:.1f} "
             f"({'>=' if ok else 'BELOW'} sb3 - 10%|sb3| = {theirs - 0.1 * abs(theirs):.1f}); "
             f"env-steps/s palaestra {speed['palaestra']:.0f}, sb3 {speed['sb3']:.0f}, "
-            f"ratio {speed['palaestra'] / speed['sb3']:.2f}x"
+            f"ratio {speed['palaestra'] / speed['sb3']:.2f}x (per CPU second "
+            f"{cpu['palaestra'] / cpu['sb3']:.2f}x)"
         )
 
 
