@@ -7,6 +7,7 @@ Run from the repository root::
     .venv/bin/python benchmarks/learning.py --algo dqn --lib sb3 --seeds 0 1 --jobs 2
     .venv/bin/python benchmarks/learning.py --algo a2c
     .venv/bin/python benchmarks/learning.py --algo continuous         # sac and td3
+    .venv/bin/python benchmarks/learning.py --algo gsde               # ppo_sde and sac_sde
 
 * ``dqn``: MountainCar-v0, the tutorial settings (``learning_rate=1e-3, buffer_size=50000,
   learning_starts=1000, batch_size=128, tau=1.0, gamma=0.99, train_freq=4,
@@ -27,6 +28,19 @@ Run from the repository root::
   ``learning_starts=100``, one gradient step per env step, no action noise for TD3),
   ``--continuous-steps`` env steps (default 10k). Reported: mean return over 100 deterministic
   episodes, and per library the mean over seeds with a 95% t-interval.
+
+* ``ppo_sde`` / ``sac_sde``: gSDE with the RL Zoo 2.9.2 hyperparameters, as
+  ``rl_zoo3/hyperparams/ppo.yml`` (Pendulum-v1: 4 envs, ``n_steps=1024, gae_lambda=0.95,
+  gamma=0.9, n_epochs=10, learning_rate=1e-3, clip_range=0.2, use_sde=True,
+  sde_sample_freq=4``, ``--ppo-sde-steps``, default the Zoo's 100k) and ``sac.yml``
+  (MountainCarContinuous-v0: ``learning_rate=3e-4, buffer_size=50000, batch_size=512,
+  ent_coef=0.1, train_freq=32, gradient_steps=32, gamma=0.9999, tau=0.01,
+  learning_starts=0, use_sde=True, log_std_init=-3.67, net_arch=[64, 64], use_expln=True``,
+  ``--sac-sde-steps``, default the Zoo's 50k) give them. Reported: mean return over 100
+  (Pendulum) / 20 (MountainCarContinuous, 999-step episodes) deterministic episodes, per
+  library the interquartile mean over seeds (25% trimmed from each end), whether
+  palaestra's is at least SB3's minus 10% of its magnitude, and the ratio of training env
+  steps per second (median over seeds).
 
 Both libraries run with ``torch.set_num_threads(1)`` and the same env construction: SB3 gets
 ``gymnasium.make`` / SB3's ``make_vec_env``, palaestra gets ``palaestra.make`` /
@@ -51,6 +65,7 @@ PPO_N_ENVS = 8
 A2C_N_ENVS = 8
 EVAL_EPISODES = 100
 CONTINUOUS = ("sac", "td3")
+GSDE = ("ppo_sde", "sac_sde")
 # Two-sided 95% Student t quantiles by degrees of freedom (n - 1 seeds).
 T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306, 9: 2.262}
 
@@ -109,7 +124,7 @@ def algo_class(lib: str, algo: str) -> Any:
         import stable_baselines3 as algos
     else:
         import palaestra.algos as algos  # type: ignore[no-redef]
-    return getattr(algos, algo.upper())
+    return getattr(algos, algo.split("_")[0].upper())
 
 
 def evaluate(model: Any, env: Any, seed: int, episodes: int) -> tuple[float, float, float]:
@@ -136,6 +151,42 @@ def evaluate(model: Any, env: Any, seed: int, episodes: int) -> tuple[float, flo
 
 def build(algo: str, lib: str, seed: int) -> tuple[Any, str]:
     cls = algo_class(lib, algo)
+    if algo == "ppo_sde":  # rl_zoo3 2.9.2 ppo.yml, Pendulum-v1
+        env_id = "Pendulum-v1"
+        model = cls(
+            "MlpPolicy",
+            make_vec(lib, env_id, 4, seed),
+            n_steps=1024,
+            gae_lambda=0.95,
+            gamma=0.9,
+            n_epochs=10,
+            ent_coef=0.0,
+            learning_rate=1e-3,
+            clip_range=0.2,
+            use_sde=True,
+            sde_sample_freq=4,
+            seed=seed,
+        )
+        return model, env_id
+    if algo == "sac_sde":  # rl_zoo3 2.9.2 sac.yml, MountainCarContinuous-v0
+        env_id = "MountainCarContinuous-v0"
+        model = cls(
+            "MlpPolicy",
+            make_env(lib, env_id),
+            learning_rate=3e-4,
+            buffer_size=50000,
+            batch_size=512,
+            ent_coef=0.1,
+            train_freq=32,
+            gradient_steps=32,
+            gamma=0.9999,
+            tau=0.01,
+            learning_starts=0,
+            use_sde=True,
+            policy_kwargs=dict(log_std_init=-3.67, net_arch=[64, 64], use_expln=True),
+            seed=seed,
+        )
+        return model, env_id
     if algo == "dqn":
         env_id = "MountainCar-v0"
         model = cls("MlpPolicy", make_env(lib, env_id), seed=seed, **DQN_KWARGS)
@@ -170,7 +221,8 @@ def run_one(algo: str, lib: str, seed: int, steps: int) -> Result:
     wall, cpu = time.perf_counter(), time.process_time()
     model.learn(total_timesteps=steps)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-    success, length, ret = evaluate(model, make_env(lib, env_id), seed, EVAL_EPISODES)
+    episodes = 20 if algo == "sac_sde" else EVAL_EPISODES
+    success, length, ret = evaluate(model, make_env(lib, env_id), seed, episodes)
     return Result(algo, lib, seed, steps, success, length, ret, wall, cpu)
 
 
@@ -204,9 +256,41 @@ def compare_continuous(results: list[Result]) -> None:
         )
 
 
+def iqm(values: list[float]) -> float:
+    """Interquartile mean: the mean after dropping ``int(n / 4)`` values from each end."""
+    ordered = sorted(values)
+    cut = len(ordered) // 4
+    return statistics.fmean(ordered[cut : len(ordered) - cut])
+
+
+def compare_gsde(results: list[Result]) -> None:
+    """Per gSDE case: each library's IQM, the issue's criterion and the speed ratio."""
+    for algo in GSDE:
+        rows = {
+            lib: [r for r in results if r.algo == algo and r.lib == lib]
+            for lib in ("palaestra", "sb3")
+        }
+        if not rows["palaestra"] or not rows["sb3"]:
+            continue
+        ours, theirs = (iqm([r.mean_return for r in rows[lib]]) for lib in ("palaestra", "sb3"))
+        ok = ours >= theirs - 0.1 * abs(theirs)
+        speed = {
+            lib: statistics.median(r.steps / r.train_wall_s for r in rows[lib]) for lib in rows
+        }
+        # CPU seconds too: on a shared machine the wall clock also counts other processes
+        cpu = {lib: statistics.median(r.steps / r.train_cpu_s for r in rows[lib]) for lib in rows}
+        print(
+            f"{algo}: IQM palaestra {ours:.1f}, sb3 {theirs:.1f} "
+            f"({'>=' if ok else 'BELOW'} sb3 - 10%|sb3| = {theirs - 0.1 * abs(theirs):.1f}); "
+            f"env-steps/s palaestra {speed['palaestra']:.0f}, sb3 {speed['sb3']:.0f}, "
+            f"ratio {speed['palaestra'] / speed['sb3']:.2f}x (per CPU second "
+            f"{cpu['palaestra'] / cpu['sb3']:.2f}x)"
+        )
+
+
 def summarise(results: list[Result]) -> None:
     print("\nsummary (median over seeds)")
-    for algo in ("dqn", "ppo", "a2c", *CONTINUOUS):
+    for algo in ("dqn", "ppo", "a2c", *CONTINUOUS, *GSDE):
         for lib in ("palaestra", "sb3"):
             rows = [r for r in results if r.algo == algo and r.lib == lib]
             if not rows:
@@ -217,7 +301,7 @@ def summarise(results: list[Result]) -> None:
                 rates = [r.success for r in rows]
                 per_seed = "/".join(f"{x:.0%}" for x in rates)
                 score = f"median success {statistics.median(rates):.0%} ({per_seed})"
-            elif algo in CONTINUOUS:
+            elif algo in CONTINUOUS or algo in GSDE:
                 rets = [r.mean_return for r in rows]
                 per_seed = "/".join(f"{x:.1f}" for x in rets)
                 score = f"median return {statistics.median(rets):.1f} ({per_seed})"
@@ -228,6 +312,7 @@ def summarise(results: list[Result]) -> None:
                 score = f"{good}/{len(rets)} seeds >= 475 ({per_seed})"
             print(f"{algo} {lib:9s} seeds {seeds}: {score}; median train wall {wall:.1f}s")
     compare_continuous(results)
+    compare_gsde(results)
 
 
 def parse_args() -> argparse.Namespace:
@@ -239,9 +324,11 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument(
         "--continuous-steps", type=int, default=10_000, help="SAC and TD3 env steps"
     )
+    parser.add_argument("--ppo-sde-steps", type=int, default=100_000, help="PPO gSDE steps")
+    parser.add_argument("--sac-sde-steps", type=int, default=50_000, help="SAC gSDE steps")
     parser.add_argument(
         "--algo",
-        choices=["dqn", "ppo", "a2c", "sac", "td3", "both", "continuous", "all"],
+        choices=["dqn", "ppo", "a2c", "sac", "td3", *GSDE, "gsde", "both", "continuous", "all"],
         default="both",
         help="both: dqn and ppo; continuous: sac and td3; all: every algorithm",
     )
@@ -255,6 +342,7 @@ def main() -> None:
     algos = {
         "both": ["dqn", "ppo"],
         "continuous": list(CONTINUOUS),
+        "gsde": list(GSDE),
         "all": ["dqn", "ppo", "a2c", *CONTINUOUS],
     }.get(args.algo, [args.algo])
     libs = ["palaestra", "sb3"] if args.lib == "both" else [args.lib]
@@ -264,6 +352,8 @@ def main() -> None:
         "a2c": args.a2c_steps,
         "sac": args.continuous_steps,
         "td3": args.continuous_steps,
+        "ppo_sde": args.ppo_sde_steps,
+        "sac_sde": args.sac_sde_steps,
     }
     tasks = [
         (algo, lib, seed, budget[algo]) for algo in algos for seed in args.seeds for lib in libs

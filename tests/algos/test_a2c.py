@@ -179,8 +179,8 @@ def test_bad_input() -> None:
         A2C("MlpPolicy", "CartPole-v1", gae_lambda=1.5)
     with pytest.raises(ValueError, match=r"gamma must be a number in \[0, 1\], got -0.1"):
         A2C("MlpPolicy", "CartPole-v1", gamma=-0.1)
-    with pytest.raises(NotImplementedError, match="A2C does not support use_sde"):
-        A2C("MlpPolicy", "CartPole-v1", use_sde=True)
+    with pytest.raises(ValueError, match=r"gSDE\) can only be used with continuous actions"):
+        A2C("MlpPolicy", "CartPole-v1", use_sde=True)  # SB3's refusal, word for word
     with pytest.raises(ValueError, match=r"normalize_advantage=True needs more than one sample"):
         A2C("MlpPolicy", "CartPole-v1", n_steps=1, normalize_advantage=True)
     model = A2C("MlpPolicy", "CartPole-v1", n_steps=1, normalize_advantage=False)

@@ -459,7 +459,7 @@ def test_bad_policy_names_and_keywords() -> None:
         SAC(NormSACPolicy, "Pendulum-v1", buffer_size=100, policy_kwargs={"hiden": 2})
     with pytest.raises(TypeError, match=r"unexpected keys \['hidden'\] \(TD3Policy takes "):
         TD3(TD3Policy, "Pendulum-v1", buffer_size=100, policy_kwargs={"hidden": 2})
-    with pytest.raises(NotImplementedError, match="use_sde"):
+    with pytest.raises(ValueError, match="policy_kwargs use_sde=True contradicts use_sde=False"):
         SAC("MlpPolicy", "Pendulum-v1", buffer_size=100, policy_kwargs={"use_sde": True})
 
 

@@ -64,6 +64,27 @@ CASES: dict[str, tuple[Any, dict[str, Any], str, int]] = {
         "Pendulum-v1",
         900,
     ),
+    # gSDE: the exploration matrices of an open rollout/collection are in the run state
+    "ppo-sde": (
+        PPO,
+        dict(n_steps=32, batch_size=64, n_epochs=2, use_sde=True, sde_sample_freq=12),
+        "Pendulum-v1",
+        1000,
+    ),
+    "a2c-sde": (A2C, dict(n_steps=8, use_sde=True), "Pendulum-v1", 800),
+    "sac-sde": (
+        SAC,
+        dict(
+            learning_starts=100,
+            train_freq=4,
+            batch_size=32,
+            use_sde=True,
+            sde_sample_freq=3,
+            policy_kwargs={"net_arch": [32]},
+        ),
+        "Pendulum-v1",
+        900,
+    ),
     "td3": (
         TD3,
         dict(

@@ -62,3 +62,28 @@ def test_ppo_sb3_defaults_cartpole() -> None:
     """SB3's default PPO on one CartPole env, 50k steps."""
     model = PPO("MlpPolicy", "CartPole-v1", seed=0).learn(50_000)
     assert _score(model) >= 150
+
+
+@pytest.mark.slow
+def test_ppo_gsde_learns_pendulum() -> None:
+    """gSDE with the RL Zoo's Pendulum-v1 settings (100k steps, about 20 s of CPU): random
+    play scores about -1200, SB3 about -200 (BENCHMARKS.md, gSDE section)."""
+    venv = make_vec_env("Pendulum-v1", n_envs=4, seed=0)
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=1024,
+        gae_lambda=0.95,
+        gamma=0.9,
+        n_epochs=10,
+        learning_rate=1e-3,
+        clip_range=0.2,
+        use_sde=True,
+        sde_sample_freq=4,
+        seed=0,
+    )
+    model.learn(100_000)
+    env = gym.make("Pendulum-v1")
+    env.reset(seed=123)
+    mean, _ = evaluate_policy(model, env, n_eval_episodes=10)
+    assert mean >= -400

@@ -284,8 +284,8 @@ def test_bad_input() -> None:
         SAC("MlpPolicy", "Pendulum-v1", ent_coef=-1)
     with pytest.raises(TypeError, match="action_noise must be"):
         TD3("MlpPolicy", "Pendulum-v1", action_noise=0.1)
-    with pytest.raises(NotImplementedError, match="use_sde"):
-        SAC("MlpPolicy", "Pendulum-v1", use_sde=True)
+    with pytest.raises(TypeError, match="sde_sample_freq must be an int"):
+        SAC("MlpPolicy", "Pendulum-v1", use_sde=True, sde_sample_freq=2.5)
     with pytest.raises(ValueError, match="net_arch must be"):
         SAC("MlpPolicy", "Pendulum-v1", policy_kwargs={"net_arch": "big"})
     with pytest.raises(TypeError, match=r"unexpected keys \['ortho_init'\]"):

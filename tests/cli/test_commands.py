@@ -173,8 +173,8 @@ def _bad(tmp_path: Path) -> dict[str, tuple[list[object], int, str | re.Pattern[
             + ".*envs.*bench.*" + re.escape(") (see palaestra --help)"))),
         "no command": ([], 2, e + "no command given (choose one of envs, train, eval, record, "
                        "compare, sweep, bench)"),
-        "bench unknown env": (["bench", "--envs", "Nope-v0"], 2,
-                              e + "Environment `Nope` doesn't exist. "
+        "bench unknown env": (["bench", "--envs", "Qwxz-v0"], 2,
+                              e + "Environment `Qwxz` doesn't exist. "
                               "(run `palaestra envs` to list the ids)"),
         "bench zero seconds": (["bench", "--seconds", "0"], 2,
                                e + "--seconds must be a positive number, got 0.0 (e.g. 0.5)"),

@@ -39,9 +39,11 @@ surprising, palaestra differs on purpose:
 - ``n_steps > 1`` (n-step returns of DQN, SAC, TD3, DDPG, as SB3 2.x's ``NStepReplayBuffer``)
   also works with Dict observations (SB3 asserts ``n_steps == 1`` there).
 
-Not supported yet: ``use_sde`` (gSDE; PPO, A2C and SAC raise ``NotImplementedError``),
-buffer classes other than ``HerReplayBuffer``, recurrent policies, VecNormalize-aware replay
-(observations are stored as the env returns them).
+- gSDE (``use_sde`` in PPO, A2C and SAC) draws its exploration matrices from the model's
+  generator (SB3: torch's), and a model file keeps those of an unfinished rollout.
+
+Not supported yet: buffer classes other than ``HerReplayBuffer``, recurrent policies,
+VecNormalize-aware replay (observations are stored as the env returns them).
 """
 
 import importlib

@@ -60,8 +60,6 @@ class A2C(OnPolicyAlgorithm):
         self._configure(locals())
 
     def _take_settings(self, settings: Settings) -> None:
-        if settings["use_sde"]:
-            raise NotImplementedError("A2C does not support use_sde (gSDE) yet")
         if settings["rollout_buffer_class"] is not None:
             raise NotImplementedError("A2C does not support rollout_buffer_class yet")
         n_steps, rms_prop_eps = settings["n_steps"], settings["rms_prop_eps"]
@@ -126,7 +124,7 @@ class A2C(OnPolicyAlgorithm):
         log.record("train/entropy_loss", metrics["entropy_loss"])
         log.record("train/policy_loss", metrics["policy_loss"])
         log.record("train/value_loss", metrics["value_loss"])
-        if self._head.kind == "gaussian":
+        if self._head.kind in ("gaussian", "sde"):
             log.record("train/std", float(np.exp(self.learner.extra("log_std")).mean()))
 
 

@@ -6,6 +6,7 @@ from palaestra.algos.common.hyperparams import (
     _LEARNING_RATE,
     _ON_POLICY_ACTOR_CRITIC,
     _PROBABILITY,
+    _SDE,
     MAX_N_STEPS,
     _boolean,
     _integer,
@@ -15,6 +16,7 @@ from palaestra.algos.common.hyperparams import (
 
 HYPERPARAMETERS = {
     **_COMMON,
+    **_SDE,
     "n_steps": _integer(1, MAX_N_STEPS),
     "gae_lambda": _PROBABILITY,
     "ent_coef": _number(-1e6, 1e6),

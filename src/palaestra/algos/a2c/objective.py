@@ -84,9 +84,10 @@ class A2CObjective:
         self, xp: Any, run: Run, extras: dict[str, Any], batch: dict[str, Any]
     ) -> tuple[Any, dict[str, Any], Any]:
         obs = batch["observations"]
-        head_params, values = run("pi", obs), run("vf", obs)[:, 0]
+        head_params, latent = self.head.run(run, obs)
+        values = run("vf", obs)[:, 0]
         log_prob, entropy, head_tape = self.head.evaluate(
-            xp, head_params, extras.get("log_std"), batch["actions"]
+            xp, head_params, extras.get("log_std"), batch["actions"], latent
         )
         loss, metrics, tape = a2c_loss(
             xp, log_prob, batch["advantages"], values, batch["returns"], entropy, *self.args
@@ -98,5 +99,5 @@ class A2CObjective:
         g_log_prob, g_values, g_mean_entropy = a2c_loss_vjp(loss_tape)
         g_params, g_log_std = self.head.evaluate_vjp(head_tape, g_log_prob, g_mean_entropy)
         backprop("vf", g_values[:, None])
-        backprop("pi", g_params)
+        self.head.backprop(backprop, g_params)
         return {} if g_log_std is None else {"log_std": g_log_std}

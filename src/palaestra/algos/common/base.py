@@ -334,6 +334,11 @@ class BaseAlgorithm:
     def _load_loop_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
         """Restore ``_loop_state`` output; ``ValueError``/``KeyError`` if it does not fit."""
 
+    def _sde_matrix_shape(self) -> tuple[int, ...] | None:
+        """The shape of one gSDE exploration matrix (None without gSDE), which a model file's
+        run state may hold."""
+        return None
+
     def _make_optimizer(
         self,
         params: list[torch.nn.Parameter],

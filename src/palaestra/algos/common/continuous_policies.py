@@ -15,6 +15,11 @@ from torch import nn
 
 from palaestra import spaces
 from palaestra.algos.common.base_policy import BasePolicy
+from palaestra.algos.common.distributions import (
+    Distribution,
+    SquashedDiagGaussianDistribution,
+    StateDependentNoiseDistribution,
+)
 from palaestra.algos.common.networks import (
     BaseFeaturesExtractor,
     FlattenExtractor,
@@ -80,7 +85,12 @@ class _Actor(_Extracting, BasePolicy):
 
 
 class SquashedGaussianActor(_Actor):
-    """SAC's actor: ``latent_pi`` then ``mu`` and ``log_std`` (clipped later to [-20, 2])."""
+    """SAC's actor: ``latent_pi`` then ``mu`` and ``log_std`` (clipped later to [-20, 2]).
+
+    With ``use_sde`` (gSDE, SB3's layout): ``mu`` (followed by ``Hardtanh(-clip_mean,
+    clip_mean)`` when ``clip_mean > 0``) and a ``log_std`` parameter ``[latent, action_dim]``
+    of the exploration weights; ``action_dist`` is the ``StateDependentNoiseDistribution``
+    with the features learned and tanh on top, holding the exploration matrices."""
 
     def __init__(
         self,
@@ -91,13 +101,46 @@ class SquashedGaussianActor(_Actor):
         activation_fn: type[nn.Module],
         normalize_images: bool = True,
         action_space: spaces.Box | None = None,
+        use_sde: bool = False,
+        log_std_init: float = -3.0,
+        full_std: bool = True,
+        use_expln: bool = False,
+        clip_mean: float = 2.0,
     ) -> None:
         super().__init__(observation_space, extractor, normalize_images)
         self._set_action_space(action_dim, action_space)
         self.latent_pi = mlp(extractor.features_dim, net_arch, activation_fn)
         last = net_arch[-1] if net_arch else extractor.features_dim
+        self.use_sde, self.use_expln, self.clip_mean = use_sde, use_expln, clip_mean
+        self.full_std = full_std
+        self.action_dist: Distribution
+        self.mu: nn.Module
+        self.log_std: nn.Module | nn.Parameter  # a layer, or gSDE's weights' log-std
+        if use_sde:
+            self.action_dist = StateDependentNoiseDistribution(
+                action_dim, full_std, use_expln, squash_output=True, learn_features=True
+            )
+            self.mu, self.log_std = self.action_dist.proba_distribution_net(
+                last, log_std_init, latent_sde_dim=last
+            )
+            if clip_mean > 0.0:  # SB3: keeps the Gaussian's mean inside tanh's useful range
+                self.mu = nn.Sequential(self.mu, nn.Hardtanh(-clip_mean, clip_mean))
+            return
+        self.action_dist = SquashedDiagGaussianDistribution(action_dim)
         self.mu = nn.Linear(last, action_dim)
         self.log_std = nn.Linear(last, action_dim)
+
+    def mean_layer(self) -> nn.Linear:
+        """The mean's linear layer (without gSDE's clip, which the losses apply)."""
+        mu = self.mu
+        return mu[0] if isinstance(mu, nn.Sequential) else mu  # type: ignore[return-value]
+
+    def reset_noise(self, batch_size: int = 1) -> None:
+        """New gSDE exploration matrices from torch's generator (SB3's ``reset_noise``)."""
+        if not isinstance(self.action_dist, StateDependentNoiseDistribution):
+            raise ValueError("reset_noise() is only available when using gSDE")
+        assert isinstance(self.log_std, nn.Parameter)
+        self.action_dist.sample_weights(self.log_std, batch_size=batch_size)
 
     def latent(self, obs: Any) -> torch.Tensor:
         return self.latent_pi(self.features(obs))
@@ -108,6 +151,9 @@ class SquashedGaussianActor(_Actor):
         mean = self.mu(latent)
         if deterministic:
             return torch.tanh(mean)
+        if isinstance(self.action_dist, StateDependentNoiseDistribution):
+            return torch.tanh(mean + self.action_dist.get_noise(latent))
+        assert isinstance(self.log_std, nn.Module)
         log_std = self.log_std(latent)
         return squashed_gaussian_rsample(torch_ops, mean, log_std, torch.randn_like(mean))[0]
 

@@ -303,7 +303,12 @@ _ON_POLICY_ACTOR_CRITIC = {  # PPO's and A2C's ActorCritic
     **_POLICY_COMMON,
     "ortho_init": _boolean,
     "log_std_init": _number(-20.0, 20.0),
+    "use_sde": _boolean,  # gSDE's (the algorithm's use_sde; equal if given)
+    "full_std": _boolean,
+    "use_expln": _boolean,
+    "squash_output": _boolean,
 }
+_SDE = {"use_sde": _boolean, "sde_sample_freq": _integer(-1, MAX_STEPS)}
 
 # Each algorithm's rules, declared by its package (``algos/<algo>/hyperparams.py``) through
 # declare_rules: the keys of its ``_hyperparameters()``, each schedule's values (a learning rate,

@@ -86,9 +86,14 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
     def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
         return self._unscale(self._policy_actions(observation, deterministic))
 
+    def _uniform_warmup(self) -> bool:
+        """Whether this step's actions are uniform (before ``learning_starts``; SAC's
+        ``use_sde_at_warmup`` acts with gSDE instead)."""
+        return self.num_timesteps < self.learning_starts
+
     def _sample_actions(self) -> tuple[np.ndarray, np.ndarray]:
         n = self.n_envs
-        if self.num_timesteps < self.learning_starts:
+        if self._uniform_warmup():
             scaled = 2.0 * self._rng.random((n, self.action_dim)) - 1.0  # uniform in the bounds
         else:
             scaled = self._policy_actions(self._last_obs, deterministic=False)

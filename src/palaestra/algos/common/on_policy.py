@@ -50,13 +50,8 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         "CnnPolicy": ActorCriticCnnPolicy,
         "MultiInputPolicy": MultiInputActorCriticPolicy,
     }
-    # SB3's arguments for gSDE and custom rollout buffers: refused, or without effect here.
-    _not_saved = BaseAlgorithm._not_saved | {
-        "use_sde",
-        "sde_sample_freq",
-        "rollout_buffer_class",
-        "rollout_buffer_kwargs",
-    }
+    # SB3's arguments for custom rollout buffers: refused, or without effect here.
+    _not_saved = BaseAlgorithm._not_saved | {"rollout_buffer_class", "rollout_buffer_kwargs"}
     policy: ActorCritic
     n_steps: int
     gamma: float
@@ -72,8 +67,21 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         self.ent_coef, self.vf_coef = settings["ent_coef"], settings["vf_coef"]
         self.max_grad_norm = settings["max_grad_norm"]
         self.normalize_advantage = settings["normalize_advantage"]
-        settings.unused("sde_sample_freq", "rollout_buffer_kwargs")
+        self.use_sde, self.sde_sample_freq = settings["use_sde"], settings["sde_sample_freq"]
+        if not isinstance(self.use_sde, (bool, np.bool_)):
+            raise TypeError(f"use_sde must be a bool, got {self.use_sde!r}")
+        freq = self.sde_sample_freq
+        if isinstance(freq, bool) or not isinstance(freq, (int, np.integer)):
+            raise TypeError(f"sde_sample_freq must be an int (-1: once per rollout), got {freq!r}")
+        settings.unused("rollout_buffer_kwargs")
         super()._take_settings(settings)
+        if self.use_sde and not isinstance(
+            getattr(self, "action_space", None), (spaces.Box, type(None))
+        ):
+            raise ValueError(
+                "generalized State-Dependent Exploration (gSDE) can only be used with "
+                "continuous actions."
+            )
         if self.env is not None:
             # warnings point at the user's PPO(...): __init__, _configure, 2 _take_settings
             self._check_rollout_size(stacklevel=6)
@@ -94,16 +102,27 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         kwargs = dict(self.policy_kwargs)
         self._optimizer_choice(kwargs)  # takes its keys out of the policy's
         kwargs.pop("backend", None)
+        if kwargs.pop("use_sde", self.use_sde) != self.use_sde:
+            raise ValueError(
+                f"policy_kwargs use_sde={self.policy_kwargs['use_sde']!r} contradicts "
+                f"use_sde={self.use_sde!r}: give it once, as {type(self).__name__}(use_sde=...)"
+            )
         policy: ActorCritic
         if isinstance(self.policy_name, type):  # an ActorCriticPolicy subclass (SB3's guide)
             # its own default extractor (ActorCriticCnnPolicy's is NatureCNN), as in SB3
             policy_class: Any = self.policy_name
             policy = policy_class(
-                self.observation_space, self.action_space, self.lr_schedule, **kwargs
+                self.observation_space,
+                self.action_space,
+                self.lr_schedule,
+                use_sde=self.use_sde,
+                **kwargs,
             )
         else:
             kwargs.setdefault("features_extractor_class", extractor_class(self.policy_name))
-            policy = ActorCritic(self.observation_space, self.action_space, **kwargs)
+            policy = ActorCritic(
+                self.observation_space, self.action_space, use_sde=self.use_sde, **kwargs
+            )
         self._use_policy(policy.to(self.device))
         self._make_rollout_buffer()
 
@@ -118,7 +137,7 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         optimizer = self._make_optimizer(params, optimizer_class, optimizer_kwargs)
         pi_modules, vf_modules, why = policy.mlp_modules()
         head = policy.action_head
-        extras = {"log_std": head.log_std} if head.kind == "gaussian" else {}
+        extras = {"log_std": head.log_std} if head.kind in ("gaussian", "sde") else {}
         if pi_modules is not None and vf_modules is not None:
             # The flat buffer's order (actor, critic, log-std) sets the order in which the
             # gradient norm is summed: kept from the numpy trainer it replaces.
@@ -128,13 +147,18 @@ class OnPolicyAlgorithm(BaseAlgorithm):
             "pi": Net(policy.pi_out, pi_modules, group="policy", why=why),
             "vf": Net(policy.vf_out, vf_modules, group="policy", why=why),
         }
+        joint = policy.pi_and_vf
+        if head.kind == "sde":  # gSDE reads the latent: pi ends there, act is the mean's layer
+            nets["pi"] = Net(policy.pi_latent, pi_modules and pi_modules[:-1], "policy", why=why)
+            nets["act"] = Net(head.net, pi_modules and [head.net], group="policy", why=why)
+            joint = policy.pi_latent_and_vf
         self._set_learner(
             policy,
             optimizer,
             backend,
             nets,
             {"policy": Group(optimizer, params, extras)},
-            joint={("pi", "vf"): policy.pi_and_vf},
+            joint={("pi", "vf"): joint},
         )
         self._head = head
 
@@ -160,8 +184,27 @@ class OnPolicyAlgorithm(BaseAlgorithm):
 
     def _sample(self, obs: Any, deterministic: bool) -> tuple[np.ndarray, np.ndarray]:
         """``(actions, log_probs)`` for a batch of raw observations."""
-        log_std = self.learner.extra("log_std") if self._head.kind == "gaussian" else None
-        return self._head.sample(self.learner.forward("pi", obs), log_std, self._rng, deterministic)
+        head = self._head
+        if head.kind == "sde":
+            latent = self.learner.forward("pi", obs)
+            mean = self.learner.forward("act", latent)
+            sde_log_std = self.learner.extra("log_std")
+            return head.sample(mean, sde_log_std, self._rng, deterministic, latent)
+        log_std = self.learner.extra("log_std") if head.kind == "gaussian" else None
+        return head.sample(self.learner.forward("pi", obs), log_std, self._rng, deterministic)
+
+    def _reset_noise(self) -> None:
+        """gSDE: new exploration matrices, one per env, from the model's generator."""
+        self._head.reset_noise(self.learner.extra("log_std"), self.n_envs, self._rng)
+
+    def _to_env_actions(self, actions: np.ndarray) -> np.ndarray:
+        """Box actions clipped to the bounds, or, squashed (gSDE's ``squash_output``), mapped
+        from ``[-1, 1]`` to them (SB3's ``unscale_action``)."""
+        box = self.action_space
+        assert isinstance(box, spaces.Box)
+        if self._head.squash:
+            return (box.low + 0.5 * (actions + 1.0) * (box.high - box.low)).astype(box.dtype)
+        return np.clip(actions, box.low, box.high)
 
     def _values(self, obs: Any) -> np.ndarray:
         """``V(obs)`` ``[B]``, in chunks (a whole rollout of images may not fit at once)."""
@@ -175,7 +218,8 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         return out[0] if len(out) == 1 else np.concatenate(out)
 
     def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
-        return self._sample(observation, deterministic)[0]
+        actions = self._sample(observation, deterministic)[0]
+        return self._to_env_actions(actions) if self._head.squash else actions
 
     # -- learning ----------------------------------------------------------------------------
     def _learn(
@@ -229,11 +273,15 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         # parameters do not change during a rollout): per step, only the policy.
         bits = isinstance(self.action_space, spaces.MultiBinary)
         self._set_training_mode(False)
+        sde, freq = self._head.kind == "sde", self.sde_sample_freq
         while not buf.full:
+            # gSDE: new matrices when a rollout starts and every sde_sample_freq steps (SB3)
+            if sde and (buf.pos == 0 or (freq > 0 and buf.pos % freq == 0)):
+                self._reset_noise()
             actions, log_probs = self._sample(self._last_obs, False)
             if bits:
                 actions = actions.astype(self.action_space.dtype)  # Bernoulli samples are floats
-            env_actions = np.clip(actions, box.low, box.high) if box is not None else actions
+            env_actions = self._to_env_actions(actions) if box is not None else actions
             new_obs, rewards, dones, infos = env.step(env_actions)
             running = self._stepped(callback, actions, new_obs, rewards, dones, infos)
             rewards = np.asarray(rewards, dtype=np.float32)
@@ -281,9 +329,19 @@ class OnPolicyAlgorithm(BaseAlgorithm):
 
     # -- persistence ---------------------------------------------------------------------------
     def _loop_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-        return self.rollout_buffer.partial_state()
+        meta, arrays = self.rollout_buffer.partial_state()
+        # gSDE's matrices: a partial rollout continues with the ones it was drawn with
+        arrays.update({f"sde/{k}": v for k, v in self._head.noise_state().items()})
+        return meta, arrays
+
+    def _sde_matrix_shape(self) -> tuple[int, ...] | None:
+        noise = self._head.noise_state()
+        return tuple(noise["exploration_mat"].shape) if noise else None
 
     def _load_loop_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
+        noise = {k[4:]: arrays.pop(k) for k in list(arrays) if k.startswith("sde/")}
+        if noise:
+            self._head.load_noise_state(noise)
         self.rollout_buffer.load_partial_state(meta, arrays)
 
 

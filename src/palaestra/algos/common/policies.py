@@ -14,7 +14,7 @@ from torch import nn
 
 from palaestra import spaces
 from palaestra.algos.common.base_policy import BasePolicy
-from palaestra.algos.common.distributions import ActionHead
+from palaestra.algos.common.distributions import ActionHead, Distribution
 from palaestra.algos.common.networks import (
     BaseFeaturesExtractor,
     CombinedExtractor,
@@ -136,9 +136,15 @@ class ActorCritic(BasePolicy):
         log_std_init: float = 0.0,
         share_features_extractor: bool = True,
         normalize_images: bool = True,
+        use_sde: bool = False,
+        full_std: bool = True,
+        use_expln: bool = False,
+        squash_output: bool = False,
     ) -> None:
         super().__init__()
         self.observation_space, self.action_space = observation_space, action_space
+        self.use_sde, self.full_std, self.use_expln = use_sde, full_std, use_expln
+        self.squash_output = squash_output
         self.normalize_images, self.ortho_init = normalize_images, ortho_init
         self.net_arch = _sb3_net_arch(net_arch, features_extractor_class)
         self.activation_fn = activation_fn
@@ -157,7 +163,9 @@ class ActorCritic(BasePolicy):
         self._features_extractor_class = features_extractor_class
         self._build_mlp_extractor()
         latent_pi, latent_vf = self._latent_dims()
-        self.action_head = ActionHead(action_space, latent_pi, log_std_init)
+        self.action_head = ActionHead(
+            action_space, latent_pi, log_std_init, use_sde, full_std, use_expln, squash_output
+        )
         self.value_head = nn.Linear(latent_vf, 1)
         if ortho_init:
             # Gains from SB3 / baselines: sqrt(2) body, 0.01 policy output, 1 value output.
@@ -209,6 +217,33 @@ class ActorCritic(BasePolicy):
             "",
         )
 
+    @property
+    def action_dist(self) -> Distribution:
+        """SB3's ``action_dist``: the distribution object the action head computes with."""
+        return self.action_head.dist
+
+    def reset_noise(self, n_envs: int = 1) -> None:
+        """Draw new gSDE exploration matrices (one per env) from torch's generator (SB3's
+        ``reset_noise``); ``ValueError`` without gSDE."""
+        self.action_head.reset_noise(self.action_head.log_std, n_envs)
+
+    def get_distribution(self, obs: Any) -> Distribution:
+        """The action distribution for a raw observation batch (SB3's ``get_distribution``)."""
+        x = preprocess_obs(obs, self.observation_space, self.normalize_images)
+        latent = self._pi_latent(self.features_extractor(x))
+        head = self.action_head
+        return head.distribution(head.net(latent), getattr(head, "log_std", None), latent)
+
+    def pi_latent(self, obs: Any) -> torch.Tensor:
+        """The policy latent (gSDE's ``pi`` net: its variance reads it)."""
+        x = preprocess_obs(obs, self.observation_space, self.normalize_images)
+        return self._pi_latent(self.features_extractor(x))
+
+    def pi_latent_and_vf(self, obs: Any) -> tuple[torch.Tensor, torch.Tensor]:
+        """The policy latent and ``V(obs)``, one pass of a shared features extractor."""
+        latent_pi, latent_vf = self._latents(obs)
+        return latent_pi, self.value_head(latent_vf)
+
     def pi_out(self, obs: Any) -> torch.Tensor:
         """The action head's outputs (logits, or the Gaussian's mean) for a raw obs batch."""
         x = preprocess_obs(obs, self.observation_space, self.normalize_images)
@@ -236,10 +271,15 @@ class ActorCritic(BasePolicy):
     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """SB3's ``(values [B], log_prob [B], entropy [B])`` of env actions (torch, autograd):
         the head's ``evaluate`` on the torch namespace."""
+        head = self.action_head
+        log_std = getattr(head, "log_std", None)
+        if head.kind == "sde":
+            latent, vf = self.pi_latent_and_vf(obs)
+            dist = head.distribution(head.net(latent), log_std, latent)
+            return vf.squeeze(1), dist.log_prob(actions), dist.entropy()  # type: ignore[return-value]
         pi, vf = self.pi_and_vf(obs)
-        log_std = getattr(self.action_head, "log_std", None)
-        idx = torch.as_tensor(self.action_head.index(actions.cpu().numpy()), device=pi.device)
-        log_prob, entropy, _ = self.action_head.evaluate(torch_ops, pi, log_std, idx)
+        idx = torch.as_tensor(head.index(actions.cpu().numpy()), device=pi.device)
+        log_prob, entropy, _ = head.evaluate(torch_ops, pi, log_std, idx)
         return vf.squeeze(1), log_prob, entropy.expand(pi.shape[0])
 
     def predict_values(self, obs: Any) -> torch.Tensor:
@@ -249,11 +289,18 @@ class ActorCritic(BasePolicy):
     def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
         """The distribution's mode, or a sample drawn from a generator seeded by torch's
         (so ``torch.manual_seed`` fixes it, as in SB3)."""
-        params = self.pi_out(observation).cpu().numpy()
         head = self.action_head
-        log_std = head.log_std.detach().cpu().numpy() if head.kind == "gaussian" else None
+        latent = None
+        if head.kind == "sde":
+            latent_t = self.pi_latent(observation)
+            params, latent = head.net(latent_t).cpu().numpy(), latent_t.cpu().numpy()
+        else:
+            params = self.pi_out(observation).cpu().numpy()
+        has_std = head.kind in ("gaussian", "sde")
+        log_std = head.log_std.detach().cpu().numpy() if has_std else None
         seed = 0 if deterministic else int(torch.randint(0, 2**62, (1,)).item())
-        actions, _ = head.sample(params, log_std, np.random.default_rng(seed), deterministic)
+        rng = np.random.default_rng(seed)
+        actions, _ = head.sample(params, log_std, rng, deterministic, latent)
         return torch.as_tensor(actions)
 
 
@@ -288,10 +335,7 @@ class ActorCriticPolicy(ActorCritic):
         optimizer_class: Any = None,
         optimizer_kwargs: dict[str, Any] | None = None,
     ) -> None:
-        if use_sde or squash_output:
-            raise NotImplementedError("use_sde and squash_output are not supported yet")
         self.lr_schedule = lr_schedule
-        self.use_sde, self.full_std, self.use_expln = use_sde, full_std, use_expln
         self.optimizer_class, self.optimizer_kwargs = optimizer_class, optimizer_kwargs
         super().__init__(
             observation_space,
@@ -304,6 +348,10 @@ class ActorCriticPolicy(ActorCritic):
             log_std_init,
             share_features_extractor,
             normalize_images,
+            use_sde,
+            full_std,
+            use_expln,
+            squash_output,
         )
 
     def _build_mlp_extractor(self) -> None:

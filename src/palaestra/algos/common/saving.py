@@ -488,6 +488,9 @@ def _check_run_array(
         key = name[len("run/last_obs/") :]
         sub = getattr(space, "spaces", {}).get(key)
         fits = sub is not None and shape == (n, *(sub.shape or ()))
+    elif name.startswith("run/loop/sde/"):  # gSDE's exploration matrices: one, one per env
+        matrix = model._sde_matrix_shape()
+        fits = matrix is not None and shape in (matrix, (n, *matrix))
     elif name.startswith("run/loop/"):
         buffer = getattr(model, "rollout_buffer", None)
         column = None if buffer is None else buffer._columns().get(name[len("run/loop/") :])

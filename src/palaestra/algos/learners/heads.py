@@ -9,9 +9,11 @@ keeps the numpy gradients exactly those of the trainers before this module.
 
 Heads: Categorical (Discrete), MultiCategorical (MultiDiscrete), Bernoulli (MultiBinary),
 diagonal Gaussian with a state-independent log-std (PPO's Box), the tanh-squashed Gaussian
-(SAC, with SB3's log-std bounds and 1e-6 in the squashing correction) and the deterministic
-tanh (TD3, DDPG). Sampling draws from the model's numpy generator whatever learner runs the
-networks, so the two learners act alike.
+(SAC, with SB3's log-std bounds and 1e-6 in the squashing correction), the deterministic
+tanh (TD3, DDPG), and gSDE's state-dependent noise (Raffin et al. 2022: the action noise is
+``latent @ W`` for a Gaussian weight matrix ``W`` drawn now and then, so the action's
+variance is ``latent^2 @ std^2``), squashed by tanh or not. Sampling draws from the model's
+numpy generator whatever learner runs the networks, so the two learners act alike.
 """
 
 from __future__ import annotations
@@ -37,15 +39,26 @@ __all__ = [
     "multi_categorical_evaluate",
     "multi_categorical_evaluate_vjp",
     "multi_categorical_sample",
+    "sde_log_prob",
+    "sde_log_prob_vjp",
+    "sde_noise",
+    "sde_rsample",
+    "sde_rsample_vjp",
+    "sde_std",
+    "sde_std_vjp",
+    "squash_correction",
     "squashed_gaussian_rsample",
     "squashed_gaussian_rsample_vjp",
     "tanh_action",
     "tanh_action_vjp",
+    "tanh_inverse",
 ]
 
 LOG_SQRT_2PI = 0.5 * math.log(2 * math.pi)
 LOG_STD_MIN, LOG_STD_MAX = -20.0, 2.0  # SB3's SAC actor bounds
 SQUASH_EPS = 1e-6  # SB3's TanhBijector epsilon
+SDE_EPS = 1e-6  # SB3's StateDependentNoiseDistribution epsilon (variance floor, expln)
+F32_EPS = float(np.finfo(np.float32).eps)  # the inverse tanh's clip, as SB3's for float32
 
 
 # -- Categorical ------------------------------------------------------------------------------
@@ -183,7 +196,10 @@ def gaussian_evaluate(xp: Any, mean: Any, log_std: Any, actions: Any) -> tuple[A
     inv_std = xp.exp(-log_std)
     z = (actions - mean) * inv_std
     log_prob = xp.sum_rows(-0.5 * z * z - log_std - LOG_SQRT_2PI)
-    entropy = xp.sum(0.5 + LOG_SQRT_2PI + log_std)
+    if log_std.ndim == 1:
+        entropy = xp.sum(0.5 + LOG_SQRT_2PI + log_std)
+    else:  # a log-std per row (SB3's distributions accept one; the algorithms do not use it)
+        entropy = xp.sum_rows(0.5 + LOG_SQRT_2PI + log_std + 0.0 * mean)
     return log_prob, entropy, (z, inv_std)
 
 
@@ -243,3 +259,130 @@ def tanh_action(xp: Any, x: Any) -> tuple[Any, Any]:
 
 def tanh_action_vjp(tape: Any, g_action: np.ndarray) -> np.ndarray:
     return g_action * (1.0 - tape * tape)
+
+
+def squash_correction(xp: Any, actions: Any) -> Any:
+    """``sum log(1 - a^2 + 1e-6)`` per row: what tanh takes off a Gaussian's log-density
+    (the original SAC's correction, with SB3's epsilon)."""
+    return xp.sum_rows(xp.log(1.0 - actions * actions + SQUASH_EPS))
+
+
+def tanh_inverse(xp: Any, y: Any) -> Any:
+    """``atanh`` of actions clipped one float32 epsilon inside ``(-1, 1)`` (SB3's
+    ``TanhBijector.inverse``, so a saturated action has a finite pre-image)."""
+    y = xp.clip(y, -1.0 + F32_EPS, 1.0 - F32_EPS)
+    return 0.5 * (xp.log1p(y) - xp.log1p(-y))
+
+
+# -- gSDE ----------------------------------------------------------------------------------------
+def sde_std(
+    xp: Any, log_std: Any, use_expln: bool, full_std: bool, action_dim: int
+) -> tuple[Any, Any]:
+    """The exploration weights' std ``[L, d]`` from ``log_std`` (``[L, d]``, or ``[L, 1]``
+    shared by every action dimension when not ``full_std``): ``exp``, or with ``use_expln``
+    ``exp`` below 0 and ``log1p(x + 1e-6) + 1`` above (it grows slowly, SB3's expln).
+    Returns ``(std, tape)``."""
+    if use_expln:
+        above_zero = log_std > 0
+        below = xp.exp(log_std) * (log_std <= 0)
+        std = below + (xp.log1p(log_std * above_zero + SDE_EPS) + 1.0) * above_zero
+    else:
+        std = xp.exp(log_std)
+    tape = (log_std, std, use_expln, full_std)
+    return (std if full_std else xp.repeat_cols(std, action_dim)), tape
+
+
+def sde_std_vjp(tape: Any, g_std: np.ndarray) -> np.ndarray:
+    """d(loss)/d(log_std) from d(loss)/d(std ``[L, d]``)."""
+    log_std, std, use_expln, full_std = tape
+    if not full_std:
+        g_std = g_std.sum(axis=1, keepdims=True)
+    if use_expln:
+        above_zero = log_std > 0
+        slope = np.where(above_zero, 1.0 / (1.0 + log_std * above_zero + SDE_EPS), std)
+        return (g_std * slope).astype(np.float32, copy=False)
+    return (g_std * std).astype(np.float32, copy=False)
+
+
+def sde_noise(xp: Any, latent: Any, matrix: Any, matrices: Any) -> Any:
+    """The action noise ``latent @ W`` ``[B, d]`` (SB3's ``get_noise``): one matrix
+    ``matrix [L, d]`` for a batch of one or a batch whose size is not the number of
+    ``matrices [n, L, d]`` (or without them); else row ``i`` with ``matrices[i]`` (one per env)."""
+    if matrices is None or latent.shape[0] == 1 or latent.shape[0] != matrices.shape[0]:
+        return latent @ matrix
+    return (latent[:, None, :] @ matrices)[:, 0, :]
+
+
+def sde_log_prob(
+    xp: Any, mean: Any, std: Any, latent: Any, gaussian_actions: Any, squash: bool
+) -> tuple[Any, Any, Any]:
+    """Log-densities of pre-squash ``gaussian_actions [B, d]`` under ``N(mean, sigma^2)`` with
+    ``sigma = sqrt(latent^2 @ std^2 + 1e-6)`` per row, less ``sum log(1 - tanh(x)^2 + 1e-6)``
+    when ``squash``; the entropies ``[B]`` (None when squashed: no closed form, as in SB3).
+    ``latent`` is taken as given (pass it detached where the features are not learned)."""
+    lat2 = latent * latent
+    sigma = xp.sqrt(lat2 @ (std * std) + SDE_EPS)
+    z = (gaussian_actions - mean) / sigma
+    log_sigma = xp.log(sigma)
+    log_prob = xp.sum_rows(-0.5 * z * z - log_sigma - LOG_SQRT_2PI)
+    entropy = squashed = None
+    if squash:
+        squashed = xp.tanh(gaussian_actions)
+        log_prob = log_prob - squash_correction(xp, squashed)
+    else:
+        entropy = xp.sum_rows(0.5 + LOG_SQRT_2PI + log_sigma)
+    return log_prob, entropy, (latent, lat2, std, sigma, z, squashed)
+
+
+def sde_log_prob_vjp(
+    tape: Any, g_log_prob: np.ndarray, g_mean_entropy: float, latent_grad: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+    """``(d/d mean, d/d std [L, d], d/d latent or None, d/d gaussian_actions)`` of
+    ``sum(g_log_prob * log_prob) + g_mean_entropy * mean(entropy)``.
+
+    With ``v = latent^2 @ std^2``: d log_prob/d sigma is ``(z^2 - 1) / sigma`` per entry,
+    d entropy/d sigma ``1 / sigma``, d sigma/d v ``1 / (2 sigma)``; the squashing term
+    adds ``2a(1 - a^2) / (1 - a^2 + eps)`` per action (``a = tanh(x)``)."""
+    latent, lat2, std, sigma, z, squashed = tape
+    g_lp = g_log_prob[:, None]
+    g_x = g_lp * (-z / sigma)
+    g_mean = -g_x
+    g_sigma = g_lp * (z * z - 1.0) / sigma
+    if squashed is None:
+        if g_mean_entropy:
+            g_sigma += (g_mean_entropy / sigma.shape[0]) / sigma
+    else:
+        one_minus = 1.0 - squashed * squashed
+        g_x = g_x + g_lp * (2.0 * squashed * one_minus / (one_minus + SQUASH_EPS))
+    g_var = g_sigma / (2.0 * sigma)
+    g_std = 2.0 * std * (lat2.T @ g_var)
+    g_latent = 2.0 * latent * (g_var @ (std * std).T) if latent_grad else None
+    return g_mean, g_std, g_latent, g_x
+
+
+def sde_rsample(
+    xp: Any, mean: Any, std: Any, latent: Any, weights_noise: Any
+) -> tuple[Any, Any, Any]:
+    """SAC's reparameterised gSDE draw: ``W = std * weights_noise`` (standard normal
+    ``[L, d]``, one matrix for the batch), ``a = tanh(mean + latent @ W)`` and its
+    log-probability with the features learned (gradients reach ``latent`` through the noise
+    and the variance): ``(a, log_prob, tape)``."""
+    weights = std * weights_noise
+    gaussian = mean + latent @ weights
+    log_prob, _, tape = sde_log_prob(xp, mean, std, latent, gaussian, squash=True)
+    return tape[5], log_prob, (tape, weights, weights_noise)
+
+
+def sde_rsample_vjp(
+    tape: Any, g_action: np.ndarray | None, g_log_prob: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(d/d mean, d/d std, d/d latent)`` from the gradients on the action and its
+    log-prob (the draw ``u = mean + latent @ W`` passes d/du to each of its terms)."""
+    lp_tape, weights, weights_noise = tape
+    g_mean, g_std, g_latent, g_u = sde_log_prob_vjp(lp_tape, g_log_prob, 0.0, True)
+    assert g_latent is not None
+    if g_action is not None:
+        a = lp_tape[5]
+        g_u = g_u + g_action * (1.0 - a * a)
+    latent = lp_tape[0]
+    return g_mean + g_u, g_std + (latent.T @ g_u) * weights_noise, g_latent + g_u @ weights.T

@@ -5,6 +5,7 @@ from palaestra.algos.common.hyperparams import (
     _COMMON,
     _ON_POLICY_ACTOR_CRITIC,
     _PROBABILITY,
+    _SDE,
     MAX_BATCH_SIZE,
     MAX_N_STEPS,
     _boolean,
@@ -16,6 +17,7 @@ from palaestra.algos.common.hyperparams import (
 
 HYPERPARAMETERS = {
     **_COMMON,
+    **_SDE,
     "n_steps": _integer(1, MAX_N_STEPS),
     "batch_size": _integer(1, MAX_BATCH_SIZE),
     "n_epochs": _integer(1, 10_000),

@@ -61,8 +61,8 @@ class PPO(OnPolicyAlgorithm):
         self._configure(locals())
 
     def _take_settings(self, settings: Settings) -> None:
-        if settings["use_sde"] or settings["rollout_buffer_class"] is not None:
-            raise NotImplementedError("use_sde and rollout_buffer_class are not supported yet")
+        if settings["rollout_buffer_class"] is not None:
+            raise NotImplementedError("rollout_buffer_class is not supported yet")
         if settings["normalize_advantage"] and settings["batch_size"] <= 1:
             raise ValueError(
                 "`batch_size` must be greater than 1 when normalize_advantage=True "
@@ -164,7 +164,7 @@ class PPO(OnPolicyAlgorithm):
         log.record(
             "train/explained_variance", explained_variance(buf.values.ravel(), buf.returns.ravel())
         )
-        if self._head.kind == "gaussian":
+        if self._head.kind in ("gaussian", "sde"):
             log.record("train/std", float(np.exp(self.learner.extra("log_std")).mean()))
         log.record("train/n_updates", self._n_updates, exclude="tensorboard")
         log.record("train/clip_range", clip_range)

@@ -8,6 +8,7 @@ from palaestra.algos.common.hyperparams import (
     _COMMON_NO_CLIP,
     _LEARNING_RATE,
     _OFF_POLICY,
+    _SDE,
     MAX_STEPS,
     _boolean,
     _integer,
@@ -35,11 +36,13 @@ def _target_entropy(value: Any) -> str | None:
 HYPERPARAMETERS = {
     **_COMMON_NO_CLIP,
     **_OFF_POLICY,
+    **_SDE,
+    "use_sde_at_warmup": _boolean,
     "ent_coef": _ent_coef,
     "target_update_interval": _integer(1, MAX_STEPS),
     "target_entropy": _target_entropy,
 }
-POLICY_KWARGS = {  # SACPolicy's gSDE keywords: stored, unused while use_sde is refused
+POLICY_KWARGS = {  # SACPolicy's gSDE keywords
     **_ACTOR_CRITIC,
     "use_sde": _boolean,
     "log_std_init": _number(-20.0, 20.0),

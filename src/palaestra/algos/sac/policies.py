@@ -28,7 +28,7 @@ class SACPolicy(_ContinuousPolicy):
     ``make_critic``. ``SAC(MyPolicy, env)`` builds it as
     ``MyPolicy(observation_space, action_space, lr_schedule, **policy_kwargs)`` and trains a
     subclass on the torch learner. ``log_std_init``, ``use_expln`` and ``clip_mean`` only
-    matter with ``use_sde``, which is not supported yet."""
+    matter with ``use_sde`` (gSDE), which ``SAC(use_sde=True)`` passes."""
 
     _frozen = ("critic_target",)
     _not_policy_state = ("ent_coef.",)  # SAC's learned temperature, the algorithm's
@@ -52,8 +52,6 @@ class SACPolicy(_ContinuousPolicy):
         n_critics: int = 2,
         share_features_extractor: bool = False,
     ) -> None:
-        if use_sde:
-            raise NotImplementedError("use_sde (gSDE) is not supported by palaestra's SAC yet")
         super().__init__(
             observation_space,
             action_space,
@@ -92,7 +90,15 @@ class SACPolicy(_ContinuousPolicy):
             self.activation_fn,
             self.normalize_images,
             action_space=self.action_space,
+            use_sde=self.use_sde,
+            log_std_init=self.log_std_init,
+            use_expln=self.use_expln,
+            clip_mean=self.clip_mean,
         )
+
+    def reset_noise(self, batch_size: int = 1) -> None:
+        """New gSDE exploration matrices for the actor (SB3's ``SACPolicy.reset_noise``)."""
+        self.actor.reset_noise(batch_size=batch_size)
 
     def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
         """The actor's action in ``[-1, 1]`` (SB3's ``SACPolicy._predict``)."""

@@ -14,12 +14,13 @@ from palaestra.algos.common.policies import _numpy_input_problem
 from palaestra.algos.common.schedules import Schedule
 from palaestra.algos.common.settings import Settings
 from palaestra.algos.learners import Group, Net
-from palaestra.algos.learners.heads import squashed_gaussian_rsample
+from palaestra.algos.learners.heads import sde_noise, squashed_gaussian_rsample
 from palaestra.algos.learners.xp import numpy_ops
 from palaestra.algos.sac.objective import (
     EntCoefObjective,
     SACActorObjective,
     SACCriticObjective,
+    SDEDraw,
 )
 from palaestra.algos.sac.policies import CnnPolicy, MlpPolicy, MultiInputPolicy, SACPolicy
 
@@ -57,7 +58,9 @@ class SAC(ActorCriticOffPolicy):
     drawn from the model's generator (same seed, same run, on either learner), and the
     temperature is updated after the actor with the actor's log-probs of that step, which
     is the same update as SB3's (the coefficient used by both losses is the one before it).
-    ``use_sde`` (gSDE) is not implemented.
+    ``use_sde``: gSDE (SB3's), the exploration matrices drawn from the model's generator when
+    each collection starts and every ``sde_sample_freq`` steps, and one noise matrix per
+    gradient step for the losses.
     """
 
     policy_aliases: ClassVar[dict[str, type[torch.nn.Module]]] = {
@@ -66,12 +69,6 @@ class SAC(ActorCriticOffPolicy):
         "MultiInputPolicy": MultiInputPolicy,
     }
     _policy_class_base = SACPolicy
-    # gSDE: refused, or without effect here
-    _not_saved = ActorCriticOffPolicy._not_saved | {
-        "use_sde",
-        "sde_sample_freq",
-        "use_sde_at_warmup",
-    }
     # target_entropy: the argument ("auto" or a number), not the number it resolves to
     _saved_from = ActorCriticOffPolicy._saved_from | {"target_entropy": "target_entropy_setting"}
 
@@ -110,9 +107,19 @@ class SAC(ActorCriticOffPolicy):
         self._configure(locals())
 
     def _take_settings(self, settings: Settings) -> None:
-        if settings["use_sde"] or settings["use_sde_at_warmup"]:
-            raise NotImplementedError("use_sde (gSDE) is not supported by palaestra's SAC yet")
-        settings.unused("sde_sample_freq")
+        self.use_sde, self.use_sde_at_warmup = settings["use_sde"], settings["use_sde_at_warmup"]
+        self.sde_sample_freq = settings["sde_sample_freq"]
+        for name in ("use_sde", "use_sde_at_warmup"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise TypeError(f"{name} must be a bool, got {getattr(self, name)!r}")
+        freq = self.sde_sample_freq
+        if isinstance(freq, bool) or not isinstance(freq, (int, np.integer)):
+            raise TypeError(
+                f"sde_sample_freq must be an int (-1: once per collection), got {freq!r}"
+            )
+        # SB3 hands use_sde to the policy (SACPolicy(use_sde=...)); only when on, so a custom
+        # policy without the keyword still builds without gSDE.
+        self._policy_defaults = {"use_sde": True} if self.use_sde else {}
         ent_coef, target_entropy = settings["ent_coef"], settings["target_entropy"]
         self._learn_ent_coef, self._ent_coef_init = _ent_coef_init(ent_coef)
         if isinstance(target_entropy, str) and target_entropy != "auto":
@@ -125,6 +132,12 @@ class SAC(ActorCriticOffPolicy):
         super()._take_settings(settings)
 
     def _setup_model(self) -> None:
+        given = self.policy_kwargs.get("use_sde", self.use_sde)
+        if given != self.use_sde:
+            raise ValueError(
+                f"policy_kwargs use_sde={given!r} contradicts use_sde={self.use_sde!r}: give it "
+                "once, as SAC(use_sde=...)"
+            )
         self._check_action_space()
         self.set_random_seed(self.seed)
         policy = self._make_policy(**self._policy_parts)
@@ -166,11 +179,24 @@ class SAC(ActorCriticOffPolicy):
             "mu": Net(actor.mu, [actor.mu], group="actor"),
             "log_std": Net(actor.log_std, [actor.log_std], group="actor"),
         }
+        actor_extras: dict[str, torch.nn.Parameter] = {}
+        self._sde: SDEDraw | None = None
+        if getattr(actor, "use_sde", False):
+            # gSDE: the mean's layer (its clip is the losses'), the weights' log-std an extra
+            mean_layer = actor.mean_layer()
+            nets["mu"] = Net(mean_layer, [mean_layer], group="actor")
+            del nets["log_std"]
+            assert isinstance(actor.log_std, torch.nn.Parameter)
+            actor_extras = {"log_std": actor.log_std}
+            self._sde = SDEDraw(actor.use_expln, actor.full_std, actor.clip_mean, self.action_dim)
+            self._sde_dist = actor.action_dist
         critic_nets, critic_params = self._critic_nets(critic, critic_target, policy)
         nets.update(critic_nets)
         actor_params = list(actor.parameters())
         groups = {
-            "actor": Group(self._make_optimizer_for(actor_params, policy), actor_params),
+            "actor": Group(
+                self._make_optimizer_for(actor_params, policy), actor_params, actor_extras
+            ),
             "critic": Group(self._make_optimizer_for(critic_params, policy), critic_params),
         }
         if self._learn_ent_coef:
@@ -210,11 +236,61 @@ class SAC(ActorCriticOffPolicy):
     def _policy_actions(self, obs: Any, deterministic: bool) -> np.ndarray:
         latent = self.learner.forward("latent", obs)
         mean = self.learner.forward("mu", latent)
+        if self._sde is not None:
+            if self._sde.clip_mean > 0:
+                mean = np.clip(mean, -self._sde.clip_mean, self._sde.clip_mean)
+            if not deterministic:
+                dist = self._sde_dist
+                mat = dist.exploration_mat.detach().cpu().numpy()
+                mats = dist.exploration_matrices.detach().cpu().numpy()
+                mean = mean + sde_noise(numpy_ops, latent, mat, mats)
+            return np.tanh(mean)
         if deterministic:
             return np.tanh(mean)
         log_std = self.learner.forward("log_std", latent)
         noise = self._rng.standard_normal(mean.shape, np.float32)
         return squashed_gaussian_rsample(numpy_ops, mean, log_std, noise)[0]
+
+    def _reset_noise(self) -> None:
+        """gSDE: new exploration matrices (one, and one per env) from the model's generator."""
+        log_std = torch.as_tensor(self.learner.extra("log_std"))
+        self._sde_dist.sample_weights(log_std, batch_size=self.n_envs, rng=self._rng)
+
+    def _uniform_warmup(self) -> bool:
+        return super()._uniform_warmup() and not (self.use_sde and self.use_sde_at_warmup)
+
+    def _sample_actions(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._sde is not None:
+            # SB3's collect_rollouts: new matrices as each collection starts and every
+            # sde_sample_freq steps of it
+            step, freq = self._collected_steps, self.sde_sample_freq
+            if step == 0 or (freq > 0 and step % freq == 0):
+                self._reset_noise()
+        return super()._sample_actions()
+
+    def _loop_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        meta, arrays = super()._loop_state()
+        if self._sde is not None:  # an open collection continues with its matrices
+            dist = self._sde_dist
+            arrays["sde/exploration_mat"] = dist.exploration_mat.detach().cpu().numpy()
+            arrays["sde/exploration_matrices"] = dist.exploration_matrices.detach().cpu().numpy()
+        return meta, arrays
+
+    def _sde_matrix_shape(self) -> tuple[int, ...] | None:
+        return None if self._sde is None else tuple(self._sde_dist.exploration_mat.shape)
+
+    def _load_loop_state(self, meta: Any, arrays: dict[str, np.ndarray]) -> None:
+        super()._load_loop_state(meta, arrays)
+        if self._sde is not None and "sde/exploration_mat" in arrays:
+            mat, mats = arrays["sde/exploration_mat"], arrays["sde/exploration_matrices"]
+            shape = tuple(self._sde_dist.exploration_mat.shape)
+            if mat.shape != shape or mats.shape[1:] != shape:
+                raise ValueError(
+                    f"gSDE exploration matrices of shape {mat.shape} and {mats.shape} do not "
+                    f"fit the actor's {shape}"
+                )
+            self._sde_dist.exploration_mat = torch.as_tensor(mat)
+            self._sde_dist.exploration_matrices = torch.as_tensor(mats)
 
     # -- learning ----------------------------------------------------------------------------
     def train(self, gradient_steps: int, batch_size: int = 64) -> None:
@@ -226,14 +302,20 @@ class SAC(ActorCriticOffPolicy):
         with self.learner.session():
             for step in range(gradient_steps):
                 batch = self._sample_batch(batch_size)
-                shape = (batch_size, self.action_dim)
-                batch["noise"] = self._rng.standard_normal(shape, np.float32)
-                batch["next_noise"] = self._rng.standard_normal(shape, np.float32)
+                if self._sde is not None:
+                    # SB3 resamples the matrix every gradient step (the log-std moved): one
+                    # for the batch, shared by the actor's and the target's actions
+                    shape = tuple(self._sde_dist.exploration_mat.shape)
+                    batch["sde_noise"] = self._rng.standard_normal(shape, np.float32)
+                else:
+                    shape = (batch_size, self.action_dim)
+                    batch["noise"] = self._rng.standard_normal(shape, np.float32)
+                    batch["next_noise"] = self._rng.standard_normal(shape, np.float32)
                 ent_coef = self._current_ent_coef()
                 logs.setdefault("ent_coef", []).append(ent_coef)
-                critic = SACCriticObjective(self._n_critics, self.gamma, ent_coef)
+                critic = SACCriticObjective(self._n_critics, self.gamma, ent_coef, self._sde)
                 metrics, _ = self.learner.update("critic", critic, batch)
-                actor = SACActorObjective(self._n_critics, ent_coef, self.action_dim)
+                actor = SACActorObjective(self._n_critics, ent_coef, self.action_dim, self._sde)
                 metrics.update(self.learner.update("actor", actor, batch)[0])
                 if self._learn_ent_coef:
                     temperature = EntCoefObjective(self.target_entropy, actor.last_log_prob)
