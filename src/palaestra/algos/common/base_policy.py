@@ -40,7 +40,7 @@ from palaestra.algos.common.spaces_util import (
 )
 from palaestra.algos.public_paths import public_ref
 
-__all__ = ["BasePolicy"]
+__all__ = ["BaseModel", "BasePolicy"]
 
 SelfPolicy = TypeVar("SelfPolicy", bound="BasePolicy")
 
@@ -299,3 +299,8 @@ class BasePolicy(nn.Module):
         if device == "auto":
             device = "cpu"
         return policy.to(torch.device(device))
+
+
+# SB3 splits its policy base in two (``BaseModel``: modules, device, save/load; ``BasePolicy``:
+# adds predict and action scaling); palaestra's one class is both, so the names are one class.
+BaseModel = BasePolicy

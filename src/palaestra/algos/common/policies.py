@@ -13,7 +13,8 @@ import torch
 from torch import nn
 
 from palaestra import spaces
-from palaestra.algos.common.base_policy import BasePolicy
+from palaestra.algos.common.base_policy import BaseModel, BasePolicy
+from palaestra.algos.common.continuous_policies import ContinuousCritic
 from palaestra.algos.common.distributions import ActionHead, Distribution
 from palaestra.algos.common.networks import (
     BaseFeaturesExtractor,
@@ -33,7 +34,9 @@ __all__ = [
     "ActorCritic",
     "ActorCriticCnnPolicy",
     "ActorCriticPolicy",
+    "BaseModel",
     "BasePolicy",
+    "ContinuousCritic",
     "MultiInputActorCriticPolicy",
     "extractor_class",
 ]

@@ -1,5 +1,6 @@
 """SAC's policy classes, at SB3's path (``stable_baselines3.sac.policies``): ``SACPolicy``
-and its ``MlpPolicy``/``CnnPolicy``/``MultiInputPolicy`` aliases."""
+and its ``MlpPolicy``/``CnnPolicy``/``MultiInputPolicy`` aliases, the ``Actor`` it builds and
+the actor's log-std bounds."""
 
 from __future__ import annotations
 
@@ -18,8 +19,19 @@ from palaestra.algos.common.networks import (
     CombinedExtractor,
     NatureCNN,
 )
+from palaestra.algos.learners.heads import LOG_STD_MAX, LOG_STD_MIN
 
-__all__ = ["CnnPolicy", "MlpPolicy", "MultiInputPolicy", "SACPolicy"]
+__all__ = [
+    "LOG_STD_MAX",
+    "LOG_STD_MIN",
+    "Actor",
+    "CnnPolicy",
+    "MlpPolicy",
+    "MultiInputPolicy",
+    "SACPolicy",
+]
+
+Actor = SquashedGaussianActor  # SB3's name for SAC's actor class
 
 
 class SACPolicy(_ContinuousPolicy):

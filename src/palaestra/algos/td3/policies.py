@@ -19,7 +19,9 @@ from palaestra.algos.common.networks import (
     NatureCNN,
 )
 
-__all__ = ["CnnPolicy", "MlpPolicy", "MultiInputPolicy", "TD3Policy"]
+__all__ = ["Actor", "CnnPolicy", "MlpPolicy", "MultiInputPolicy", "TD3Policy"]
+
+Actor = DeterministicActor  # SB3's name for TD3's (and DDPG's) actor class
 
 
 class TD3Policy(_ContinuousPolicy):
