@@ -9,6 +9,7 @@ in the same order (PPO's golden hashes did not change when this was taken out of
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, ClassVar
 
 import numpy as np
@@ -111,6 +112,7 @@ class OnPolicyAlgorithm(BaseAlgorithm):
         if isinstance(self.policy_name, type):  # an ActorCriticPolicy subclass (SB3's guide)
             # its own default extractor (ActorCriticCnnPolicy's is NatureCNN), as in SB3
             policy_class: Any = self.policy_name
+            _warn_unused_overrides(policy_class)
             policy = policy_class(
                 self.observation_space,
                 self.action_space,
@@ -353,3 +355,27 @@ def default_adam(kwargs: dict[str, Any]) -> tuple[type, dict[str, Any]]:
     if optimizer_class is torch.optim.Adam:
         optimizer_kwargs.setdefault("eps", 1e-5)
     return optimizer_class, optimizer_kwargs
+
+
+# What SB3's on-policy loop calls on its policy; palaestra's learner runs the policy's modules
+# (extractor, mlp_extractor, heads) instead, so an override of these changes nothing here.
+_LOOP_METHODS = ("forward", "evaluate_actions", "predict_values", "get_distribution")
+
+
+def _warn_unused_overrides(policy_class: type) -> None:
+    """Warn when an ``ActorCriticPolicy`` subclass overrides a method SB3's rollout or train
+    step calls but palaestra's learner does not: its result would silently differ from SB3's."""
+    overridden = [
+        name
+        for name in _LOOP_METHODS
+        if getattr(policy_class, name, None) is not getattr(ActorCriticPolicy, name, None)
+    ]
+    if overridden:
+        warnings.warn(
+            f"{policy_class.__name__} overrides {', '.join(overridden)}: palaestra's PPO/A2C "
+            "run the policy's modules (features extractor, mlp_extractor, action and value "
+            "heads), not these methods, when collecting rollouts and training; customise "
+            "those modules (_build_mlp_extractor, features_extractor_class) instead",
+            UserWarning,
+            stacklevel=4,
+        )
