@@ -6,7 +6,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 py="${PY:-python3}"
-extras="train,box2d,render,progress,sweep,ray"
+extras="train,box2d,mujoco,render,progress,sweep,ray"
 work="$(mktemp -d "${TMPDIR:-/tmp}/palaestra-userinstall.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 start=$SECONDS

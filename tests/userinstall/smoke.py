@@ -175,6 +175,34 @@ def cli_on_a_builtin_env(cwd: Path) -> None:
 
 
 @check
+def mujoco_env_trains_records_and_runs_in_workers(cwd: Path) -> None:
+    run = cwd / "runs" / "sac-inverted-pendulum"
+    out = palaestra(
+        cwd, "train", "sac", "InvertedPendulum-v5", "--seed", "0", "--timesteps", "300",
+        "--out", str(run), "--progress", "none", "--eval-episodes", "1",
+    )  # fmt: skip
+    assert "trained sac on InvertedPendulum-v5" in out, out
+    palaestra(cwd, "record", str(run), "--out", str(cwd / "pendulum.gif"))
+    assert (cwd / "pendulum.gif").stat().st_size > 1000
+    # the models are package data, found from worker processes started by spawn
+    out = python(
+        cwd,
+        """
+        import palaestra as gym
+
+        if __name__ == "__main__":
+            envs = gym.make_vec("HalfCheetah-v5", num_envs=2, vectorization_mode="async",
+                                vector_kwargs={"context": "spawn"})
+            obs, _ = envs.reset(seed=0)
+            obs, reward, *_ = envs.step(envs.action_space.sample())
+            envs.close()
+            print(obs.shape, reward.shape)
+    """,
+    )
+    assert "(2, 17) (2,)" in out, out
+
+
+@check
 def cli_compare_and_sweep(cwd: Path) -> None:
     out = palaestra(
         cwd, "compare", "algos", "--env", "CartPole-v1", "--algos", "a2c", "ppo",
