@@ -71,6 +71,7 @@ from palaestra.algos.qrdqn import QRDQN
 from palaestra.algos.common.evaluation import evaluate_policy
 from palaestra.algos.common.model_io import ModelFileError
 from palaestra.algos.common.schedules import ConstantSchedule, LinearSchedule
+from palaestra.algos.common.utils import get_system_info
 
 __all__ = [
     "A2C",
@@ -88,6 +89,7 @@ __all__ = [
     "VectorizedActionNoise",
     "callbacks",
     "evaluate_policy",
+    "get_system_info",
     "schedules",
 ]
 
