@@ -135,6 +135,7 @@ def test_one_env_takes_an_action_without_the_batch_axis_as_sb3(env_id):
         assert o1.shape == o2.shape == (1, *ours.observation_space.shape)
         np.testing.assert_allclose(o1, o2, atol=1e-5)
         np.testing.assert_allclose(r1, r2, atol=1e-5)
+        np.testing.assert_array_equal(d1, d2)
     with pytest.raises(ValueError, match=r"Expected a batch of actions of shape \(2, 1\)"):
         two = DummyVecEnv([lambda: gym.make(env_id), lambda: gym.make(env_id)])
         two.reset()
