@@ -141,12 +141,21 @@ def _checked_excluded(key_excluded: Any) -> Excluded:
     return key_excluded
 
 
+def _formats(excluded: Excluded, key: str) -> tuple[str, ...]:
+    """The formats ``key`` is excluded from: one name given as a string is that format (SB3's
+    ``("stdout")``, a string, is read so by its substring test), ``None`` is none."""
+    value = excluded.get(key)
+    if value is None:
+        return ()
+    return (value,) if isinstance(value, str) else tuple(value)
+
+
 def filter_excluded_keys(
     key_values: dict[str, Any], key_excluded: Excluded | None, _format: str
 ) -> dict[str, Any]:
     """The values of ``key_values`` that ``_format`` writes (SB3's helper)."""
     excluded = _checked_excluded(key_excluded)
-    return {k: v for k, v in key_values.items() if _format not in (excluded.get(k) or ())}
+    return {k: v for k, v in key_values.items() if _format not in _formats(excluded, k)}
 
 
 class KVWriter:
@@ -189,7 +198,7 @@ class HumanOutputFormat(KVWriter, SeqWriter):
         values = {
             k: v
             for k, v in key_values.items()
-            if not {"stdout", "log"} & set(excluded.get(k) or ())
+            if not {"stdout", "log"} & set(_formats(excluded, k))
         }
         _refuse_rich(values, ["stdout", "log"])
         rows: list[tuple[str, str]] = []

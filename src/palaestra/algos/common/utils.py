@@ -36,6 +36,7 @@ from palaestra.algos.common.spaces_util import (
     is_vectorized_observation,
 )
 from palaestra.algos.learners.losses import explained_variance, polyak
+from palaestra.error import InvalidObservation
 
 if TYPE_CHECKING:  # type_aliases imports buffers, which imports this module
     from palaestra.algos.common.type_aliases import TrainFreq
@@ -191,20 +192,25 @@ def check_for_correct_spaces(
 
 
 def check_shape_equal(space1: spaces.Space[Any], space2: spaces.Space[Any]) -> None:
-    """Box spaces (and Dict spaces key by key) of the same shapes; ``ValueError`` naming the
-    difference otherwise (SB3: ``AssertionError``, same words)."""
+    """Box spaces (and Dict spaces key by key) of the same shapes; otherwise
+    ``InvalidObservation`` naming the difference (SB3's words): a ``ValueError``, and an
+    ``AssertionError`` as SB3 raises."""
     if isinstance(space1, spaces.Dict):
         if not isinstance(space2, spaces.Dict):
-            raise ValueError(f"spaces must be of the same type: {type(space1)} != {type(space2)}")
+            raise InvalidObservation(
+                f"spaces must be of the same type: {type(space1)} != {type(space2)}"
+            )
         if space1.spaces.keys() != space2.spaces.keys():
-            raise ValueError(
+            raise InvalidObservation(
                 f"spaces must have the same keys: {list(space1.spaces.keys())} != "
                 f"{list(space2.spaces.keys())}"
             )
         for key in space1.spaces:
             check_shape_equal(space1.spaces[key], space2.spaces[key])
     elif isinstance(space1, spaces.Box) and space1.shape != space2.shape:
-        raise ValueError(f"spaces must have the same shape: {space1.shape} != {space2.shape}")
+        raise InvalidObservation(
+            f"spaces must have the same shape: {space1.shape} != {space2.shape}"
+        )
 
 
 def obs_as_tensor(obs: Any, device: torch.device | str) -> Any:
