@@ -117,3 +117,26 @@ def test_make_vec_env_paths():
     from_callable = make_vec_env(lambda: gym.make("Pendulum-v1"), n_envs=2, seed=0)
     assert isinstance(from_callable, DummyVecEnv)
     assert from_callable.reset().shape == (2, 3)
+
+
+@pytest.mark.parametrize("env_id", ["Pendulum-v1", "MountainCarContinuous-v0"])
+def test_one_env_takes_an_action_without_the_batch_axis_as_sb3(env_id):
+    """SB3's DummyVecEnv of one env steps ``actions[0]``, so it takes an action without the
+    batch axis (and hands its env a scalar, which Gymnasium's Pendulum cannot index); palaestra
+    adds the axis: the same step as SB3's for the batched action."""
+    ours = DummyVecEnv([lambda: gym.make(env_id)])
+    theirs = sb3.DummyVecEnv([lambda: gymnasium.make(env_id)])
+    ours.seed(3), theirs.seed(3)
+    np.testing.assert_allclose(ours.reset(), theirs.reset(), atol=1e-6)
+    for value in (0.5, -0.25, 1.0):
+        action = np.array([value], dtype=np.float32)  # shape (1,): one action, no batch axis
+        o1, r1, d1, _ = ours.step(action)
+        o2, r2, d2, _ = theirs.step(action[None])
+        assert o1.shape == o2.shape == (1, *ours.observation_space.shape)
+        np.testing.assert_allclose(o1, o2, atol=1e-5)
+        np.testing.assert_allclose(r1, r2, atol=1e-5)
+        np.testing.assert_array_equal(d1, d2)
+    with pytest.raises(ValueError, match=r"Expected a batch of actions of shape \(2, 1\)"):
+        two = DummyVecEnv([lambda: gym.make(env_id), lambda: gym.make(env_id)])
+        two.reset()
+        two.step(np.array([0.5], dtype=np.float32))  # two envs: still a batch needed

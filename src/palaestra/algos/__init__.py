@@ -74,6 +74,7 @@ from palaestra.algos.her import HerReplayBuffer
 from palaestra.algos.common.evaluation import evaluate_policy
 from palaestra.algos.common.model_io import ModelFileError
 from palaestra.algos.common.schedules import ConstantSchedule, LinearSchedule
+from palaestra.algos.common.utils import get_system_info
 
 __all__ = [
     "A2C",
@@ -92,6 +93,7 @@ __all__ = [
     "VectorizedActionNoise",
     "callbacks",
     "evaluate_policy",
+    "get_system_info",
     "schedules",
 ]
 

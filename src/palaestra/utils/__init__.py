@@ -4,9 +4,10 @@ import importlib
 from typing import Any
 
 from palaestra.utils.colorize import colorize
+from palaestra.utils.ezpickle import EzPickle
 from palaestra.utils.record_constructor import RecordConstructorArgs
 
-__all__ = ["RecordConstructorArgs", "colorize", "save_video"]
+__all__ = ["EzPickle", "RecordConstructorArgs", "colorize", "save_video"]
 
 
 def __getattr__(name: str) -> Any:

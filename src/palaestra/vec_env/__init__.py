@@ -5,7 +5,7 @@ engines of :mod:`palaestra.vector`; ``make_vec_env`` picks the native batch for 
 """
 
 from palaestra.vec_env.atari_vec_env import AtariVecEnv
-from palaestra.vec_env.base import VecEnv, VecEnvWrapper
+from palaestra.vec_env.base import CloudpickleWrapper, VecEnv, VecEnvWrapper
 from palaestra.vec_env.check_nan import VecCheckNan
 from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
 from palaestra.vec_env.env_util import make_atari_env, make_vec_env
@@ -21,7 +21,6 @@ from palaestra.vec_env.util import (
     unwrap_vec_wrapper,
 )
 from palaestra.vec_env.video_recorder import VecVideoRecorder
-from palaestra.vector.worker import Payload as CloudpickleWrapper
 
 __all__ = [
     "AtariVecEnv",

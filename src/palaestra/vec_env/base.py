@@ -19,9 +19,32 @@ from palaestra import error
 from palaestra.spaces import Space
 from palaestra.utils import run_state
 from palaestra.utils.run_state import State
+from palaestra.vector.worker import Payload
 
 Indices = int | Iterable[int] | None
 StepReturn = tuple[Any, np.ndarray, np.ndarray, list[dict[str, Any]]]
+# SB3's names for them (stable_baselines3.common.vec_env.base_vec_env)
+VecEnvIndices = Indices
+VecEnvObs = np.ndarray | dict[str, np.ndarray] | tuple[np.ndarray, ...]
+VecEnvStepReturn = StepReturn
+
+
+class CloudpickleWrapper(Payload):
+    """SB3's wrapper: ``var`` (any object: lambdas, closures, local classes) pickled with
+    cloudpickle, so it reaches a worker process under every start method. An object that
+    cannot be pickled is a ``TypeError`` naming it when the wrapper is pickled."""
+
+    def __init__(self, var: Any) -> None:
+        super().__init__(var)
+
+    @property
+    def var(self) -> Any:
+        """The wrapped object."""
+        return self.fn
+
+    @var.setter
+    def var(self, value: Any) -> None:
+        self.fn = value
 
 
 class VecEnv:

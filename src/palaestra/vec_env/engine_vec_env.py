@@ -90,8 +90,14 @@ class EngineVecEnv(VecEnv):
         action space. The two differ for composite spaces: a list of per-env Tuple or Dict
         actions becomes the batched tuple/dict here (passing it on unchanged would transpose
         Tuple actions between envs and leave envs unstepped, with no error)."""
-        if isinstance(self.action_space, _ROW_SPACES) or not isinstance(actions, (list, tuple)):
-            return actions  # array spaces index by row already; a dict is a batched Dict
+        if isinstance(self.action_space, _ROW_SPACES):
+            shape = tuple(self.action_space.shape or ())
+            if self.num_envs == 1 and shape and np.shape(actions) == shape:
+                # One env's action without the batch axis: SB3's DummyVecEnv takes it too
+                return np.asarray(actions)[None]
+            return actions  # array spaces index by row already
+        if not isinstance(actions, (list, tuple)):
+            return actions  # a dict is a batched Dict
         if len(actions) != self.num_envs:
             raise error.InvalidAction(
                 f"Expected {self.num_envs} actions (one per env) for action space "

@@ -18,6 +18,8 @@ from palaestra.vec_env.atari_vec_env import AtariGameMonitor, AtariVecEnv, atari
 from palaestra.vec_env.base import VecEnv
 from palaestra.vec_env.engine_vec_env import BatchedVecEnv, DummyVecEnv, SubprocVecEnv
 from palaestra.vec_env.monitor import VecMonitor
+from palaestra.vector.engine import is_wrapped as is_wrapped  # SB3 env_util names
+from palaestra.vector.engine import unwrap_wrapper as unwrap_wrapper
 from palaestra.vector.native import BatchedVectorEnv, batched_vector_env
 from palaestra.wrappers.atari import AtariWrapper
 from palaestra.wrappers.monitor import Monitor

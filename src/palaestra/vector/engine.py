@@ -179,13 +179,18 @@ def call_env(env: Env[Any, Any], name: str, args: tuple[Any, ...], kwargs: dict[
     return attr(*args, **kwargs) if callable(attr) else attr
 
 
-def is_wrapped(env: Any, wrapper_class: type) -> bool:
-    """Whether any layer of ``env``'s wrapper stack is a ``wrapper_class``."""
+def unwrap_wrapper(env: Any, wrapper_class: type) -> Any:
+    """The outermost layer of ``env``'s wrapper stack that is a ``wrapper_class``, or None."""
     while env is not None:
         if isinstance(env, wrapper_class):
-            return True
+            return env
         env = getattr(env, "env", None)
-    return False
+    return None
+
+
+def is_wrapped(env: Any, wrapper_class: type) -> bool:
+    """Whether any layer of ``env``'s wrapper stack is a ``wrapper_class``."""
+    return unwrap_wrapper(env, wrapper_class) is not None
 
 
 def check_env_fns(env_fns: Sequence[Callable[[], Env[Any, Any]]], who: str) -> None:

@@ -43,6 +43,10 @@ class Payload:
     def __setstate__(self, state: bytes) -> None:
         self.fn = pickle.loads(state)
 
+    def __call__(self) -> Any:
+        """``fn()`` (Gymnasium's ``CloudpickleWrapper`` is called to make the env)."""
+        return self.fn()
+
 
 def dumps(obj: Any) -> bytes:
     """``obj`` pickled; with cloudpickle (by value) where plain pickle cannot name a class.

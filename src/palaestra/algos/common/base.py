@@ -51,11 +51,26 @@ from palaestra.algos.common.spaces_util import (
     is_vectorized_observation,
     refuse_reset_tuple,
 )
+from palaestra.algos.common.utils import check_for_correct_spaces, get_latest_run_id, safe_mean
 from palaestra.algos.learners import Group, Learner, Net, build_learner
 from palaestra.core import Env, Wrapper
+from palaestra.envs.registration import make
 from palaestra.wrappers.monitor import Monitor
 
-__all__ = ["BaseAlgorithm", "resolve_device", "round_up_steps"]
+__all__ = ["BaseAlgorithm", "maybe_make_env", "resolve_device", "round_up_steps"]
+
+
+def maybe_make_env(env: Any, verbose: int) -> Any:
+    """An id string made into an env (``render_mode="rgb_array"`` where the env takes it, so
+    videos can be recorded); anything else returned as it is (SB3's helper)."""
+    if not isinstance(env, str):
+        return env
+    if verbose >= 1:
+        print(f"Creating environment from the given name '{env}'")
+    try:
+        return make(env, render_mode="rgb_array")
+    except TypeError:  # the env's constructor has no render_mode
+        return make(env)
 
 
 def resolve_device(device: torch.device | str, policy: str | type) -> torch.device:
@@ -65,10 +80,6 @@ def resolve_device(device: torch.device | str, policy: str | type) -> torch.devi
         wants_gpu = policy in ("CnnPolicy", "MultiInputPolicy")
         return torch.device("cuda" if wants_gpu and torch.cuda.is_available() else "cpu")
     return torch.device(device)
-
-
-def _safe_mean(values: list[float]) -> float:
-    return float("nan") if not values else float(np.mean(values))
 
 
 class BaseAlgorithm:
@@ -307,12 +318,7 @@ class BaseAlgorithm:
     def set_env(self, env: Any, force_reset: bool = True) -> None:
         """Train on another env with the same spaces (SB3: ``ValueError`` when they differ)."""
         venv = self._wrap_env(env)
-        for name, ours, theirs in [
-            ("Observation", self.observation_space, venv.observation_space),
-            ("Action", self.action_space, venv.action_space),
-        ]:
-            if ours != theirs:
-                raise ValueError(f"{name} spaces do not match: {theirs} != {ours}")
+        check_for_correct_spaces(venv, self.observation_space, self.action_space)
         n_changed = venv.num_envs != self.n_envs
         self.env, self.n_envs = venv, venv.num_envs
         if n_changed:
@@ -513,17 +519,10 @@ class BaseAlgorithm:
         if self.tensorboard_log is None:
             # stdout only: no folder to create (SB3 makes an empty temp dir here)
             return Logger(None, [HumanOutputFormat(sys.stdout)] if formats else [])
-        runs = (
-            [d for d in os.listdir(self.tensorboard_log)]
-            if os.path.isdir(self.tensorboard_log)
-            else []
-        )
-        ids = [
-            int(d.rsplit("_", 1)[1])
-            for d in runs
-            if d.startswith(tb_log_name + "_") and d.rsplit("_", 1)[1].isdigit()
-        ]
-        run_id = max(ids, default=0) + (1 if reset_num_timesteps or not ids else 0)
+        latest = get_latest_run_id(self.tensorboard_log, tb_log_name)
+        # Going on (reset_num_timesteps=False) writes into the latest run's folder; with none
+        # yet, into _1 (SB3: _0)
+        run_id = latest + (1 if reset_num_timesteps or latest == 0 else 0)
         folder = os.path.join(self.tensorboard_log, f"{tb_log_name}_{run_id}")
         return configure(folder, [*formats, "tensorboard"])
 
@@ -532,17 +531,17 @@ class BaseAlgorithm:
         fps = int((self.num_timesteps - self._num_timesteps_at_start) / elapsed)
         if self.ep_info_buffer:
             self.logger.record(
-                "rollout/ep_rew_mean", _safe_mean([e["r"] for e in self.ep_info_buffer])
+                "rollout/ep_rew_mean", safe_mean([e["r"] for e in self.ep_info_buffer])
             )
             self.logger.record(
-                "rollout/ep_len_mean", _safe_mean([e["l"] for e in self.ep_info_buffer])
+                "rollout/ep_len_mean", safe_mean([e["l"] for e in self.ep_info_buffer])
             )
         self.logger.record("time/fps", fps)
         self.logger.record("time/time_elapsed", int(elapsed), exclude="tensorboard")
         self.logger.record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
         if self.ep_success_buffer:
             self.logger.record(
-                "rollout/success_rate", _safe_mean([float(s) for s in self.ep_success_buffer])
+                "rollout/success_rate", safe_mean([float(s) for s in self.ep_success_buffer])
             )
 
     def _callback_locals(self, **values: Any) -> dict[str, Any]:

@@ -32,6 +32,11 @@ from palaestra.error import dependency_not_installed
 from palaestra.utils.atomic_write import atomic_write, complete_text
 
 __all__ = [
+    "DEBUG",
+    "DISABLED",
+    "ERROR",
+    "INFO",
+    "WARN",
     "CSVOutputFormat",
     "Figure",
     "FormatUnsupportedError",
@@ -50,6 +55,14 @@ __all__ = [
 ]
 
 Exclude = str | tuple[str, ...] | None
+
+# SB3's levels: ``Logger.log(..., level=)`` prints when ``level >= logger.level``; at
+# ``DISABLED`` nothing is printed and ``dump`` writes nothing.
+DEBUG = 10
+INFO = 20
+WARN = 30
+ERROR = 40
+DISABLED = 50
 
 
 # -- values only TensorBoard shows (SB3's classes): record them with
@@ -128,12 +141,21 @@ def _checked_excluded(key_excluded: Any) -> Excluded:
     return key_excluded
 
 
+def _formats(excluded: Excluded, key: str) -> tuple[str, ...]:
+    """The formats ``key`` is excluded from: one name given as a string is that format (SB3's
+    ``("stdout")``, a string, is read so by its substring test), ``None`` is none."""
+    value = excluded.get(key)
+    if value is None:
+        return ()
+    return (value,) if isinstance(value, str) else tuple(value)
+
+
 def filter_excluded_keys(
     key_values: dict[str, Any], key_excluded: Excluded | None, _format: str
 ) -> dict[str, Any]:
     """The values of ``key_values`` that ``_format`` writes (SB3's helper)."""
     excluded = _checked_excluded(key_excluded)
-    return {k: v for k, v in key_values.items() if _format not in (excluded.get(k) or ())}
+    return {k: v for k, v in key_values.items() if _format not in _formats(excluded, k)}
 
 
 class KVWriter:
@@ -176,7 +198,7 @@ class HumanOutputFormat(KVWriter, SeqWriter):
         values = {
             k: v
             for k, v in key_values.items()
-            if not {"stdout", "log"} & set(excluded.get(k) or ())
+            if not {"stdout", "log"} & set(_formats(excluded, k))
         }
         _refuse_rich(values, ["stdout", "log"])
         rows: list[tuple[str, str]] = []
@@ -354,6 +376,7 @@ class Logger:
     def __init__(self, folder: str | None, output_formats: list[Any]) -> None:
         self.folder = folder
         self.output_formats = output_formats
+        self.level = INFO
         self.name_to_value: dict[str, Any] = {}
         self.name_to_excluded: dict[str, tuple[str, ...]] = {}
         self._sums: dict[str, float] = defaultdict(float)
@@ -366,15 +389,20 @@ class Logger:
             (exclude,) if isinstance(exclude, str) else tuple(exclude or ())
         )
 
-    def record_mean(self, key: str, value: float, exclude: Exclude = None) -> None:
-        """Average every value given for ``key`` until the next dump."""
+    def record_mean(self, key: str, value: float | None, exclude: Exclude = None) -> None:
+        """Average every value given for ``key`` until the next dump (None: ignored, as SB3)."""
+        if value is None:
+            return
         self._sums[key] += float(value)
         self._counts[key] += 1
         self.record(key, self._sums[key] / self._counts[key], exclude)
 
     def dump(self, step: int = 0) -> None:
         """Write everything recorded since the last dump, then forget it: each output gets
-        all values and what each key is excluded from (SB3's ``KVWriter.write``)."""
+        all values and what each key is excluded from (SB3's ``KVWriter.write``). At level
+        ``DISABLED`` nothing is written and the values are kept, as in SB3."""
+        if self.level == DISABLED:
+            return
         for fmt in self.output_formats:
             if hasattr(fmt, "write"):
                 fmt.write(self.name_to_value, self.name_to_excluded, step)
@@ -382,6 +410,39 @@ class Logger:
         self.name_to_excluded.clear()
         self._sums.clear()
         self._counts.clear()
+
+    @property
+    def dir(self) -> str | None:
+        """The folder the outputs write to (SB3's attribute), None without one."""
+        return self.folder
+
+    def log(self, *args: Any, level: int = INFO) -> None:
+        """Write ``args`` (as ``str``) on one line to the text outputs (stdout, ``log.txt``)
+        when ``level`` is at least the logger's level."""
+        if self.level <= level:
+            for fmt in self.output_formats:
+                if isinstance(fmt, SeqWriter):
+                    fmt.write_sequence([str(arg) for arg in args])
+
+    def debug(self, *args: Any) -> None:
+        """``log`` at ``DEBUG``."""
+        self.log(*args, level=DEBUG)
+
+    def info(self, *args: Any) -> None:
+        """``log`` at ``INFO``."""
+        self.log(*args, level=INFO)
+
+    def warn(self, *args: Any) -> None:
+        """``log`` at ``WARN``."""
+        self.log(*args, level=WARN)
+
+    def error(self, *args: Any) -> None:
+        """``log`` at ``ERROR``."""
+        self.log(*args, level=ERROR)
+
+    def set_level(self, level: int) -> None:
+        """Print only ``log`` calls at ``level`` or above; ``DISABLED`` also stops ``dump``."""
+        self.level = level
 
     def get_dir(self) -> str | None:
         return self.folder
@@ -417,4 +478,8 @@ def configure(folder: str | None = None, format_strings: list[str] | None = None
         folder = os.path.join(tempfile.gettempdir(), time.strftime("palaestra-%Y-%m-%d-%H-%M-%S"))
     formats = [make_output_format(name, folder) for name in filter(None, format_strings)]
     os.makedirs(folder, exist_ok=True)
-    return Logger(folder, formats)
+    logger = Logger(folder, formats)
+    names = list(filter(None, format_strings))
+    if names and names != ["stdout"]:  # SB3 says where files go
+        logger.log(f"Logging to {folder}")
+    return logger

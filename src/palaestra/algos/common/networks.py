@@ -8,6 +8,7 @@ Images are scaled by 1/255 and channel-last images are permuted here, inside the
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 import torch
@@ -22,7 +23,9 @@ __all__ = [
     "FlattenExtractor",
     "MlpExtractor",
     "NatureCNN",
+    "create_mlp",
     "extractor_space",
+    "get_actor_critic_arch",
     "make_extractor",
     "mlp",
     "preprocess_obs",
@@ -253,10 +256,59 @@ class CombinedExtractor(BaseFeaturesExtractor):
         return torch.cat([net(obs[key]) for key, net in self.extractors.items()], dim=1)
 
 
+def create_mlp(
+    input_dim: int,
+    output_dim: int,
+    net_arch: list[int],
+    activation_fn: type[nn.Module] = nn.ReLU,
+    squash_output: bool = False,
+    with_bias: bool = True,
+    pre_linear_modules: list[type[nn.Module]] | None = None,
+    post_linear_modules: list[type[nn.Module]] | None = None,
+) -> list[nn.Module]:
+    """SB3's MLP as a list of layers: ``Linear -> activation`` per width of ``net_arch``, then
+    a ``Linear`` to ``output_dim`` when it is positive, then ``Tanh`` if ``squash_output``.
+
+    ``pre_linear_modules`` (e.g. ``BatchNorm1d``) are built with each linear layer's input
+    width and go before it (the output layer's too); ``post_linear_modules`` (``LayerNorm``,
+    ``Dropout``) with its output width, between a hidden layer and its activation.
+    """
+    pre, post = pre_linear_modules or [], post_linear_modules or []
+    layers: list[nn.Module] = []
+    widths = [input_dim, *net_arch]
+    for in_dim, out_dim in itertools.pairwise(widths):
+        layers += [module(in_dim) for module in pre]
+        layers.append(nn.Linear(in_dim, out_dim, bias=with_bias))
+        layers += [module(out_dim) for module in post]
+        layers.append(activation_fn())
+    if output_dim > 0:
+        layers += [module(widths[-1]) for module in pre]
+        layers.append(nn.Linear(widths[-1], output_dim, bias=with_bias))
+    if squash_output:
+        layers.append(nn.Tanh())
+    return layers
+
+
 def mlp(in_dim: int, hidden: list[int], activation_fn: type[nn.Module]) -> nn.Sequential:
     """``Linear -> activation`` for each hidden width (empty list: identity)."""
-    layers: list[nn.Module] = []
-    for width in hidden:
-        layers += [nn.Linear(in_dim, width), activation_fn()]
-        in_dim = width
-    return nn.Sequential(*layers)
+    return nn.Sequential(*create_mlp(in_dim, 0, hidden, activation_fn))
+
+
+def get_actor_critic_arch(
+    net_arch: list[int] | dict[str, list[int]],
+) -> tuple[list[int], list[int]]:
+    """SAC/TD3/DDPG's ``net_arch``: a list (actor and critic alike) or
+    ``dict(pi=[...], qf=[...])`` -> ``(actor widths, critic widths)``."""
+    if isinstance(net_arch, list):
+        return net_arch, net_arch
+    if not isinstance(net_arch, dict):
+        raise TypeError(
+            f"net_arch must be a list of ints or dict(pi=[...], qf=[...]), got {net_arch!r}"
+        )
+    for key, net in (("pi", "actor"), ("qf", "critic")):
+        if key not in net_arch:
+            raise ValueError(
+                f"Error: no key '{key}' was provided in net_arch for the {net} network: "
+                f"got {net_arch!r}"
+            )
+    return net_arch["pi"], net_arch["qf"]

@@ -18,6 +18,8 @@ import torch
 from torch.nn import functional
 
 from palaestra import spaces
+from palaestra.vec_env.image import VecTransposeImage
+from palaestra.vec_env.util import check_for_nested_spaces
 
 __all__ = [
     "check_for_nested_spaces",
@@ -26,6 +28,7 @@ __all__ = [
     "get_obs_shape",
     "is_image_space",
     "is_image_space_channels_first",
+    "maybe_transpose",
     "preprocess_obs",
 ]
 
@@ -105,23 +108,6 @@ def get_action_dim(action_space: spaces.Space[Any]) -> int:
     raise NotImplementedError(f"{action_space} action space is not supported")
 
 
-def check_for_nested_spaces(obs_space: spaces.Space[Any]) -> None:
-    """``NotImplementedError`` (SB3's words) for a Dict/Tuple inside a Dict/Tuple: the
-    algorithms store and flatten one level of keys only."""
-    if isinstance(obs_space, spaces.Dict):
-        subs: Any = obs_space.spaces.values()
-    elif isinstance(obs_space, spaces.Tuple):
-        subs = obs_space.spaces
-    else:
-        return
-    for sub in subs:
-        if isinstance(sub, (spaces.Dict, spaces.Tuple)):
-            raise NotImplementedError(
-                "Nested observation spaces are not supported (Tuple/Dict space inside "
-                f"Tuple/Dict space): {obs_space}"
-            )
-
-
 def preprocess_obs(
     obs: Any, observation_space: spaces.Space[Any], normalize_images: bool = True
 ) -> Any:
@@ -153,3 +139,15 @@ def preprocess_obs(
     if isinstance(observation_space, spaces.MultiBinary):
         return obs.float()
     raise NotImplementedError(f"Preprocessing not implemented for {observation_space}")
+
+
+def maybe_transpose(observation: np.ndarray, observation_space: spaces.Space[Any]) -> np.ndarray:
+    """An image observation (or batch) given channels-last for a channels-first image space,
+    transposed to the space's layout; anything else unchanged (SB3's helper)."""
+    if is_image_space(observation_space):
+        shape = tuple(observation_space.shape or ())
+        if not (observation.shape == shape or observation.shape[1:] == shape):
+            transposed = VecTransposeImage.transpose_image(observation)
+            if transposed.shape == shape or transposed.shape[1:] == shape:
+                return transposed
+    return observation

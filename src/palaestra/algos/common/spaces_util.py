@@ -14,6 +14,11 @@ __all__ = [
     "allocate",
     "is_image_space",
     "is_image_space_channels_first",
+    "is_vectorized_box_observation",
+    "is_vectorized_dict_observation",
+    "is_vectorized_discrete_observation",
+    "is_vectorized_multibinary_observation",
+    "is_vectorized_multidiscrete_observation",
     "is_vectorized_observation",
     "refuse_reset_tuple",
     "space_from_json",
@@ -61,38 +66,119 @@ def refuse_reset_tuple(observation: Any) -> None:
         )
 
 
+def is_vectorized_box_observation(observation: Any, observation_space: spaces.Box) -> bool:
+    """True for a batch ``[n, *shape]``, False for one observation, ``ValueError`` otherwise
+    (SB3's words)."""
+    shape, single = np.shape(observation), tuple(observation_space.shape)
+    if shape == single:
+        return False
+    if shape[1:] == single:
+        return True
+    raise ValueError(
+        f"Error: Unexpected observation shape {shape} for Box environment, please use "
+        f"{single} or (n_env, {', '.join(map(str, single))}) for the observation shape."
+    )
+
+
+def is_vectorized_discrete_observation(
+    observation: Any, observation_space: spaces.Discrete
+) -> bool:
+    """An int or a 0-d array: one observation; a 1-d array: a batch (SB3's rules)."""
+    shape = np.shape(observation)
+    if shape == ():
+        return False
+    if len(shape) == 1:
+        return True
+    raise ValueError(
+        f"Error: Unexpected observation shape {shape} for Discrete environment, please use () "
+        "or (n_env,) for the observation shape."
+    )
+
+
+def is_vectorized_multidiscrete_observation(
+    observation: Any, observation_space: spaces.MultiDiscrete
+) -> bool:
+    """``(len(nvec),)``: one observation; ``(n, len(nvec))``: a batch (SB3's rules)."""
+    shape, single = np.shape(observation), tuple(observation_space.shape)
+    if shape == single:
+        return False
+    if len(shape) == len(single) + 1 and shape[1:] == single:
+        return True
+    width = ", ".join(map(str, single))
+    raise ValueError(
+        f"Error: Unexpected observation shape {shape} for MultiDiscrete environment, please use "
+        f"({width},) or (n_env, {width}) for the observation shape."
+    )
+
+
+def is_vectorized_multibinary_observation(
+    observation: Any, observation_space: spaces.MultiBinary
+) -> bool:
+    """The space's shape: one observation; one more leading axis: a batch (SB3's rules)."""
+    shape, single = np.shape(observation), tuple(observation_space.shape)
+    if shape == single:
+        return False
+    if len(shape) == len(single) + 1 and shape[1:] == single:
+        return True
+    raise ValueError(
+        f"Error: Unexpected observation shape {shape} for MultiBinary environment, please use "
+        f"{single} or (n_env, {observation_space.n}) for the observation shape."
+    )
+
+
+def is_vectorized_dict_observation(observation: Any, observation_space: spaces.Dict) -> bool:
+    """Every key one observation (False) or every key a batch (True); a mix is a
+    ``ValueError`` naming the first key that disagrees (SB3's words)."""
+    if not isinstance(observation, dict):
+        raise InvalidObservation(
+            f"Expected a dict observation for {observation_space}, got {observation!r:.200} "
+            f"({type(observation).__name__})"
+        )
+    items = observation_space.spaces.items()
+    if all(np.shape(observation[key]) == tuple(sub.shape or ()) for key, sub in items):
+        return False
+    for key, sub in items:
+        if np.shape(observation[key])[1:] != tuple(sub.shape or ()):
+            try:
+                is_vectorized_observation(observation[key], sub)
+                reason = ""
+            except ValueError as exc:
+                reason = str(exc)
+            raise ValueError(
+                "There seems to be a mix of vectorized and non-vectorized observations. "
+                f"Unexpected observation shape {np.shape(observation[key])} for key {key} of "
+                f"type {sub}. {reason}"
+            )
+    return True
+
+
+_IS_VECTORIZED: dict[type, Any] = {
+    spaces.Box: is_vectorized_box_observation,
+    spaces.Discrete: is_vectorized_discrete_observation,
+    spaces.MultiDiscrete: is_vectorized_multidiscrete_observation,
+    spaces.MultiBinary: is_vectorized_multibinary_observation,
+    spaces.Dict: is_vectorized_dict_observation,
+}
+
+
 def is_vectorized_observation(obs: Any, space: spaces.Space[Any]) -> bool:
     """True for a batch ``[n, *shape]``, False for one observation; ``ValueError`` otherwise.
 
-    The shape rules and messages follow SB3's ``BasePolicy.predict``.
+    SB3's ``is_vectorized_observation``: its shape rules and messages, per space type. A dict
+    on a non-Dict space (or the reverse) is an ``InvalidObservation`` naming it.
     """
-    if isinstance(space, spaces.Dict):
-        if not isinstance(obs, dict):
-            raise InvalidObservation(
-                f"Expected a dict observation for {space}, got {obs!r:.200} ({type(obs).__name__})"
-            )
-        flags = {key: is_vectorized_observation(obs[key], sub) for key, sub in space.spaces.items()}
-        if len(set(flags.values())) > 1:
-            raise ValueError(f"Observation keys disagree on batching: {flags}")
-        return next(iter(flags.values()))
-    if isinstance(obs, dict):
+    if isinstance(obs, dict) and not isinstance(space, spaces.Dict):
         # SB3 asserts this; without the check the dict becomes an object array and fails deep
         # in torch
         raise InvalidObservation(
             f"The observation {obs!r:.200} is a dict, but the observation space is {space}: "
             "pass an observation of that space (or a batch of them)"
         )
-    shape = np.shape(obs)
-    single: tuple[int, ...] = (
-        tuple(space.shape or ()) if not isinstance(space, spaces.Discrete) else ()
-    )
-    if shape == single:
-        return False
-    if len(shape) == len(single) + 1 and shape[1:] == single:
-        return True
+    for space_type, check in _IS_VECTORIZED.items():
+        if isinstance(space, space_type):
+            return bool(check(obs, space))
     raise ValueError(
-        f"Error: Unexpected observation shape {shape} for {type(space).__name__} environment, "
-        f"please use {single} or (n_env, {', '.join(map(str, single))}) for the observation shape."
+        f"Error: Cannot determine if the observation is vectorized with the space type {space}."
     )
 
 

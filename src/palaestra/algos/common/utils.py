@@ -7,16 +7,19 @@ reports. The schedules are palaestra's own classes, so a model saved with one st
 
 from __future__ import annotations
 
+import glob
 import os
 import platform
 import random
 import re
 from collections.abc import Iterable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
 
+from palaestra import spaces
+from palaestra.algos.common.logger import Logger, configure
 from palaestra.algos.common.schedules import (
     ConstantSchedule,
     FloatSchedule,
@@ -24,21 +27,47 @@ from palaestra.algos.common.schedules import (
     Schedule,
     as_schedule,
 )
+from palaestra.algos.common.spaces_util import (
+    is_vectorized_box_observation,
+    is_vectorized_dict_observation,
+    is_vectorized_discrete_observation,
+    is_vectorized_multibinary_observation,
+    is_vectorized_multidiscrete_observation,
+    is_vectorized_observation,
+)
 from palaestra.algos.learners.losses import explained_variance, polyak
+from palaestra.error import InvalidObservation
+
+if TYPE_CHECKING:  # type_aliases imports buffers, which imports this module
+    from palaestra.algos.common.type_aliases import TrainFreq
 
 __all__ = [
     "ConstantSchedule",
     "FloatSchedule",
     "LinearSchedule",
+    "check_for_correct_spaces",
+    "check_shape_equal",
+    "configure_logger",
     "constant_fn",
     "explained_variance",
     "get_device",
+    "get_latest_run_id",
     "get_linear_fn",
     "get_parameters_by_name",
     "get_schedule_fn",
     "get_system_info",
+    "is_vectorized_box_observation",
+    "is_vectorized_dict_observation",
+    "is_vectorized_discrete_observation",
+    "is_vectorized_multibinary_observation",
+    "is_vectorized_multidiscrete_observation",
+    "is_vectorized_observation",
+    "obs_as_tensor",
     "polyak_update",
+    "safe_mean",
     "set_random_seed",
+    "should_collect_more_steps",
+    "update_learning_rate",
     "zip_strict",
 ]
 
@@ -104,6 +133,108 @@ def get_parameters_by_name(model: torch.nn.Module, included_names: Iterable[str]
 def zip_strict(*iterables: Iterable[Any]) -> Iterable[Any]:
     """``zip`` that raises ``ValueError`` when the iterables' lengths differ."""
     return zip(*iterables, strict=True)
+
+
+def update_learning_rate(optimizer: torch.optim.Optimizer, learning_rate: float) -> None:
+    """Set the learning rate of every parameter group of ``optimizer``."""
+    for param_group in optimizer.param_groups:
+        param_group["lr"] = learning_rate
+
+
+def safe_mean(arr: Any) -> float:
+    """The mean of ``arr``, NaN when it is empty (for logging)."""
+    return float("nan") if len(arr) == 0 else float(np.mean(arr))
+
+
+def get_latest_run_id(log_path: str = "", log_name: str = "") -> int:
+    """The largest ``N`` among the folders ``{log_name}_{N}`` in ``log_path``; 0 if none
+    (``log_name`` is matched literally, glob characters included)."""
+    latest = 0
+    for path in glob.glob(os.path.join(log_path, f"{glob.escape(log_name)}_[0-9]*")):
+        name = os.path.basename(path)
+        stem, _, ext = name.rpartition("_")
+        if stem == log_name and ext.isdigit():
+            latest = max(latest, int(ext))
+    return latest
+
+
+def configure_logger(
+    verbose: int = 0,
+    tensorboard_log: str | None = None,
+    tb_log_name: str = "",
+    reset_num_timesteps: bool = True,
+) -> Logger:
+    """SB3's logger for a ``learn`` call: stdout when ``verbose >= 1``; with
+    ``tensorboard_log``, TensorBoard in ``{tensorboard_log}/{tb_log_name}_{N}``, ``N`` the
+    next run id (the latest one when ``reset_num_timesteps=False``: training goes on there)."""
+    folder, formats = None, ["stdout"]
+    if tensorboard_log is not None:
+        run_id = get_latest_run_id(tensorboard_log, tb_log_name)
+        if not reset_num_timesteps:
+            run_id -= 1
+        folder = os.path.join(tensorboard_log, f"{tb_log_name}_{run_id + 1}")
+        formats = ["stdout", "tensorboard"] if verbose >= 1 else ["tensorboard"]
+    elif verbose == 0:
+        formats = [""]
+    return configure(folder, format_strings=formats)
+
+
+def check_for_correct_spaces(
+    env: Any, observation_space: spaces.Space[Any], action_space: spaces.Space[Any]
+) -> None:
+    """``ValueError`` unless ``env`` has exactly these observation and action spaces."""
+    if observation_space != env.observation_space:
+        raise ValueError(
+            f"Observation spaces do not match: {observation_space} != {env.observation_space}"
+        )
+    if action_space != env.action_space:
+        raise ValueError(f"Action spaces do not match: {action_space} != {env.action_space}")
+
+
+def check_shape_equal(space1: spaces.Space[Any], space2: spaces.Space[Any]) -> None:
+    """Box spaces (and Dict spaces key by key) of the same shapes; otherwise
+    ``InvalidObservation`` naming the difference (SB3's words): a ``ValueError``, and an
+    ``AssertionError`` as SB3 raises."""
+    if isinstance(space1, spaces.Dict):
+        if not isinstance(space2, spaces.Dict):
+            raise InvalidObservation(
+                f"spaces must be of the same type: {type(space1)} != {type(space2)}"
+            )
+        if space1.spaces.keys() != space2.spaces.keys():
+            raise InvalidObservation(
+                f"spaces must have the same keys: {list(space1.spaces.keys())} != "
+                f"{list(space2.spaces.keys())}"
+            )
+        for key in space1.spaces:
+            check_shape_equal(space1.spaces[key], space2.spaces[key])
+    elif isinstance(space1, spaces.Box) and space1.shape != space2.shape:
+        raise InvalidObservation(
+            f"spaces must have the same shape: {space1.shape} != {space2.shape}"
+        )
+
+
+def obs_as_tensor(obs: Any, device: torch.device | str) -> Any:
+    """An observation array (or a dict of them) as tensors on ``device``."""
+    if isinstance(obs, np.ndarray):
+        return torch.as_tensor(obs, device=device)
+    if isinstance(obs, dict):
+        return {key: torch.as_tensor(value, device=device) for key, value in obs.items()}
+    raise TypeError(f"Unrecognized type of observation {type(obs)}")
+
+
+def should_collect_more_steps(
+    train_freq: TrainFreq, num_collected_steps: int, num_collected_episodes: int
+) -> bool:
+    """Whether an off-policy collection of ``train_freq`` (steps or episodes) goes on."""
+    # TrainFrequencyUnit is a str enum: its members equal these strings
+    if train_freq.unit == "step":
+        return num_collected_steps < train_freq.frequency
+    if train_freq.unit == "episode":
+        return num_collected_episodes < train_freq.frequency
+    raise ValueError(
+        "The unit of the `train_freq` must be either TrainFrequencyUnit.STEP or "
+        f"TrainFrequencyUnit.EPISODE not '{train_freq.unit}'!"
+    )
 
 
 def get_system_info(print_info: bool = True) -> tuple[dict[str, str], str]:
