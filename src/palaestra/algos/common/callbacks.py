@@ -393,10 +393,7 @@ class EvalCallback(BaseCallback):
                 self._is_success_buffer.append(success)
 
     def _init_callback(self) -> None:
-        from palaestra.vec_env import VecMonitor  # lazy: import-time — cloudpickle
-        from palaestra.vec_env.engine_vec_env import (  # lazy: import-time — cloudpickle
-            EngineVecEnv,
-        )
+        from palaestra.vec_env import VecMonitor, engine_vec_env  # lazy: import-time — cloudpickle
 
         def face(env: Any) -> Any:
             while isinstance(env, VecMonitor):  # where SB3 has a Monitor on each env
@@ -409,8 +406,8 @@ class EvalCallback(BaseCallback):
         # DummyVecEnv) and make_vec_env adds a VecMonitor: engine faces count as one type.
         eval_env = face(self.eval_env)
         vectorized = hasattr(eval_env, "step_async") and hasattr(eval_env, "num_envs")
-        plain = not vectorized or isinstance(eval_env, EngineVecEnv)
-        eval_type = EngineVecEnv if plain else type(eval_env)
+        plain = not vectorized or isinstance(eval_env, engine_vec_env.EngineVecEnv)
+        eval_type = engine_vec_env.EngineVecEnv if plain else type(eval_env)
         if not isinstance(face(self.training_env), eval_type):
             warnings.warn(
                 "Training and eval env are not of the same type"

@@ -18,8 +18,6 @@ import torch
 from torch.nn import functional
 
 from palaestra import spaces
-from palaestra.vec_env.image import VecTransposeImage
-from palaestra.vec_env.util import check_for_nested_spaces
 
 __all__ = [
     "check_for_nested_spaces",
@@ -141,13 +139,23 @@ def preprocess_obs(
     raise NotImplementedError(f"Preprocessing not implemented for {observation_space}")
 
 
+def check_for_nested_spaces(obs_space: spaces.Space[Any]) -> None:
+    """SB3's ``NotImplementedError`` for a Dict/Tuple inside a Dict/Tuple (the check lives
+    with the vec envs, which need it without torch)."""
+    from palaestra.vec_env import util  # lazy: import-time — cloudpickle
+
+    util.check_for_nested_spaces(obs_space)
+
+
 def maybe_transpose(observation: np.ndarray, observation_space: spaces.Space[Any]) -> np.ndarray:
     """An image observation (or batch) given channels-last for a channels-first image space,
     transposed to the space's layout; anything else unchanged (SB3's helper)."""
     if is_image_space(observation_space):
         shape = tuple(observation_space.shape or ())
         if not (observation.shape == shape or observation.shape[1:] == shape):
-            transposed = VecTransposeImage.transpose_image(observation)
+            # [..., H, W, C] -> [..., C, H, W]; fewer than 3 axes: numpy's ValueError, as SB3's
+            axes = (*range(observation.ndim - 3), -1, -3, -2)
+            transposed = np.transpose(observation, axes)
             if transposed.shape == shape or transposed.shape[1:] == shape:
                 return transposed
     return observation
