@@ -30,6 +30,21 @@ BATCH_KEYS = ("observations", "actions", "next_observations", "rewards", "termin
 Obs = np.ndarray | dict[str, np.ndarray]
 
 
+def saved_rows(
+    meta: dict[str, Any], arrays: dict[str, np.ndarray], n_envs: int, buffer_size: int
+) -> int:
+    """The rows a saved replay buffer holds; ``ValueError`` when it was saved with other
+    ``n_envs`` or holds more rows than ``buffer_size``."""
+    if int(meta["n_envs"]) != n_envs:
+        raise ValueError(
+            f"replay buffer was saved with n_envs={meta['n_envs']}, this model has n_envs={n_envs}"
+        )
+    n = int(arrays["rewards"].shape[0])
+    if n > buffer_size:
+        raise ValueError(f"saved replay buffer holds {n} rows, capacity is {buffer_size}")
+    return n
+
+
 def _write(store: Any, row: int, value: Any) -> None:
     if isinstance(store, dict):
         for key, sub in store.items():
@@ -181,14 +196,7 @@ class TransitionRing:
                 "the file holds a frame buffer (optimize_memory_usage=True); "
                 "this model uses optimize_memory_usage=False"
             )
-        if int(meta["n_envs"]) != self.n_envs:
-            raise ValueError(
-                f"replay buffer was saved with n_envs={meta['n_envs']}, "
-                f"this model has n_envs={self.n_envs}"
-            )
-        n = arrays["rewards"].shape[0]
-        if n > self.buffer_size:
-            raise ValueError(f"saved replay buffer holds {n} rows, capacity is {self.buffer_size}")
+        n = saved_rows(meta, arrays, self.n_envs, self.buffer_size)
         targets = {
             **_flat("observations", self.observations, n),
             **_flat("next_observations", self.next_observations, n),

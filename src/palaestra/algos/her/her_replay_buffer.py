@@ -36,6 +36,7 @@ import torch
 
 from palaestra import spaces
 from palaestra.algos.common.buffers import DictReplayBuffer, DictReplayBufferSamples
+from palaestra.algos.common.transition_ring import saved_rows
 from palaestra.algos.her.goal_selection_strategy import GoalSelectionStrategy, goal_strategy
 
 __all__ = ["HerReplayBuffer"]
@@ -337,14 +338,7 @@ class HerReplayBuffer(DictReplayBuffer):
                 "the file holds a replay buffer without hindsight relabelling; this model uses "
                 "HerReplayBuffer (replay_buffer_class)"
             )
-        if int(meta["n_envs"]) != self.n_envs:
-            raise ValueError(
-                f"replay buffer was saved with n_envs={meta['n_envs']}, "
-                f"this model has n_envs={self.n_envs}"
-            )
-        n = arrays["rewards"].shape[0]
-        if n > self.buffer_size:
-            raise ValueError(f"saved replay buffer holds {n} rows, capacity is {self.buffer_size}")
+        n = saved_rows(meta, arrays, self.n_envs, self.buffer_size)
         targets = {
             **{f"observations/{k}": v[:n] for k, v in self.observations.items()},
             **{f"next_observations/{k}": v[:n] for k, v in self.next_observations.items()},
