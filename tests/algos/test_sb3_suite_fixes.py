@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 import torch
 
+import palaestra
 from palaestra import spaces
 from palaestra.algos import DQN, TD3
 from palaestra.algos.action_noise import (
@@ -298,3 +299,28 @@ def test_loading_a_file_that_is_no_zip_says_so_in_sb3s_words(tmp_path: Path) -> 
         f"{bad} is corrupt or not a palaestra model file (it wasn't a zip-file: File is not a "
         "zip file)"
     )
+
+
+class _MultiBinaryGrid(palaestra.Env):  # type: ignore[type-arg]
+    """Reward: how many of the six bits of the (2, 3) action are set."""
+
+    observation_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+    action_space = spaces.MultiBinary([2, 3])
+
+    def reset(self, *, seed: int | None = None, options: Any = None) -> tuple[Any, dict]:
+        super().reset(seed=seed)
+        return np.zeros(2, np.float32), {}
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
+        assert self.action_space.contains(action), action
+        return np.zeros(2, np.float32), float(np.sum(action)), False, False, {}
+
+
+def test_a2c_acts_on_a_multi_dimensional_multi_binary_space() -> None:
+    """SB3 asserts ("Multi-dimensional MultiBinary(...) action space is not supported");
+    palaestra's head takes the flattened bits and acts in the space's shape."""
+    from palaestra.algos import A2C
+
+    model = A2C("MlpPolicy", _MultiBinaryGrid(), n_steps=8, seed=0).learn(32)
+    action, _ = model.predict(np.zeros(2, np.float32))
+    assert action.shape == (2, 3) and model.action_space.contains(action.astype(np.int8))
