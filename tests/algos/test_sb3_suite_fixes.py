@@ -2,8 +2,10 @@
 stable-baselines3: action noise that broadcasts onto the action space, ``VectorizedActionNoise
 .noises`` checked when set, ``evaluate_policy``'s callback locals (``observations`` and
 ``new_observations``), ``from ... import HER``'s ImportError, ``load_replay_buffer`` after
-``del model.replay_buffer``, and SB3's test envs with a ``Discrete`` action space not
-starting at 0."""
+``del model.replay_buffer``, SB3's test envs with a ``Discrete`` action space not starting at
+0, ``device="cuda"`` on a machine without CUDA, SAC's actor and critics called as modules,
+SB3's words for DQN's target-interval warning and for a file that is no zip, and a
+multi-dimensional ``MultiBinary`` action space (SB3 asserts)."""
 
 from __future__ import annotations
 
@@ -15,6 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
+from tests.raised import raised
 
 import palaestra
 from palaestra import spaces
@@ -31,14 +34,6 @@ from palaestra.vec_env import DummyVecEnv
 
 HAS_SB3 = importlib.util.find_spec("stable_baselines3") is not None
 pytestmark = pytest.mark.skipif(not HAS_SB3, reason="stable-baselines3 (dev dependency) missing")
-
-
-def _raised(fn: Any) -> BaseException | None:
-    try:
-        fn()
-    except BaseException as exc:  # the exception is the result
-        return exc
-    return None
 
 
 # -- action noise ------------------------------------------------------------------------------
@@ -98,8 +93,8 @@ def test_vectorized_action_noise_checks_noises_when_set() -> None:
     ):
         base = ou_class(np.zeros(2), 0.4 * np.ones(2))
         vec = vec_class(base, 3)
-        assert type(_raised(lambda vec=vec: setattr(vec, "noises", None))) is TypeError
-        wrong_type = _raised(lambda vec=vec: setattr(vec, "noises", [None] * 3))
+        assert type(raised(lambda vec=vec: setattr(vec, "noises", None))) is TypeError
+        wrong_type = raised(lambda vec=vec: setattr(vec, "noises", [None] * 3))
         assert type(wrong_type) is ValueError
         moved = ou_class(np.zeros(2), 0.4 * np.ones(2))
         moved()
@@ -108,10 +103,10 @@ def test_vectorized_action_noise_checks_noises_when_set() -> None:
         assert vec.noises[0] is moved and np.all(moved.noise_prev == 0)  # reset
         assert len(vec.noises) == 3
     ours_base = OrnsteinUhlenbeckActionNoise(np.zeros(2), np.ones(2))
-    ours = _raised(lambda: setattr(VectorizedActionNoise(ours_base, 3), "noises", []))
+    ours = raised(lambda: setattr(VectorizedActionNoise(ours_base, 3), "noises", []))
     assert type(ours) is ValueError
     assert str(ours) == "Expected a list of 3 ActionNoises, found 0."
-    theirs = _raised(lambda: setattr(SB3Vec(SB3OU(np.zeros(2), np.ones(2)), 3), "noises", []))
+    theirs = raised(lambda: setattr(SB3Vec(SB3OU(np.zeros(2), np.ones(2)), 3), "noises", []))
     assert type(theirs) is AssertionError
 
 
