@@ -103,4 +103,11 @@ def __getattr__(name: str) -> object:
     on first use as ``import palaestra.algos.buffers`` would."""
     if f"{__name__}.{name}" in public_paths.MODULE_ALIASES:
         return importlib.import_module(f"{__name__}.{name}")
+    if name == "HER":  # SB3 1.x's class: SB3 2.x and palaestra raise this same ImportError
+        raise ImportError(
+            "HER is a replay buffer class, HerReplayBuffer, since Stable-Baselines3 2.1.0 (and "
+            "in palaestra): pass replay_buffer_class=HerReplayBuffer to DQN, SAC, TD3 or DDPG. "
+            "Please check the documentation for more information (palaestra's README, "
+            "'Training agents'; SB3's https://stable-baselines3.readthedocs.io/en/master/modules/her.html)"
+        )
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

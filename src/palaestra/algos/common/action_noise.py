@@ -120,7 +120,33 @@ class VectorizedActionNoise(ActionNoise):
                 f"Expected base_noise to be an instance of ActionNoise, got {base_noise!r}"
             )
         self.base_noise, self.n_envs = base_noise, int(n_envs)
-        self.noises = [copy.deepcopy(base_noise) for _ in range(self.n_envs)]
+        self._noises = [copy.deepcopy(base_noise) for _ in range(self.n_envs)]
+
+    @property
+    def noises(self) -> list[ActionNoise]:
+        """One noise per env."""
+        return self._noises
+
+    @noises.setter
+    def noises(self, noises: Iterable[ActionNoise]) -> None:
+        """Replace the per-env noises, as SB3: ``n_envs`` of them, each of the base noise's
+        type, reset. A wrong count is a ``ValueError`` (SB3: ``AssertionError``)."""
+        if isinstance(noises, ActionNoise) or not isinstance(noises, Iterable):
+            raise TypeError(f"noises must be a list of {self.n_envs} ActionNoises, got {noises!r}")
+        noises = list(noises)
+        if len(noises) != self.n_envs:
+            raise ValueError(f"Expected a list of {self.n_envs} ActionNoises, found {len(noises)}.")
+        wrong = [
+            i for i, noise in enumerate(noises) if not isinstance(noise, type(self.base_noise))
+        ]
+        if wrong:
+            raise ValueError(
+                f"Noise instances at indices {wrong} don't match the type of base_noise "
+                f"{type(self.base_noise).__name__}"
+            )
+        for noise in noises:
+            noise.reset()
+        self._noises = noises
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -188,7 +214,7 @@ def noise_from_json(data: Any, depth: int = 0) -> ActionNoise:
             noises = [noise_from_json(n, 1) for n in data["noises"]]
             if len(noises) != vec.n_envs:
                 raise ValueError(f"{len(noises)} noises for {vec.n_envs} envs")
-            vec.noises = noises
+            vec._noises = noises  # with their saved states (the setter resets them)
             return vec
         mean = np.asarray(data["mean"], dtype=np.float64)
         sigma = np.asarray(data["sigma"], dtype=np.float64)

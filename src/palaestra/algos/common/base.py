@@ -51,7 +51,12 @@ from palaestra.algos.common.spaces_util import (
     is_vectorized_observation,
     refuse_reset_tuple,
 )
-from palaestra.algos.common.utils import check_for_correct_spaces, get_latest_run_id, safe_mean
+from palaestra.algos.common.utils import (
+    check_for_correct_spaces,
+    get_device,
+    get_latest_run_id,
+    safe_mean,
+)
 from palaestra.algos.learners import Group, Learner, Net, build_learner
 from palaestra.core import Env, Wrapper
 from palaestra.envs.registration import make
@@ -74,12 +79,14 @@ def maybe_make_env(env: Any, verbose: int) -> Any:
 
 
 def resolve_device(device: torch.device | str, policy: str | type) -> torch.device:
-    """``"auto"``: cuda for CNN policies when available, else the CPU; anything else as given."""
+    """``"auto"``: cuda for CNN policies when available, else the CPU; anything else as given,
+    except that a CUDA device on a machine without CUDA is the CPU (SB3's ``get_device``, so
+    code written with ``device="cuda"`` runs on CPU-only machines as under SB3)."""
     if device == "auto":
         # CNNs gain from a GPU; small MLPs are faster on the CPU (no transfers per step).
         wants_gpu = policy in ("CnnPolicy", "MultiInputPolicy")
         return torch.device("cuda" if wants_gpu and torch.cuda.is_available() else "cpu")
-    return torch.device(device)
+    return get_device(device)
 
 
 class BaseAlgorithm:

@@ -38,6 +38,7 @@ from palaestra.algos.common.spaces_util import (
     space_from_json,
     space_to_json,
 )
+from palaestra.algos.common.utils import get_device
 from palaestra.algos.public_paths import public_ref
 
 __all__ = ["BaseModel", "BasePolicy"]
@@ -296,9 +297,8 @@ class BasePolicy(nn.Module):
         arrays = read_arrays(manifest, expect=fits)
         state = {k: torch.from_numpy(np.array(v)) for k, v in arrays.items()}
         policy.load_state_dict(state, strict=not policy._not_policy_state)
-        if device == "auto":
-            device = "cpu"
-        return policy.to(torch.device(device))
+        # "auto": the CPU; "cuda" without CUDA: the CPU too, as SB3's get_device
+        return policy.to(get_device("cpu" if device == "auto" else device))
 
 
 # SB3 splits its policy base in two (``BaseModel``: modules, device, save/load; ``BasePolicy``:

@@ -145,6 +145,18 @@ class SquashedGaussianActor(_Actor):
     def latent(self, obs: Any) -> torch.Tensor:
         return self.latent_pi(self.features(obs))
 
+    def forward(self, obs: Any, deterministic: bool = False) -> torch.Tensor:
+        """The action in ``[-1, 1]`` for a batch of observation tensors (SB3's
+        ``Actor.forward``: a sample, or the mean's tanh when ``deterministic``)."""
+        return self._predict(obs, deterministic)
+
+    def get_std(self) -> torch.Tensor:
+        """gSDE's exploration std ``[latent, action_dim]`` (SB3's ``Actor.get_std``)."""
+        if not isinstance(self.action_dist, StateDependentNoiseDistribution):
+            raise ValueError("get_std() is only available when using gSDE (use_sde=True)")
+        assert isinstance(self.log_std, nn.Parameter)
+        return self.action_dist.get_std(self.log_std)
+
     def _predict(self, observation: Any, deterministic: bool = False) -> torch.Tensor:
         """``tanh`` of the Gaussian's mean, or of a sample (log-std clipped as in training)."""
         latent = self.latent(observation)
@@ -221,6 +233,14 @@ class ContinuousCritic(_Extracting):
         # (SB3 stores them as float32, ReplayBuffer._maybe_cast_dtype)
         action = action.to(features.dtype)
         return self.q_networks[index](torch.cat([features.flatten(1), action], dim=1))
+
+    def forward(self, obs: Any, actions: torch.Tensor) -> tuple[torch.Tensor, ...]:
+        """Every critic's ``Q(obs, actions)`` ``[B, 1]`` (SB3's ``ContinuousCritic.forward``)."""
+        return tuple(self.q(i, (obs, actions)) for i in range(len(self.q_networks)))
+
+    def q1_forward(self, obs: Any, actions: torch.Tensor) -> torch.Tensor:
+        """The first critic's ``Q(obs, actions)`` (SB3's, for TD3's actor loss)."""
+        return self.q(0, (obs, actions))
 
     def flat_input(self) -> bool:
         """Whether ``[flattened obs, action]`` is this critic's MLP input (numpy learner)."""

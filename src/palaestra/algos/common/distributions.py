@@ -185,7 +185,23 @@ class SquashedDiagGaussianDistribution(DiagGaussianDistribution):
         return action, self.log_prob(action, self.gaussian_actions)
 
 
-class CategoricalDistribution(Distribution):
+class _LogitsDistribution(Distribution):
+    """The discrete distributions' common part: their one parameter is the logits."""
+
+    def actions_from_params(
+        self, action_logits: torch.Tensor, deterministic: bool = False
+    ) -> torch.Tensor:
+        self.proba_distribution(action_logits)
+        return self.get_actions(deterministic=deterministic)
+
+    def log_prob_from_params(
+        self, action_logits: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        actions = self.actions_from_params(action_logits)
+        return actions, self.log_prob(actions)
+
+
+class CategoricalDistribution(_LogitsDistribution):
     """Categorical over ``action_dim`` choices (Discrete)."""
 
     distribution: Categorical
@@ -219,20 +235,8 @@ class CategoricalDistribution(Distribution):
     def mode(self) -> torch.Tensor:
         return torch.argmax(self.distribution.probs, dim=1)
 
-    def actions_from_params(
-        self, action_logits: torch.Tensor, deterministic: bool = False
-    ) -> torch.Tensor:
-        self.proba_distribution(action_logits)
-        return self.get_actions(deterministic=deterministic)
 
-    def log_prob_from_params(
-        self, action_logits: torch.Tensor
-    ) -> tuple[torch.Tensor, torch.Tensor]:
-        actions = self.actions_from_params(action_logits)
-        return actions, self.log_prob(actions)
-
-
-class MultiCategoricalDistribution(Distribution):
+class MultiCategoricalDistribution(_LogitsDistribution):
     """One categorical per dimension (MultiDiscrete); ``distribution`` is their list."""
 
     distribution: list[Categorical]
@@ -277,20 +281,8 @@ class MultiCategoricalDistribution(Distribution):
     def mode(self) -> torch.Tensor:
         return torch.stack([torch.argmax(dist.probs, dim=1) for dist in self.distribution], dim=1)
 
-    def actions_from_params(
-        self, action_logits: torch.Tensor, deterministic: bool = False
-    ) -> torch.Tensor:
-        self.proba_distribution(action_logits)
-        return self.get_actions(deterministic=deterministic)
 
-    def log_prob_from_params(
-        self, action_logits: torch.Tensor
-    ) -> tuple[torch.Tensor, torch.Tensor]:
-        actions = self.actions_from_params(action_logits)
-        return actions, self.log_prob(actions)
-
-
-class BernoulliDistribution(Distribution):
+class BernoulliDistribution(_LogitsDistribution):
     """Independent bits (MultiBinary)."""
 
     distribution: Bernoulli
@@ -320,18 +312,6 @@ class BernoulliDistribution(Distribution):
 
     def mode(self) -> torch.Tensor:
         return torch.round(self.distribution.probs)
-
-    def actions_from_params(
-        self, action_logits: torch.Tensor, deterministic: bool = False
-    ) -> torch.Tensor:
-        self.proba_distribution(action_logits)
-        return self.get_actions(deterministic=deterministic)
-
-    def log_prob_from_params(
-        self, action_logits: torch.Tensor
-    ) -> tuple[torch.Tensor, torch.Tensor]:
-        actions = self.actions_from_params(action_logits)
-        return actions, self.log_prob(actions)
 
 
 class StateDependentNoiseDistribution(Distribution):

@@ -101,7 +101,7 @@ def _evaluate_single(
         action, state = model.predict(
             obs, state=state, episode_start=np.array([ep_len == 0]), deterministic=deterministic
         )
-        obs, reward, terminated, truncated, info = env.step(action)
+        new_obs, reward, terminated, truncated, info = env.step(action)
         ep_reward += float(reward)
         ep_len += 1
         done = terminated or truncated
@@ -115,12 +115,14 @@ def _evaluate_single(
                     "done": done,
                     "info": info,
                     "observations": obs,
+                    "new_observations": new_obs,
                     "episode_counts": [len(rewards)],
                     "current_rewards": [ep_reward],
                     "current_lengths": [ep_len],
                 },
                 {},
             )
+        obs = new_obs
         if render:
             env.render()
         if done:
@@ -174,7 +176,9 @@ def _evaluate_vec(
                         "reward": step_rewards[i],
                         "done": dones[i],
                         "info": infos[i],
-                        "observations": new_obs,
+                        # SB3 2.x: the observations acted on, and those the step returned
+                        "observations": observations,
+                        "new_observations": new_obs,
                         "episode_counts": counts,
                         "current_rewards": current_rewards,
                         "current_lengths": current_lengths,

@@ -307,7 +307,10 @@ def _opened(source: PathLike, name: str, kind: str) -> Iterator[zipfile.ZipFile]
         with zipfile.ZipFile(source) as zf:
             yield zf
     except zipfile.BadZipFile as exc:
-        raise ModelFileError(f"{name} is corrupt or not {what} ({short(exc)})") from exc
+        # "wasn't a zip-file": SB3's words, which callers match
+        raise ModelFileError(
+            f"{name} is corrupt or not {what} (it wasn't a zip-file: {short(exc)})"
+        ) from exc
     except (EOFError, OSError, zipfile.LargeZipFile, zlib.error) as exc:
         raise ModelFileError(f"{name} is truncated or unreadable ({short(exc)})") from exc
 

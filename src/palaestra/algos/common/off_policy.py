@@ -362,8 +362,9 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         A file may hold at most what this model's buffer holds (``max_bytes`` overrides that
         bound): a crafted file cannot make the reader allocate more than the buffer itself.
         A model whose ``replay_buffer`` is None (set so to free memory) gets a new one with
-        its settings first, as SB3 sets the loaded buffer."""
-        if self.replay_buffer is None:
+        its settings first, as SB3 sets the loaded buffer; so does one whose attribute
+        was deleted (``del model.replay_buffer``, as SB3's tests do)."""
+        if getattr(self, "replay_buffer", None) is None:
             self._make_replay_buffer()
         assert self.replay_buffer is not None
         # A file saved with n_steps > 1 also records where episodes ended (as rewards, float32).

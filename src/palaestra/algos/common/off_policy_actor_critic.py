@@ -64,12 +64,15 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
         noise = self.action_noise
         if noise is not None:
             want = tuple(box.shape)
-            got = noise.shape
-            ok = got == want or (isinstance(noise, VectorizedActionNoise) and got[1:] == want)
-            if not ok:
+            got = tuple(noise.shape)
+            # SB3 adds the noise with numpy broadcasting: NormalActionNoise(np.zeros(1), ...)
+            # on a Box((10,)) adds one draw to every dimension, as SB3's HER tests do.
+            one = got[1:] if isinstance(noise, VectorizedActionNoise) else got
+            if not _broadcasts(one, want):
                 raise ValueError(
                     f"action_noise of shape {got} does not fit the action space {box} "
-                    f"(expected {want}, or (n_envs, *{want}) for VectorizedActionNoise)"
+                    f"(expected {want} or a shape that broadcasts to it, or (n_envs, *{want}) "
+                    "for VectorizedActionNoise)"
                 )
 
     # -- acting --------------------------------------------------------------------------------
@@ -100,7 +103,8 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
         if self.action_noise is not None:
             if n > 1 and not isinstance(self.action_noise, VectorizedActionNoise):
                 self.action_noise = VectorizedActionNoise(self.action_noise, n)  # as SB3
-            noise = self.action_noise(self._rng).reshape(n, self.action_dim)
+            noise = self.action_noise(self._rng)
+            noise = np.broadcast_to(noise, (n, *self.action_space.shape)).reshape(n, -1)
             scaled = np.clip(scaled + noise, -1.0, 1.0)
         scaled = scaled.astype(np.float32)
         return self._unscale(scaled), scaled.reshape(-1, *self.action_space.shape)
@@ -202,3 +206,11 @@ class ActorCriticOffPolicy(OffPolicyAlgorithm):
         batch = super()._sample_batch(batch_size)
         batch["actions"] = batch["actions"].reshape(batch_size, -1)
         return batch
+
+
+def _broadcasts(shape: tuple[int, ...], target: tuple[int, ...]) -> bool:
+    """Whether numpy broadcasts an array of ``shape`` to exactly ``target``."""
+    try:
+        return np.broadcast_shapes(shape, target) == target
+    except ValueError:
+        return False

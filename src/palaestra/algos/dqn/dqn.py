@@ -90,10 +90,11 @@ class DQN(OffPolicyAlgorithm):
         self.exploration_rate = 0.0
         super()._take_settings(settings)
         if self.env is not None and self.n_envs > self.target_update_interval:
-            warnings.warn(
-                f"The number of environments ({self.n_envs}) exceeds "
-                f"target_update_interval ({self.target_update_interval}): the target network "
-                "is updated every step",
+            warnings.warn(  # SB3's words, which users' warning filters match
+                "The number of environments used is greater than the target network update "
+                f"interval ({self.n_envs} > {self.target_update_interval}), therefore the target "
+                "network will be updated after each call to env.step() which corresponds to "
+                f"{self.n_envs} steps.",
                 stacklevel=4,  # the user's DQN(...): __init__, _configure, here
             )
 

@@ -33,7 +33,8 @@ T = TypeVar("T", int, np.ndarray)
 def checked_action(action: Any, space: spaces.Space[Any]) -> Any:
     """``action`` if it belongs to ``space`` (a Box action: the right shape, real and finite,
     bounds not enforced, as the classic-control envs), else ``InvalidAction`` naming both."""
-    if isinstance(space, spaces.Discrete):
+    if isinstance(space, spaces.Discrete) and int(space.start) == 0:
+        # the fast check counts from 0; another start goes through space.contains below
         return check_discrete_action(action, space, int(space.n))
     if isinstance(space, spaces.Box):
         try:
