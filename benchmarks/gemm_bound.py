@@ -53,8 +53,10 @@ def products(batch: int) -> list[tuple[tuple[int, int], tuple[int, int], bool]]:
 
 
 def flops_per_sample() -> int:
-    """Forward and backward multiply-adds, times 2, of one sample through both nets."""
-    return sum(2 * a[1] * (b[0] if t else b[1]) for a, b, t in products(1))
+    """Forward and backward multiply-adds, times 2, of one sample through both nets (each
+    product ``[M, K] @ [K, N]`` costs ``2 M K N``; a minibatch's total over its size)."""
+    total = sum(2 * a[0] * a[1] * (b[0] if t else b[1]) for a, b, t in products(BATCH))
+    return total // BATCH
 
 
 def time_products(calls: int = 2000) -> float:
