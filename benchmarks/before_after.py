@@ -58,7 +58,10 @@ def run_once(tree: Path, case: str, lib: str = "palaestra", scale: int = 1) -> f
 def run_sb3(tree: Path, case: str, scale: int, when: str) -> float:
     """SB3's rate on ``case``, printed at once (a run cut short keeps what it measured)."""
     rate = run_once(tree, case, "sb3", scale)
-    print(f"sb3 {when:5s} {case:16s} {rate:9,.0f} steps/cpu-s  load {os.getloadavg()[0]:.2f}")
+    print(
+        f"sb3 {when:5s} {case:16s} {rate:9,.0f} steps/cpu-s  load {os.getloadavg()[0]:.2f}",
+        flush=True,
+    )
     return rate
 
 
@@ -86,7 +89,10 @@ def main() -> None:
                 rate = run_once(trees[side], name, scale=args.scale)
                 rates[name][side].append(rate)
                 load = os.getloadavg()[0]
-                print(f"pair {pair} {side:6s} {name:16s} {rate:9,.0f} steps/cpu-s  load {load:.2f}")
+                print(
+                    f"pair {pair} {side:6s} {name:16s} {rate:9,.0f} steps/cpu-s  load {load:.2f}",
+                    flush=True,
+                )
     sb3_end = {name: run_sb3(trees["after"], name, args.scale, "end") for name in names}
     print(
         "\n| case | before (each run) | after (each run) | after/before (medians) "
