@@ -55,6 +55,16 @@ def run_once(tree: Path, case: str, lib: str = "palaestra", scale: int = 1) -> f
     return float(json.loads(out.stdout.strip().splitlines()[-1]))
 
 
+def run_sb3(tree: Path, case: str, scale: int, when: str) -> float:
+    """SB3's rate on ``case``, printed at once (a run cut short keeps what it measured)."""
+    rate = run_once(tree, case, "sb3", scale)
+    print(
+        f"sb3 {when:5s} {case:16s} {rate:9,.0f} steps/cpu-s  load {os.getloadavg()[0]:.2f}",
+        flush=True,
+    )
+    return rate
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--before", type=Path, required=True, help="the before tree's root")
@@ -70,7 +80,7 @@ def main() -> None:
 
     names = args.cases or [case.name for case in train_speed.CASES]
     trees = {"before": args.before.resolve(), "after": args.after.resolve()}
-    sb3_start = {name: run_once(trees["after"], name, "sb3", args.scale) for name in names}
+    sb3_start = {name: run_sb3(trees["after"], name, args.scale, "start") for name in names}
     rates: dict[str, dict[str, list[float]]] = {n: {"before": [], "after": []} for n in names}
     for pair in range(args.pairs):
         order = ["before", "after"] if pair % 2 == 0 else ["after", "before"]
@@ -79,8 +89,11 @@ def main() -> None:
                 rate = run_once(trees[side], name, scale=args.scale)
                 rates[name][side].append(rate)
                 load = os.getloadavg()[0]
-                print(f"pair {pair} {side:6s} {name:16s} {rate:9,.0f} steps/cpu-s  load {load:.2f}")
-    sb3_end = {name: run_once(trees["after"], name, "sb3", args.scale) for name in names}
+                print(
+                    f"pair {pair} {side:6s} {name:16s} {rate:9,.0f} steps/cpu-s  load {load:.2f}",
+                    flush=True,
+                )
+    sb3_end = {name: run_sb3(trees["after"], name, args.scale, "end") for name in names}
     print(
         "\n| case | before (each run) | after (each run) | after/before (medians) "
         "| per-pair ratios: median, range | SB3 start, end |"

@@ -13,6 +13,10 @@ Cases (one torch thread, ``torch.set_num_threads(1)``, both libraries in this pr
   exploration_fraction=0.2, exploration_final_eps=0.05``);
 * ``ppo-mountaincar``: PPO on MountainCar-v0, one env, ``learning_rate=1e-3, n_steps=2048,
   batch_size=64, n_epochs=10``;
+* ``dqn-cartpole-cleanrl``: DQN on CartPole-v1, one env, CleanRL's ``dqn.py`` defaults
+  (``DQN_CLEANRL_KWARGS``), timed after its 10,000-step warm-up;
+* ``ppo-cartpole-zoo``: PPO on CartPole-v1, 8 envs, the RL Zoo's settings (``n_steps=32``,
+  ``batch_size=256``, 20 epochs, linear learning rate and clip range: ``PPO_ZOO_KWARGS``);
 * ``ppo-cartpole-8``: PPO on CartPole-v1, 8 envs x 128 steps, 4 epochs, 4 minibatches
   (``batch_size=256``);
 * ``a2c-cartpole-8``: A2C on CartPole-v1, 8 envs, SB3's defaults (``n_steps=5``, RMSprop, one
@@ -51,6 +55,45 @@ PPO_MC_KWARGS: dict[str, Any] = dict(learning_rate=1e-3, n_steps=2048, batch_siz
 PPO_CP_KWARGS: dict[str, Any] = dict(n_steps=128, batch_size=256, n_epochs=4)
 
 
+def linear(start: float) -> Callable[[float], float]:
+    """The RL Zoo's ``lin_`` schedules: ``progress_remaining * start``."""
+
+    def schedule(progress_remaining: float) -> float:
+        return progress_remaining * start
+
+    return schedule
+
+
+# RL Zoo 2.x ``hyperparams/ppo.yml`` CartPole-v1 (8 envs; ``n_timesteps`` aside).
+PPO_ZOO_KWARGS: dict[str, Any] = dict(
+    n_steps=32,
+    batch_size=256,
+    gae_lambda=0.8,
+    gamma=0.98,
+    n_epochs=20,
+    ent_coef=0.0,
+    learning_rate=linear(1e-3),
+    clip_range=linear(0.2),
+)
+# CleanRL's ``dqn.py`` defaults (CartPole-v1) in SB3's terms: 120-84 ReLU Q-net, Adam 2.5e-4,
+# 10k buffer and warm-up, a gradient step every 10 env steps, target copied every 500.
+DQN_CLEANRL_KWARGS: dict[str, Any] = dict(
+    learning_rate=2.5e-4,
+    buffer_size=10_000,
+    learning_starts=10_000,
+    batch_size=128,
+    tau=1.0,
+    gamma=0.99,
+    train_freq=10,
+    gradient_steps=1,
+    target_update_interval=500,
+    exploration_initial_eps=1.0,
+    exploration_final_eps=0.05,
+    exploration_fraction=0.5,
+    policy_kwargs=dict(net_arch=[120, 84]),
+)
+
+
 @dataclass(frozen=True)
 class Case:
     name: str
@@ -64,9 +107,11 @@ class Case:
 
 
 CASES = [
-    Case("dqn-mountaincar", "dqn", "MountainCar-v0", 0, DQN_KWARGS, 2_000, 20_000, 2.5),
+    Case("dqn-mountaincar", "dqn", "MountainCar-v0", 0, DQN_KWARGS, 2_000, 20_000, 6.0),
+    Case("dqn-cartpole-cleanrl", "dqn", "CartPole-v1", 0, DQN_CLEANRL_KWARGS, 10_000, 40_000, 6.0),
     Case("ppo-mountaincar", "ppo", "MountainCar-v0", 0, PPO_MC_KWARGS, 2_048, 20_480, 3.0),
     Case("ppo-cartpole-8", "ppo", "CartPole-v1", 8, PPO_CP_KWARGS, 1_024, 30_720, 5.0),
+    Case("ppo-cartpole-zoo", "ppo", "CartPole-v1", 8, PPO_ZOO_KWARGS, 256, 25_600, 15.0),
     Case("a2c-cartpole-8", "a2c", "CartPole-v1", 8, {}, 2_000, 40_000, 5.0),
     Case("sac-pendulum", "sac", "Pendulum-v1", 0, {"learning_rate": 1e-3}, 1_000, 3_000, 2.0),
     Case("td3-pendulum", "td3", "Pendulum-v1", 0, {"learning_rate": 1e-3}, 1_000, 3_000, 2.0),

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.algos.learners.learner import Backprop, Run
+from palaestra.algos.learners.xp import row_indices
 
 __all__ = ["DQNObjective", "dqn_loss", "dqn_loss_vjp"]
 
@@ -50,7 +51,7 @@ def dqn_loss_vjp(tape: Any) -> np.ndarray:
     ``|diff| == 1`` both Huber branches have slope 1)."""
     shape, actions, diff = tape
     g = np.zeros(shape, dtype=np.float32)
-    g[np.arange(shape[0]), actions] = np.clip(diff, -1.0, 1.0) / shape[0]
+    g[row_indices(shape[0]), actions] = np.clip(diff, -1.0, 1.0) / shape[0]
     return g
 
 

@@ -24,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from palaestra.algos.learners.xp import row_indices
+
 __all__ = [
     "LOG_STD_MAX",
     "LOG_STD_MIN",
@@ -83,7 +85,7 @@ def categorical_sample(
         # at most n - 1 entries lie below, and the index needs no clamp.
         u = rng.random(logits.shape[0]) * total
         idx = np.add.reduce(cdf < u[:, None], axis=1)
-    return idx, shifted[np.arange(len(idx)), idx] - np.log(total)
+    return idx, shifted[row_indices(len(idx)), idx] - np.log(total)
 
 
 def categorical_evaluate(xp: Any, logits: Any, idx: Any) -> tuple[Any, Any, Any]:
@@ -104,7 +106,7 @@ def categorical_evaluate_vjp(
     g = neg[:, None] * probs
     if g_mean_entropy:
         g += (-g_mean_entropy / probs.shape[0]) * probs * (logp + entropy[:, None])
-    g[np.arange(probs.shape[0]), idx] -= neg
+    g[row_indices(probs.shape[0]), idx] -= neg
     return g
 
 

@@ -13,13 +13,23 @@ from __future__ import annotations
 
 import contextlib
 import math
+from functools import cache
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 import torch
 
-__all__ = ["numpy_ops", "torch_ops"]
+__all__ = ["numpy_ops", "row_indices", "torch_ops"]
+
+
+@cache
+def row_indices(n: int) -> np.ndarray:
+    """A read-only ``arange(n)`` (int64), shared: the losses pick one entry per row of every
+    minibatch, and batch sizes repeat, so the index is built once per size."""
+    rows = np.arange(n)
+    rows.flags.writeable = False
+    return rows
 
 
 def _np_mean(x: np.ndarray) -> float:
@@ -29,7 +39,7 @@ def _np_mean(x: np.ndarray) -> float:
 
 def _np_take_rows(x: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """``x[i, idx[i]]`` for each row."""
-    return x[np.arange(x.shape[0]), idx]
+    return x[row_indices(x.shape[0]), idx]
 
 
 def _np_clip(x: np.ndarray, low: float, high: float) -> np.ndarray:

@@ -134,8 +134,8 @@ class PPO(OnPolicyAlgorithm):
         )
         logs: dict[str, list[float]] = {}
         applied = True
-        for epoch in range(self.n_epochs):
-            with self.learner.session():
+        with self.learner.session():  # one BLAS-thread switch for all epochs
+            for epoch in range(self.n_epochs):
                 for batch in self.rollout_buffer.minibatch_arrays(self.batch_size, self._rng):
                     batch["actions"] = self._head.index(batch["actions"])
                     metrics, applied = self.learner.update(
@@ -145,14 +145,14 @@ class PPO(OnPolicyAlgorithm):
                         logs.setdefault(key, []).append(value)
                     if not applied:
                         break
-            self._n_updates += 1
-            if not applied:
-                if self.verbose >= 1:
-                    print(
-                        f"Early stopping at step {epoch} due to reaching max kl: "
-                        f"{logs['approx_kl'][-1]:.2f}"
-                    )
-                break
+                self._n_updates += 1
+                if not applied:
+                    if self.verbose >= 1:
+                        print(
+                            f"Early stopping at step {epoch} due to reaching max kl: "
+                            f"{logs['approx_kl'][-1]:.2f}"
+                        )
+                    break
         buf = self.rollout_buffer
         log = self.logger
         log.record("train/entropy_loss", float(np.mean(logs["entropy_loss"])))
