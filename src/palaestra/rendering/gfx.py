@@ -363,40 +363,52 @@ def _shrink_plan(src: int, dst: int) -> tuple[np.ndarray, ...]:
     return tuple(np.asarray(a, dtype=np.int64)[:dst] for a in arrays)
 
 
-def _shrink_axis(a: np.ndarray, dst: int, axis: int) -> np.ndarray:
-    """One axis of pygame's SSE2 shrink: whole samples summed in 16-bit lanes, split samples
-    weighted with ``mulhi(4 * v, w)``, the sum scaled by ``mulhi(sum, recip)``, saturated."""
-    src = a.shape[axis]
-    space = _ONE * src // dst
+def lanes(packed: np.ndarray) -> np.ndarray:
+    """The ``[..., 3] int64`` channels of packed pixels (``uint64``, 16-bit lanes R, G, B, 0:
+    sums of up to 257 pixels stay within their lanes)."""
+    packed = np.ascontiguousarray(packed)
+    return packed.view(np.uint16).reshape(*packed.shape, 4)[..., :3].astype(np.int64)
+
+
+def _shrink_rows(packed: np.ndarray, dst: int) -> np.ndarray:
+    """pygame's SSE2 area-average shrink along axis 1 of ``[R, src]`` packed pixels:
+    ``[R, dst, 3]`` uint8."""
+    rows, src = packed.shape
+    space = 0x4000 * src // dst
     recip = (0x40000000 // space) & 0xFFFF
     head_idx, head_w, lo, hi, tail_idx, tail_w = _shrink_plan(src, dst)
-    shape = [1] * a.ndim
-    shape[axis] = -1
-
-    def weighted(idx: np.ndarray, weights: np.ndarray) -> np.ndarray:
-        return (4 * np.take(a, idx, axis=axis).astype(np.int32) * weights.reshape(shape)) >> 16
-
-    # Whole samples: output k sums samples lo[k] .. hi[k]-1, at most ceil(src/dst) of them;
-    # adding the j-th of each is one gather (cheaper than a running sum over the full axis).
-    count = hi - lo
-    full = np.zeros(np.take(a, lo, axis=axis).shape, dtype=np.int32)
-    for j in range(int(count.max(initial=0))):
-        idx = np.minimum(lo + j, src - 1)
-        part = np.take(a, idx, axis=axis).astype(np.int32)
-        if (count <= j).any():
-            part *= (count > j).reshape(shape)
-        full += part
-    acc = (weighted(head_idx, head_w) + full + weighted(tail_idx, tail_w)) & 0xFFFF
-    out = np.minimum((acc.astype(np.int64) * recip) >> 16, 255).astype(np.uint8)
-    if len(head_idx) < dst:  # unreached samples stay as the new surface had them (zero)
-        pad_shape = list(out.shape)
-        pad_shape[axis] = dst - len(head_idx)
-        out = np.concatenate([out, np.zeros(pad_shape, np.uint8)], axis=axis)
+    reached = len(head_idx)
+    flat = packed.reshape(-1)
+    base = (np.arange(rows, dtype=np.int64) * src)[:, None]
+    # Whole samples: one segmented sum over the flat image, segments [lo, hi) then [hi, lo').
+    cuts = (base + np.stack([lo, hi], axis=1).reshape(1, -1)).reshape(-1)
+    full = np.add.reduceat(flat, cuts)[0::2].reshape(rows, reached)
+    full[:, lo == hi] = 0  # reduceat gives the sample itself for an empty segment
+    acc = lanes(full)
+    for idx, weight in ((head_idx, head_w), (tail_idx, tail_w)):
+        acc += (4 * lanes(packed[:, idx]) * weight[None, :, None]) >> 16
+    out = np.minimum(((acc & 0xFFFF) * recip) >> 16, 255).astype(np.uint8)
+    if reached < dst:  # unreached samples stay as the new surface had them (zero)
+        out = np.concatenate([out, np.zeros((rows, dst - reached, 3), np.uint8)], axis=1)
     return out
+
+
+def pack_lanes(img: np.ndarray) -> np.ndarray:
+    """``[..., 3] uint8`` pixels packed as ``uint64`` (see :func:`lanes`)."""
+    wide = np.zeros((*img.shape[:-1], 4), dtype=np.uint16)
+    wide[..., :3] = img
+    return wide.view(np.uint64)[..., 0]
+
+
+def shrink_packed(packed: np.ndarray, width: int, height: int) -> np.ndarray:
+    """pygame's ``transform.smoothscale`` (SSE2) of a packed ``[H, W]`` frame to a smaller
+    ``(width, height)``: area averages along x, then along y; ``[height, width, 3] uint8``."""
+    out = _shrink_rows(packed, width)  # [H, width, 3]
+    cols = pack_lanes(out).T.copy()  # [width, H]: y becomes the row axis
+    return np.ascontiguousarray(_shrink_rows(cols, height).transpose(1, 0, 2))
 
 
 def smoothscale_shrink(img: np.ndarray, width: int, height: int) -> np.ndarray:
     """pygame's ``transform.smoothscale`` (its SSE2 filters) to a smaller ``(width, height)``:
     area averages, first along x then along y."""
-    out = _shrink_axis(img, width, axis=1)
-    return _shrink_axis(out, height, axis=0)
+    return shrink_packed(pack_lanes(img), width, height)
