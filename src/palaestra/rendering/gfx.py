@@ -14,6 +14,7 @@ truncate floats toward zero, as pygame does when it hands them to SDL_gfx).
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Sequence
 from functools import lru_cache
 
@@ -370,24 +371,47 @@ def lanes(packed: np.ndarray) -> np.ndarray:
     return packed.view(np.uint16).reshape(*packed.shape, 4)[..., :3].astype(np.int64)
 
 
+def _lanes32(packed: np.ndarray) -> np.ndarray:
+    """All four 16-bit lanes of packed pixels as ``[..., 4] uint32`` (one contiguous cast)."""
+    packed = np.ascontiguousarray(packed)
+    return packed.view(np.uint16).astype(np.uint32).reshape(*packed.shape, 4)
+
+
+_BUFFERS = threading.local()  # a running-sum buffer per thread: a fresh 6 MB costs ~1 ms
+
+
+def _running_buffer(size: int) -> np.ndarray:
+    buf = getattr(_BUFFERS, "running", None)
+    if buf is None or len(buf) < size:
+        buf = np.empty(size, dtype=np.uint64)
+        _BUFFERS.running = buf
+    return buf[:size]
+
+
 def _shrink_rows(packed: np.ndarray, dst: int) -> np.ndarray:
     """pygame's SSE2 area-average shrink along axis 1 of ``[R, src]`` packed pixels:
     ``[R, dst, 3]`` uint8."""
     rows, src = packed.shape
-    space = 0x4000 * src // dst
+    space = _ONE * src // dst
     recip = (0x40000000 // space) & 0xFFFF
     head_idx, head_w, lo, hi, tail_idx, tail_w = _shrink_plan(src, dst)
     reached = len(head_idx)
-    flat = packed.reshape(-1)
+    # Whole samples: differences of a running sum over the flat image (uint64 arithmetic
+    # wraps, but every difference is a sum of at most 257 pixels per lane: exact).
+    running = _running_buffer(rows * src + 1)
+    running[0] = 0
+    np.cumsum(packed.reshape(-1), out=running[1:])
     base = (np.arange(rows, dtype=np.int64) * src)[:, None]
-    # Whole samples: one segmented sum over the flat image, segments [lo, hi) then [hi, lo').
-    cuts = (base + np.stack([lo, hi], axis=1).reshape(1, -1)).reshape(-1)
-    full = np.add.reduceat(flat, cuts)[0::2].reshape(rows, reached)
-    full[:, lo == hi] = 0  # reduceat gives the sample itself for an empty segment
-    acc = lanes(full)
+    acc = _lanes32(running[base + hi] - running[base + lo])  # [R, reached, 4]
     for idx, weight in ((head_idx, head_w), (tail_idx, tail_w)):
-        acc += (4 * lanes(packed[:, idx]) * weight[None, :, None]) >> 16
-    out = np.minimum(((acc & 0xFFFF) * recip) >> 16, 255).astype(np.uint8)
+        part = _lanes32(packed[:, idx])
+        part *= (4 * weight).astype(np.uint32)[None, :, None]  # < 2**32: 4 * 255 * 2**14
+        part >>= 16
+        acc += part
+    acc &= 0xFFFF
+    acc *= np.uint32(recip)  # < 2**32: both factors < 2**16
+    acc >>= 16
+    out = np.minimum(acc[..., :3], 255).astype(np.uint8)
     if reached < dst:  # unreached samples stay as the new surface had them (zero)
         out = np.concatenate([out, np.zeros((rows, dst - reached, 3), np.uint8)], axis=1)
     return out
