@@ -90,48 +90,50 @@ def sdl_fill_spans(
             np.concatenate(out_b))  # fmt: skip
 
 
-def pg_fill_spans(xs: Any, ys: Any, h: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """pygame's ``draw.polygon`` fill of one polygon: ``(row, x_a, x_b)`` of its spans (rows
-    not yet clipped), as :func:`gfx.pg_fill_polygon` paints them."""
-    vx = np.asarray(xs, dtype=np.int64)
-    vy = np.asarray(ys, dtype=np.int64)
-    n = len(vx)
-    miny, maxy = int(vy.min()), int(vy.max())
-    if miny == maxy:
-        return np.array([miny]), np.array([vx.min()]), np.array([vx.max()])
-    rows_out, a_out, b_out = [], [], []
-    first, last = max(miny, 0), min(maxy, h - 1)
-    if first <= last:
-        rows = np.arange(first, last + 1, dtype=np.int64)[:, None]  # [R, 1]
-        a, b = np.roll(np.arange(n), 1), np.arange(n)
-        ya, yb, xa, xb = vy[a], vy[b], vx[a], vx[b]
+def pg_fill_spans(
+    xs: np.ndarray, ys: np.ndarray, h: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """pygame's ``draw.polygon`` fill for ``P`` polygons of ``n`` vertices at once (``[P, n]``
+    ints): ``(polygon, row, x_a, x_b)`` of every span (rows not yet clipped), as
+    :func:`gfx.pg_fill_polygon` paints them."""
+    xs = np.asarray(xs, dtype=np.int64)
+    ys = np.asarray(ys, dtype=np.int64)
+    count, n = xs.shape
+    miny, maxy = ys.min(axis=1), ys.max(axis=1)
+    out = []
+    line = np.flatnonzero(miny == maxy)  # a flat polygon: one span, end to end
+    out.append((line, miny[line], xs[line].min(axis=1), xs[line].max(axis=1)))
+    first, last = np.maximum(miny, 0), np.minimum(maxy, h - 1)
+    nrows = np.where(miny == maxy, 0, np.maximum(last - first + 1, 0))
+    total = int(nrows.sum())
+    prev = np.roll(np.arange(n), 1)
+    if total:
+        poly = np.repeat(np.arange(count), nrows)
+        starts = np.cumsum(nrows) - nrows
+        row = (np.arange(total) - starts[poly] + first[poly])[:, None]
+        ya, yb, xa, xb = ys[:, prev], ys, xs[:, prev], xs
         down = ya < yb
         y1, y2 = np.where(down, ya, yb), np.where(down, yb, ya)
         x1, x2 = np.where(down, xa, xb), np.where(down, xb, xa)
         flat = ya == yb
-        hit = (((rows >= y1) & (rows < y2)) | ((rows == maxy) & (y2 == maxy))) & ~flat
-        ints = ((rows - y1) * (x2 - x1)) // np.where(flat, 1, y2 - y1) + x1
-        ints = np.where(hit, ints, _BIG)
+        span = np.where(flat, 1, y2 - y1)
+        y1, y2, x1, x2, flat, span = (v[poly] for v in (y1, y2, x1, x2, flat, span))
+        top = maxy[poly][:, None]
+        hit = (((row >= y1) & (row < y2)) | ((row == top) & (y2 == top))) & ~flat
+        ints = np.where(hit, ((row - y1) * (x2 - x1)) // span + x1, _BIG)
         ints.sort(axis=1)
-        count = hit.sum(axis=1)
+        hits = hit.sum(axis=1)
+        row = row[:, 0]
         for i in range(0, n - 1, 2):
-            ok = count >= i + 2
+            ok = hits >= i + 2
             if not ok.any():
                 break
-            rows_out.append(rows[ok, 0])
-            a_out.append(ints[ok, i])
-            b_out.append(ints[ok, i + 1])
-    ly, lx = vy.tolist(), vx.tolist()
-    for i in range(n):
-        y = ly[i]
-        if miny < y < maxy and ly[i - 1] == y:
-            rows_out.append(np.array([y]))
-            a_out.append(np.array([lx[i]]))
-            b_out.append(np.array([lx[i - 1]]))
-    if not rows_out:
-        empty = np.zeros(0, dtype=np.int64)
-        return empty, empty, empty
-    return np.concatenate(rows_out), np.concatenate(a_out), np.concatenate(b_out)
+            out.append((poly[ok], row[ok], ints[ok, i], ints[ok, i + 1]))
+    # Horizontal edges strictly between the top and the bottom.
+    flat_edge = (ys == ys[:, prev]) & (ys > miny[:, None]) & (ys < maxy[:, None])
+    p_idx, v_idx = np.nonzero(flat_edge)
+    out.append((p_idx, ys[p_idx, v_idx], xs[p_idx, v_idx], xs[p_idx, prev[v_idx]]))
+    return tuple(np.concatenate([o[i] for o in out]) for i in range(4))  # type: ignore[return-value]
 
 
 def _codes(x: np.ndarray, y: np.ndarray, w: int, h: int) -> np.ndarray:
@@ -239,6 +241,7 @@ class Canvas:
         self._spans: list[tuple[np.ndarray, ...]] = []  # (order, row, x_a, x_b)
         self._lines: list[tuple[np.ndarray, ...]] = []  # (order, x, y, alpha, seq)
         self._seq = 0  # outline pixels drawn so far (orders them across calls)
+        self._pending: list[tuple[np.ndarray, np.ndarray, int]] = []  # pygame fills to batch
 
     def _orders(self, colors: Sequence[Sequence[int]]) -> np.ndarray:
         start = self._order
@@ -263,9 +266,21 @@ class Canvas:
 
     def pg_polygon(self, xs: Any, ys: Any, color: Sequence[int]) -> None:
         """``pygame.draw.polygon`` (filled) with int vertices."""
-        row, xa, xb = pg_fill_spans(xs, ys, self.h)
-        order = self._orders([color])
-        self._spans.append((np.repeat(order, len(row)), row, xa, xb))
+        order = int(self._orders([color])[0])
+        self._pending.append((np.asarray(xs, np.int64), np.asarray(ys, np.int64), order))
+
+    def _flush(self) -> None:
+        """The pending pygame fills' spans, polygons of one vertex count at a time."""
+        by_size: dict[int, list[tuple[np.ndarray, np.ndarray, int]]] = {}
+        for item in self._pending:
+            by_size.setdefault(len(item[0]), []).append(item)
+        self._pending = []
+        for items in by_size.values():
+            xs = np.stack([i[0] for i in items])
+            ys = np.stack([i[1] for i in items])
+            orders = np.array([i[2] for i in items])
+            poly, row, xa, xb = pg_fill_spans(xs, ys, self.h)
+            self._spans.append((orders[poly], row, xa, xb))
 
     def rect(self, x0: int, y0: int, x1: int, y1: int, color: Sequence[int]) -> None:
         """Fill ``[x0, x1) x [y0, y1)`` (as ``img[y0:y1, x0:x1] = color``)."""
@@ -278,11 +293,13 @@ class Canvas:
 
     def flip(self) -> None:
         """``pygame.transform.flip(surface, False, True)`` of what is drawn so far."""
+        self._flush()
         self._spans = [(o, self.h - 1 - r, a, b) for o, r, a, b in self._spans]
         self._lines = [(o, x, self.h - 1 - y, a, s) for o, x, y, a, s in self._lines]
 
     def compose(self) -> np.ndarray:
         """The frame as packed pixels, ``[h, w] uint64`` (see :func:`pack`)."""
+        self._flush()
         h, w = self.h, self.w
         palette = np.array([0, *self._palette], dtype=np.uint64)  # order -1: black
         empty = np.zeros(0, dtype=np.int64)
