@@ -2,8 +2,9 @@
 
 Gymnasium draws the scene on a 1000x800 pygame surface (y down), rotated and zoomed around the
 car, flips it vertically, adds the dashboard and shrinks it with ``smoothscale``. This module
-does the same steps with :mod:`palaestra.rendering.gfx`, which reproduces the pygame/SDL_gfx
-primitives, so most pixels equal Gymnasium's. What differs: the score text (Gymnasium renders
+does the same steps on a :class:`palaestra.rendering.spans.Canvas`, which reproduces the
+pygame/SDL_gfx primitives of :mod:`palaestra.rendering.gfx` for a whole frame at once, so most
+pixels equal Gymnasium's. What differs: the score text (Gymnasium renders
 it with pygame's bundled font; here digits are drawn as simple strokes) and the skid marks in
 video frames (pygame's 2-pixel lines; here thin quads).
 """

@@ -162,12 +162,12 @@ def aa_outline_pixels(
     cross = np.flatnonzero(keep & ~inside)
     if len(cross):
         ex1, ey1, ex2, ey2 = ex1.copy(), ey1.copy(), ex2.copy(), ey2.copy()
-        for e in cross.tolist():
-            clipped = _clip_line(int(ex1[e]), int(ey1[e]), int(ex2[e]), int(ey2[e]), w, h)
+        for j in cross.tolist():
+            clipped = _clip_line(int(ex1[j]), int(ey1[j]), int(ex2[j]), int(ey2[j]), w, h)
             if clipped is None:
-                keep[e] = False
+                keep[j] = False
             else:
-                ex1[e], ey1[e], ex2[e], ey2[e] = clipped
+                ex1[j], ey1[j], ex2[j], ey2[j] = clipped
     edge = edge[keep]
     x1, y1, x2, y2 = ex1[keep], ey1[keep], ex2[keep], ey2[keep]
     swap = y1 > y2
