@@ -2,8 +2,9 @@
 
 Gymnasium draws the scene on a 1000x800 pygame surface (y down), rotated and zoomed around the
 car, flips it vertically, adds the dashboard and shrinks it with ``smoothscale``. This module
-does the same steps with :mod:`palaestra.rendering.gfx`, which reproduces the pygame/SDL_gfx
-primitives, so most pixels equal Gymnasium's. What differs: the score text (Gymnasium renders
+does the same steps on a :class:`palaestra.rendering.spans.Canvas`, which reproduces the
+pygame/SDL_gfx primitives of :mod:`palaestra.rendering.gfx` for a whole frame at once, so most
+pixels equal Gymnasium's. What differs: the score text (Gymnasium renders
 it with pygame's bundled font; here digits are drawn as simple strokes) and the skid marks in
 video frames (pygame's 2-pixel lines; here thin quads).
 """
@@ -18,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.rendering import gfx
+from palaestra.rendering import spans
 
 
 @dataclass(frozen=True)
@@ -105,39 +106,53 @@ def _visible(screen: np.ndarray, margin: float) -> np.ndarray:
     return np.asarray(inside.any(axis=-1))
 
 
-def _gfx_polygons(img: np.ndarray, screen: np.ndarray, colors: list[Any]) -> None:
+def _gfx_polygons(canvas: spans.Canvas, screen: np.ndarray, colors: list[Any]) -> None:
     """``gfxdraw.aapolygon`` then ``gfxdraw.filled_polygon`` for each of ``[M, k, 2]``
     polygons, coordinates truncated (as pygame hands floats to SDL_gfx)."""
-    pixels = np.trunc(screen).astype(np.int64).tolist()  # Python ints: the small-shape paths
-    for poly, color in zip(pixels, colors):
-        xs, ys = [p[0] for p in poly], [p[1] for p in poly]
-        gfx.aa_polygon(img, xs, ys, color)
-        gfx.fill_polygon(img, xs, ys, color)
+    pixels = np.trunc(screen).astype(np.int64)
+    canvas.gfx_polygons(pixels[..., 0], pixels[..., 1], colors)
 
 
-def _pg_polygon(img: np.ndarray, pts: Any, color: tuple[int, int, int]) -> None:
+def _pg_polygon(canvas: spans.Canvas, pts: Any, color: tuple[int, int, int]) -> None:
     """``pygame.draw.polygon`` (filled; coordinates truncated)."""
-    arr = np.asarray(pts, dtype=np.float64)
-    gfx.pg_fill_polygon(img, np.trunc(arr[:, 0]).astype(np.int64),
-                        np.trunc(arr[:, 1]).astype(np.int64), color)  # fmt: skip
+    arr = np.trunc(np.asarray(pts, dtype=np.float64)).astype(np.int64)
+    canvas.pg_polygon(arr[:, 0], arr[:, 1], color)
 
 
-def _draw_road(img: np.ndarray, env: Any, zoom: float, trans: Any, rot: Any, dims: Dims) -> None:
+def _draw_road(
+    canvas: spans.Canvas, env: Any, zoom: float, trans: Any, rot: Any, dims: Dims
+) -> None:
     b = dims.playfield
     field = np.array([[(b, b), (b, -b), (-b, -b), (-b, b)]])
-    _gfx_polygons(img, _to_screen(field, rot, zoom, trans), [_rgb(env.bg_color)])
+    _gfx_polygons(canvas, _to_screen(field, rot, zoom, trans), [_rgb(env.bg_color)])
     grass = _to_screen(_grass_patches(dims.grass_dim), rot, zoom, trans)
     grass = grass[_visible(grass, dims.max_shape_dim)]
-    _gfx_polygons(img, grass, [_rgb(env.grass_color)] * len(grass))
+    _gfx_polygons(canvas, grass, [_rgb(env.grass_color)] * len(grass))
     if env.road_poly:
-        polys = np.array([p for p, _ in env.road_poly], dtype=np.float64)  # [M, 4, 2]
+        polys = _road_points(env)
         screen = _to_screen(polys, rot, zoom, trans)
         shown = np.flatnonzero(_visible(screen, dims.max_shape_dim)).tolist()
-        _gfx_polygons(img, screen[shown], [_rgb(env.road_poly[i][1]) for i in shown])
+        _gfx_polygons(canvas, screen[shown], [_rgb(env.road_poly[i][1]) for i in shown])
+
+
+def _road_points(env: Any) -> np.ndarray:
+    """The road's polygons as one ``[M, 4, 2]`` array, built once per track."""
+    cached = getattr(env, "_road_points_cache", None)
+    if cached is None or cached[0] is not env.road_poly or cached[1] != len(env.road_poly):
+        points = np.array([p for p, _ in env.road_poly], dtype=np.float64)
+        cached = (env.road_poly, len(env.road_poly), points)
+        env._road_points_cache = cached
+    return cached[2]
 
 
 def _draw_car(
-    img: np.ndarray, car: Any, zoom: float, trans: Any, rot: Any, marks: bool, dims: Dims
+    canvas: spans.Canvas,
+    car: Any,
+    zoom: float,
+    trans: Any,
+    rot: Any,
+    marks: bool,
+    dims: Dims,
 ) -> None:
     def screen(points: list[tuple[float, float]]) -> np.ndarray:
         return _to_screen(np.asarray(points, dtype=np.float64), rot, zoom, trans)
@@ -151,7 +166,7 @@ def _draw_car(
                 if length == 0.0:
                     continue
                 n = np.array([-d[1], d[0]]) / length  # 2 pixels wide
-                _pg_polygon(img, [a, b, b + n, a + n], mark.color)
+                _pg_polygon(canvas, [a, b, b + n, a + n], mark.color)
     bodies: list[tuple[Any, tuple[int, int, int], Any]] = [
         (w.body, (0, 0, 0), w) for w in car.wheels
     ]
@@ -161,7 +176,7 @@ def _draw_car(
             trans_b = f.body.transform
             # Box2D's own float32 transform, as Gymnasium's ``trans * v``.
             path = [tuple(trans_b * v) for v in f.shape.vertices]
-            _pg_polygon(img, screen(path), color)
+            _pg_polygon(canvas, screen(path), color)
             if wheel is None:
                 continue
             a1, a2 = wheel.phase, wheel.phase + 1.2  # the white band turns with the wheel
@@ -176,13 +191,13 @@ def _draw_car(
             band = [(-ww * size, +wr * c1 * size), (+ww * size, +wr * c1 * size),
                     (+ww * size, +wr * c2 * size), (-ww * size, +wr * c2 * size)]  # fmt: skip
             path = [tuple(trans_b * v) for v in band]
-            _pg_polygon(img, screen(path), dims.wheel_white)
+            _pg_polygon(canvas, screen(path), dims.wheel_white)
 
 
-def _draw_indicators(img: np.ndarray, car: Any) -> None:
+def _draw_indicators(canvas: spans.Canvas, car: Any) -> None:
     """The dashboard along the bottom (drawn after the flip, in screen coordinates)."""
     s, h = W / 40.0, H / 40.0
-    _pg_polygon(img, [(W, H), (W, H - 5 * h), (0, H - 5 * h), (0, H)], (0, 0, 0))
+    _pg_polygon(canvas, [(W, H), (W, H - 5 * h), (0, H - 5 * h), (0, H)], (0, 0, 0))
 
     def vertical(place: float, val: float) -> list[tuple[float, float]]:
         return [(place * s, H - (h + h * val)), ((place + 1) * s, H - (h + h * val)),
@@ -207,7 +222,7 @@ def _draw_indicators(img: np.ndarray, car: Any) -> None:
     bars.append((spin, horizontal(30, -0.8 * spin), (255, 0, 0)))
     for value, points, color in bars:
         if abs(value) > 1e-4:
-            _pg_polygon(img, points, color)
+            _pg_polygon(canvas, points, color)
 
 
 def render(env: Any, mode: str, dims: Dims) -> np.ndarray:
@@ -222,15 +237,14 @@ def render(env: Any, mode: str, dims: Dims) -> np.ndarray:
     scroll = _rotate(np.array([-(pos[0]) * zoom, -(pos[1]) * zoom]), rot)
     trans = (W / 2 + float(scroll[0]), H / 4 + float(scroll[1]))
 
-    img = np.zeros((H, W, 3), dtype=np.uint8)
-    _draw_road(img, env, zoom, trans, rot, dims)
-    _draw_car(img, car, zoom, trans, rot, marks=mode != "state_pixels", dims=dims)
-    img = img[::-1].copy()  # pygame.transform.flip(surf, False, True)
-    _draw_indicators(img, car)
-    _draw_score(img, env.reward)
-    if mode == "state_pixels":
-        return gfx.smoothscale_shrink(img, *dims.state_size)
-    return gfx.smoothscale_shrink(img, *dims.video_size)
+    canvas = spans.Canvas(H, W)
+    _draw_road(canvas, env, zoom, trans, rot, dims)
+    _draw_car(canvas, car, zoom, trans, rot, marks=mode != "state_pixels", dims=dims)
+    canvas.flip()  # pygame.transform.flip(surf, False, True)
+    _draw_indicators(canvas, car)
+    _draw_score(canvas, env.reward)
+    size = dims.state_size if mode == "state_pixels" else dims.video_size
+    return spans.shrink_packed(canvas.compose(), *size)
 
 
 # Seven-segment digits for the score: segments a-g as (x0, y0, x1, y1) boxes in a 20x30 cell.
@@ -244,7 +258,7 @@ _DIGITS = {
 }  # fmt: skip
 
 
-def _draw_score(img: np.ndarray, reward: float) -> None:
+def _draw_score(canvas: spans.Canvas, reward: float) -> None:
     """The score as in Gymnasium (``f"{reward:04.0f}"`` centred at (60, 750), white on black),
     in simple seven-segment digits instead of pygame's font."""
     text = f"{reward:04.0f}"
@@ -255,4 +269,4 @@ def _draw_score(img: np.ndarray, reward: float) -> None:
         for seg in _DIGITS.get(ch, ""):
             a, b, c, d = _SEGMENTS[seg]
             left = x0 + k * (cell + gap)
-            img[y0 + b : y0 + d, left + a : left + c] = 255
+            canvas.rect(left + a, y0 + b, left + c, y0 + d, (255, 255, 255))

@@ -20,7 +20,7 @@ BOX2D_IDS = [
     "BipedalWalkerHardcore-v3",
     "CarRacing-v3",
 ]
-# Every CarRacing observation is a drawn frame (~0.05-0.1 s a step on the test machines):
+# Every CarRacing observation is a drawn frame (~0.02-0.04 s a step on the test machines):
 # its whole-contract checks run with the slow tests, its short parity run in the fast suite.
 SLOW_IDS = {"CarRacing-v3"}
 
