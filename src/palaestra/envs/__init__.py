@@ -110,6 +110,7 @@ _MUJOCO: dict[str, dict] = {
     ),
     "HalfCheetah-v5": dict(
         entry_point=f"{_MJ}.locomotion:HalfCheetahEnv",
+        vector_entry_point=f"{_MJ}.batch:HalfCheetahBatch",
         max_episode_steps=1000,
         reward_threshold=4800.0,
     ),
@@ -121,7 +122,10 @@ _MUJOCO: dict[str, dict] = {
     ),
     "Walker2d-v5": dict(entry_point=f"{_MJ}.locomotion:Walker2dEnv", max_episode_steps=1000),
     "Ant-v5": dict(
-        entry_point=f"{_MJ}.locomotion:AntEnv", max_episode_steps=1000, reward_threshold=6000.0
+        entry_point=f"{_MJ}.locomotion:AntEnv",
+        vector_entry_point=f"{_MJ}.batch:AntBatch",
+        max_episode_steps=1000,
+        reward_threshold=6000.0,
     ),
     "Humanoid-v5": dict(entry_point=f"{_MJ}.locomotion:HumanoidEnv", max_episode_steps=1000),
     "HumanoidStandup-v5": dict(
