@@ -90,8 +90,7 @@ class MujocoBatch:
         self._qpos = [d.qpos for d in self._datas]
         self._qvel = [d.qvel for d in self._datas]
         self._ctrl = [d.ctrl for d in self._datas]
-        self._warnings = [d.warning for d in self._datas]
-        self._nwarn = len(first.data.warning)
+        self._warnings = [d.warning.number for d in self._datas]  # views of the counters
         self._obs = np.zeros((n, *first.observation_space.shape))  # [N, obs_dim] float64
         self._reward = np.zeros(n)
         self._terminated = np.zeros(n, dtype=bool)
@@ -141,7 +140,7 @@ class MujocoBatch:
         self._qpos = [d.qpos for d in self._datas]
         self._qvel = [d.qvel for d in self._datas]
         self._ctrl = [d.ctrl for d in self._datas]
-        self._warnings = [d.warning for d in self._datas]
+        self._warnings = [d.warning.number for d in self._datas]
         if self.num_threads > 1:
             self._pool = ThreadPoolExecutor(self.num_threads)
 
@@ -240,33 +239,30 @@ class MujocoBatch:
 
     def _simulate(self, rows: np.ndarray, actions: np.ndarray) -> dict[int, list[str]]:
         """Advance ``rows`` by ``frame_skip`` MuJoCo steps; MuJoCo's warnings per row."""
+        counts = self._gather(self._warnings, rows)  # [R, nwarning] MuJoCo's counters
         if self._pool is None or rows.size < 2 * len(self._blocks):
-            return self._simulate_block(rows, actions)
-        blocks = [b for b in np.array_split(rows, len(self._blocks)) if b.size]
-        flagged: dict[int, list[str]] = {}
-        for part in self._pool.map(lambda b: self._simulate_block(b, actions), blocks):
-            flagged.update(part)
-        return flagged
+            self._simulate_block(rows, actions)
+        else:
+            blocks = [b for b in np.array_split(rows, len(self._blocks)) if b.size]
+            for _ in self._pool.map(lambda b: self._simulate_block(b, actions), blocks):
+                pass
+        raised = self._gather(self._warnings, rows) > counts
+        if not raised.any():
+            return {}
+        names = self._mujoco.mjtWarning
+        return {
+            int(rows[r]): [names(k).name for k in np.flatnonzero(raised[r]).tolist()]
+            for r in np.flatnonzero(raised.any(axis=1)).tolist()
+        }
 
-    def _simulate_block(self, rows: np.ndarray, actions: np.ndarray) -> dict[int, list[str]]:
+    def _simulate_block(self, rows: np.ndarray, actions: np.ndarray) -> None:
         mujoco, nstep = self._mujoco, self.frame_skip
         step, post = mujoco.mj_step, mujoco.mj_rnePostConstraint
-        models, datas, ctrls, warns = self._models, self._datas, self._ctrl, self._warnings
-        flagged = {}
+        models, datas, ctrls = self._models, self._datas, self._ctrl
         for i in rows.tolist():
-            data = datas[i]
-            before = [w.number for w in warns[i]]
             ctrls[i][:] = actions[i]
-            step(models[i], data, nstep=nstep)
-            post(models[i], data)
-            after = [w.number for w in warns[i]]
-            if after != before:
-                flagged[i] = [
-                    mujoco.mjtWarning(k).name
-                    for k, (a, b) in enumerate(zip(after, before))
-                    if a > b
-                ]
-        return flagged
+            step(models[i], datas[i], nstep=nstep)
+            post(models[i], datas[i])
 
     def _warn(
         self, flagged: dict[int, list[str]], infos: StackedInfos
@@ -289,7 +285,7 @@ class MujocoBatch:
         if rows.size == self.num_envs:
             return np.stack(views)
         if rows.size == 0:
-            return np.zeros((0, *views[0].shape))
+            return np.zeros((0, *views[0].shape), dtype=views[0].dtype)
         return np.stack([views[i] for i in rows.tolist()])
 
     # -- the array maths, per env kind ---------------------------------------------------------
