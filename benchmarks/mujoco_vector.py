@@ -180,7 +180,8 @@ def main() -> None:
                     else f"  x{wall / base[0]:.2f} wall  x{cpu / base[1]:.2f} cpu vs gym-sync"
                 )
                 print(
-                    f"{env_id:15s} N={n:<4d} {impl:13s} {wall:10.0f} steps/s wall {cpu:10.0f} steps/cpu-s{ratio}",
+                    f"{env_id:15s} N={n:<4d} {impl:13s} {wall:10.0f} steps/s wall "
+                    f"{cpu:10.0f} steps/cpu-s{ratio}",
                     flush=True,
                 )
     print(f"load average at end: {os.getloadavg()}")
