@@ -45,6 +45,21 @@ def assert_same(ours: Any, theirs: Any, where: str) -> None:
     assert a.tobytes() == b.tobytes(), (where, a, b)
 
 
+def test_a_step_that_only_resets_rows() -> None:
+    """One Ant row that falls: the next step resets it and steps no row at all."""
+    ours = gym.make_vec("Ant-v5", 1, healthy_z_range=(0.45, 1.0))
+    theirs = gym.make_vec("Ant-v5", 1, vectorization_mode="sync", healthy_z_range=(0.45, 1.0))
+    assert_same(ours.reset(seed=2), theirs.reset(seed=2), "reset")
+    rng = np.random.default_rng(3)
+    ends = 0
+    for t in range(300):
+        actions = rng.uniform(-1, 1, (1, 8)).astype(np.float32)
+        mine, ref = ours.step(actions), theirs.step(actions)
+        assert_same(mine, ref, f"step {t}")
+        ends += int(ref[2][0])
+    assert ends >= 1
+
+
 def test_make_vec_returns_the_native_batch() -> None:
     envs = gym.make_vec("HalfCheetah-v5", num_envs=3)
     assert isinstance(envs, BatchedVectorEnv)

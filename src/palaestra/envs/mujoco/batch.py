@@ -384,15 +384,14 @@ class AntBatch(MujocoBatch):
         ctrl_cost = env._ctrl_cost_weight * np.sum(np.square(actions), axis=1)
         low, high = env._contact_force_range
         forces = np.clip(self._gather(self._cfrc, rows), low, high)  # [R, nbody, 6]
-        contact_cost = env._contact_cost_weight * np.sum(
-            np.square(forces).reshape(len(rows), -1), axis=1
-        )
+        flat = (len(rows), forces[0].size if len(rows) else 6 * len(self._cfrc[0]))
+        contact_cost = env._contact_cost_weight * np.sum(np.square(forces).reshape(flat), axis=1)
         self._reward[rows] = (forward_reward + healthy_reward) - (ctrl_cost + contact_cost)
         self._terminated[rows] = ~healthy & env._terminate_when_unhealthy
         skipped = 2 * int(env._exclude_current_positions_from_observation)
         parts = [qpos[:, skipped:], qvel]
         if env._include_cfrc_ext_in_observation:
-            parts.append(forces[:, 1:].reshape(len(rows), -1))
+            parts.append(forces[:, 1:].reshape(len(rows), flat[1] - 6))
         self._obs[rows] = np.concatenate(parts, axis=1)
         xy = qpos[:, 0:2]
         return self._stacked(
