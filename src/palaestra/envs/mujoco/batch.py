@@ -77,8 +77,8 @@ class MujocoBatch:
             )
         self.num_envs = n = int(num_envs)
         self.envs = [self.env_class(**kwargs) for _ in range(n)]
-        first = self.envs[0]
-        self.single_observation_space = first.observation_space
+        first: Any = self.envs[0]
+        self.single_observation_space: Box = first.observation_space
         self.single_action_space: Box = first.action_space
         self.metadata = first.metadata
         self._mujoco = first._mujoco
@@ -353,7 +353,8 @@ class AntBatch(MujocoBatch):
         self._views_after_init()
 
     def _views_after_init(self) -> None:
-        body = self.envs[0]._main_body
+        env: Any = self.envs[0]
+        body = env._main_body
         self._xpos = [d.body(body).xpos for d in self._datas]
         self._cfrc = [d.cfrc_ext for d in self._datas]
 
