@@ -1,12 +1,17 @@
 """Native batches of the MuJoCo envs: N ``MjData`` stepped together, maths on ``[N, ...]`` arrays.
 
-``make_vec("HalfCheetah-v5", n)`` (and ``make_vec_env``) build one: each row owns a single env
-(its model, ``MjData`` and generator, so resets are the single env's own code and draws), the
-physics of all rows runs as bare ``mj_step``/``mj_rnePostConstraint`` calls, spread over
-``num_threads`` threads (MuJoCo releases the GIL while it steps), and the observations, rewards,
-terminations and infos are computed once for all rows on stacked arrays. Row i reset with seed
-``s`` gives what the single env reset with ``s + i`` gives, bit for bit
-(tests/envs/mujoco/test_batch.py).
+``make_vec("HalfCheetah-v5", n)`` (and ``make_vec_env``) build one (HalfCheetah-v5, Ant-v5):
+each row owns a single env (its model, ``MjData`` and generator, so resets are the single env's
+own code and draws), the physics of all rows runs as bare ``mj_step`` calls, spread over
+``num_threads`` threads (MuJoCo releases the GIL while it steps), and the observations,
+rewards, terminations and infos are computed once for all rows by the env's own row maths
+(``rows_before``/``rows_step`` of :class:`~palaestra.envs.mujoco._base.MujocoEnv`, which the
+single env calls with its one row) on the stacked arrays. Row i reset with seed ``s`` gives
+what the single env reset with ``s + i`` gives, bit for bit (tests/envs/mujoco/test_batch.py).
+
+``mj_rnePostConstraint`` (which only fills ``cacc``, ``cfrc_int`` and ``cfrc_ext``; nothing in
+the next ``mj_step`` reads them) runs only for the envs whose maths reads ``cfrc_ext`` (Ant,
+Humanoid, HumanoidStandup); the other rows' ``MjData`` keep stale values in those three arrays.
 
 Why not ``mujoco.rollout``: it restarts every trajectory from a ``mjSTATE_FULLPHYSICS`` state
 and does not hand back the solver's warm start (``qacc_warmstart``) nor the derived quantities
@@ -16,7 +21,6 @@ last bits after one step.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, ClassVar
@@ -25,12 +29,19 @@ import numpy as np
 
 from palaestra import error
 from palaestra.envs.batch_args import row_mask, row_seeds
-from palaestra.envs.mujoco._base import MujocoEnv, MujocoWarning
+from palaestra.envs.mujoco._base import MujocoEnv, warn_unstable, warning_names
 from palaestra.envs.mujoco.locomotion import AntEnv, HalfCheetahEnv
 from palaestra.spaces import Box
 from palaestra.utils.stacked_infos import StackedInfos
 
-__all__ = ["AntBatch", "HalfCheetahBatch", "MujocoBatch"]
+__all__ = [
+    "AntBatch",
+    "HalfCheetahBatch",
+    "MujocoBatch",
+]
+
+# What mj_rnePostConstraint computes: rows run it only when their maths reads one of these.
+_POST_CONSTRAINT = {"cacc", "cfrc_int", "cfrc_ext"}
 
 _REAL_KINDS = "biuf"
 
@@ -53,7 +64,7 @@ class _MergedInfos(Sequence[dict[str, Any]]):
 
 
 class MujocoBatch:
-    """``num_envs`` MuJoCo envs of one kind; subclasses give the array maths of a step.
+    """``num_envs`` MuJoCo envs of one kind (``env_class``), their maths done on all rows.
 
     ``kwargs`` are the single env's constructor arguments; ``num_threads`` (default 1) threads
     step the physics (each takes a contiguous block of rows).
@@ -84,13 +95,9 @@ class MujocoBatch:
         self._mujoco = first._mujoco
         self.frame_skip = first.frame_skip
         self.dt = first.dt
-        self._datas = [env.data for env in self.envs]
-        self._models = [env.model for env in self.envs]
-        # MjData's arrays live as long as the MjData: views made once are gathered each step.
-        self._qpos = [d.qpos for d in self._datas]
-        self._qvel = [d.qvel for d in self._datas]
-        self._ctrl = [d.ctrl for d in self._datas]
-        self._warnings = [d.warning.number for d in self._datas]  # views of the counters
+        self._maths = first  # every row has the same arguments: the first env's maths serve all
+        self._post = bool(_POST_CONSTRAINT.intersection(first.row_fields))
+        self._bind_views()
         self._obs = np.zeros((n, *first.observation_space.shape))  # [N, obs_dim] float64
         self._reward = np.zeros(n)
         self._terminated = np.zeros(n, dtype=bool)
@@ -125,22 +132,29 @@ class MujocoBatch:
             self._pool.shutdown()
             self._pool = None
 
+    _VIEWS = ("_mujoco", "_datas", "_models", "_ctrl", "_warnings", "_views")
+
+    def _bind_views(self) -> None:
+        # MjData's arrays live as long as the MjData: views made once are gathered each step.
+        first = self._maths
+        self._mujoco = first._mujoco
+        self._datas = [env.data for env in self.envs]
+        self._models = [env.model for env in self.envs]
+        self._ctrl = [d.ctrl for d in self._datas]
+        self._warnings = [d.warning.number for d in self._datas]  # views of the counters
+        names = dict.fromkeys(first.before_fields + first.row_fields)
+        self._views = {name: [getattr(d, name) for d in self._datas] for name in names}
+
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_pool"] = None
-        for name in ("_mujoco", "_datas", "_models", "_qpos", "_qvel", "_ctrl", "_warnings"):
+        for name in self._VIEWS:
             del state[name]
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        self._mujoco = self.envs[0]._mujoco
-        self._datas = [env.data for env in self.envs]
-        self._models = [env.model for env in self.envs]
-        self._qpos = [d.qpos for d in self._datas]
-        self._qvel = [d.qvel for d in self._datas]
-        self._ctrl = [d.ctrl for d in self._datas]
-        self._warnings = [d.warning.number for d in self._datas]
+        self._bind_views()
         if self.num_threads > 1:
             self._pool = ThreadPoolExecutor(self.num_threads)
 
@@ -225,10 +239,22 @@ class MujocoBatch:
         else:
             resetting = row_mask(reset_mask, self.num_envs, "reset_mask")
             stepping = (~resetting).nonzero()[0]
-        before = self._before(stepping)
-        flagged = self._simulate(stepping, act)
-        step_infos = self._after(stepping, act[stepping], before)
-        special = self._warn(flagged, step_infos) if flagged else {}
+        if stepping.size:
+            maths = self._maths
+            before = maths.rows_before(self._fields(maths.before_fields, stepping))
+            flagged = self._simulate(stepping, act)
+            acted = act if stepping.size == self.num_envs else act[stepping]
+            obs, reward, terminated, info = maths.rows_step(
+                self._fields(maths.row_fields, stepping), before, acted
+            )
+            self._obs[stepping] = obs
+            self._reward[stepping] = reward
+            self._terminated[stepping] = terminated
+            step_infos = self._stacked(stepping, info)
+            special = self._warn(flagged, step_infos) if flagged else {}
+        else:  # every row resets
+            step_infos = StackedInfos({}, self.num_envs, np.zeros(self.num_envs, dtype=bool))
+            special = {}
         if resetting is not None:
             rows = resetting.nonzero()[0]
             self._reward[rows] = 0.0
@@ -246,12 +272,12 @@ class MujocoBatch:
             blocks = [b for b in np.array_split(rows, len(self._blocks)) if b.size]
             for _ in self._pool.map(lambda b: self._simulate_block(b, actions), blocks):
                 pass
-        raised = self._gather(self._warnings, rows) > counts
+        after = self._gather(self._warnings, rows)
+        raised = after > counts
         if not raised.any():
             return {}
-        names = self._mujoco.mjtWarning
         return {
-            int(rows[r]): [names(k).name for k in np.flatnonzero(raised[r]).tolist()]
+            int(rows[r]): warning_names(after[r], counts[r])
             for r in np.flatnonzero(raised.any(axis=1)).tolist()
         }
 
@@ -259,10 +285,15 @@ class MujocoBatch:
         mujoco, nstep = self._mujoco, self.frame_skip
         step, post = mujoco.mj_step, mujoco.mj_rnePostConstraint
         models, datas, ctrls = self._models, self._datas, self._ctrl
-        for i in rows.tolist():
-            ctrls[i][:] = actions[i]
-            step(models[i], datas[i], nstep=nstep)
-            post(models[i], datas[i])
+        if self._post:
+            for i in rows.tolist():
+                ctrls[i][:] = actions[i]
+                step(models[i], datas[i], nstep=nstep)
+                post(models[i], datas[i])
+        else:
+            for i in rows.tolist():
+                ctrls[i][:] = actions[i]
+                step(models[i], datas[i], nstep=nstep)
 
     def _warn(
         self, flagged: dict[int, list[str]], infos: StackedInfos
@@ -271,15 +302,14 @@ class MujocoBatch:
         ``"mujoco_warnings"`` (the other rows' infos have no such key)."""
         out = {}
         for i, names in flagged.items():
-            warnings.warn(
-                f"{self.env_class.__name__} (row {i}): MuJoCo reported {', '.join(names)} at "
-                f"time {self._datas[i].time:.4f} (the simulation is unstable; MuJoCo may have "
-                "reset it)",
-                MujocoWarning,
-                stacklevel=4,
-            )
+            who = f"{self.env_class.__name__} (row {i})"
+            warn_unstable(who, names, self._datas[i].time, stacklevel=5)
             out[i] = {**infos[i], "mujoco_warnings": list(names)}
         return out
+
+    def _fields(self, names: tuple[str, ...], rows: np.ndarray) -> dict[str, np.ndarray]:
+        """The rows' MjData arrays ``names``, each stacked ``[R, ...]``."""
+        return {name: self._gather(self._views[name], rows) for name in names}
 
     def _gather(self, views: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
         if rows.size == self.num_envs:
@@ -287,14 +317,6 @@ class MujocoBatch:
         if rows.size == 0:
             return np.zeros((0, *views[0].shape), dtype=views[0].dtype)
         return np.stack([views[i] for i in rows.tolist()])
-
-    # -- the array maths, per env kind ---------------------------------------------------------
-    def _before(self, rows: np.ndarray) -> Any:
-        raise NotImplementedError
-
-    def _after(self, rows: np.ndarray, actions: np.ndarray, before: Any) -> StackedInfos:
-        """Write obs/reward/terminated of ``rows``; return their step infos."""
-        raise NotImplementedError
 
     def _stacked(self, rows: np.ndarray, arrays: dict[str, np.ndarray]) -> StackedInfos:
         if rows.size == self.num_envs:
@@ -312,100 +334,13 @@ class MujocoBatch:
         return f"{type(self).__name__}(num_envs={self.num_envs}, num_threads={self.num_threads})"
 
 
-class HalfCheetahBatch(MujocoBatch):
-    """HalfCheetah-v5's rows (:class:`~palaestra.envs.mujoco.locomotion.HalfCheetahEnv`)."""
-
-    env_class = HalfCheetahEnv
-
-    def _before(self, rows: np.ndarray) -> np.ndarray:
-        return self._gather(self._qpos, rows)[:, 0]
-
-    def _after(self, rows: np.ndarray, actions: np.ndarray, before: Any) -> StackedInfos:
-        env: Any = self.envs[0]
-        qpos = self._gather(self._qpos, rows)
-        qvel = self._gather(self._qvel, rows)
-        x_after = qpos[:, 0]
-        x_velocity = (x_after - before) / self.dt
-        forward_reward = env._forward_reward_weight * x_velocity
-        ctrl_cost = env._ctrl_cost_weight * np.sum(np.square(actions), axis=1)
-        skipped = int(env._exclude_current_positions_from_observation)
-        self._obs[rows] = np.concatenate((qpos[:, skipped:], qvel), axis=1)
-        self._reward[rows] = forward_reward - ctrl_cost
-        self._terminated[rows] = False
-        return self._stacked(
-            rows,
-            {
-                "x_position": x_after,
-                "x_velocity": x_velocity,
-                "reward_forward": forward_reward,
-                "reward_ctrl": -ctrl_cost,
-            },
-        )
-
-
 class AntBatch(MujocoBatch):
     """Ant-v5's rows (:class:`~palaestra.envs.mujoco.locomotion.AntEnv`)."""
 
     env_class = AntEnv
 
-    def __init__(self, num_envs: int, num_threads: int = 1, **kwargs: Any) -> None:
-        super().__init__(num_envs, num_threads, **kwargs)
-        self._views_after_init()
 
-    def _views_after_init(self) -> None:
-        env: Any = self.envs[0]
-        body = env._main_body
-        self._xpos = [d.body(body).xpos for d in self._datas]
-        self._cfrc = [d.cfrc_ext for d in self._datas]
+class HalfCheetahBatch(MujocoBatch):
+    """HalfCheetah-v5's rows (:class:`~palaestra.envs.mujoco.locomotion.HalfCheetahEnv`)."""
 
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        super().__setstate__(state)
-        self._views_after_init()
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = super().__getstate__()
-        del state["_xpos"], state["_cfrc"]
-        return state
-
-    def _before(self, rows: np.ndarray) -> np.ndarray:
-        return self._gather(self._xpos, rows)[:, :2]
-
-    def _after(self, rows: np.ndarray, actions: np.ndarray, before: Any) -> StackedInfos:
-        env: Any = self.envs[0]
-        qpos = self._gather(self._qpos, rows)
-        qvel = self._gather(self._qvel, rows)
-        xy_after = self._gather(self._xpos, rows)[:, :2]
-        velocity = (xy_after - before) / self.dt
-        x_velocity, y_velocity = velocity[:, 0], velocity[:, 1]
-        forward_reward = x_velocity * env._forward_reward_weight
-        low_z, high_z = env._healthy_z_range
-        state = np.concatenate((qpos, qvel), axis=1)
-        healthy = np.isfinite(state).all(axis=1) & (low_z <= state[:, 2]) & (state[:, 2] <= high_z)
-        healthy_reward = healthy * env._healthy_reward
-        ctrl_cost = env._ctrl_cost_weight * np.sum(np.square(actions), axis=1)
-        low, high = env._contact_force_range
-        forces = np.clip(self._gather(self._cfrc, rows), low, high)  # [R, nbody, 6]
-        flat = (len(rows), forces[0].size if len(rows) else 6 * len(self._cfrc[0]))
-        contact_cost = env._contact_cost_weight * np.sum(np.square(forces).reshape(flat), axis=1)
-        self._reward[rows] = (forward_reward + healthy_reward) - (ctrl_cost + contact_cost)
-        self._terminated[rows] = ~healthy & env._terminate_when_unhealthy
-        skipped = 2 * int(env._exclude_current_positions_from_observation)
-        parts = [qpos[:, skipped:], qvel]
-        if env._include_cfrc_ext_in_observation:
-            parts.append(forces[:, 1:].reshape(len(rows), flat[1] - 6))
-        self._obs[rows] = np.concatenate(parts, axis=1)
-        xy = qpos[:, 0:2]
-        return self._stacked(
-            rows,
-            {
-                "x_position": qpos[:, 0],
-                "y_position": qpos[:, 1],
-                "distance_from_origin": np.linalg.norm(xy, ord=2, axis=1),
-                "x_velocity": x_velocity,
-                "y_velocity": y_velocity,
-                "reward_forward": forward_reward,
-                "reward_ctrl": -ctrl_cost,
-                "reward_contact": -contact_cost,
-                "reward_survive": healthy_reward,
-            },
-        )
+    env_class = HalfCheetahEnv
