@@ -110,7 +110,6 @@ _MUJOCO: dict[str, dict] = {
     ),
     "HalfCheetah-v5": dict(
         entry_point=f"{_MJ}.locomotion:HalfCheetahEnv",
-        vector_entry_point=f"{_MJ}.batch:HalfCheetahBatch",
         max_episode_steps=1000,
         reward_threshold=4800.0,
     ),
@@ -122,10 +121,7 @@ _MUJOCO: dict[str, dict] = {
     ),
     "Walker2d-v5": dict(entry_point=f"{_MJ}.locomotion:Walker2dEnv", max_episode_steps=1000),
     "Ant-v5": dict(
-        entry_point=f"{_MJ}.locomotion:AntEnv",
-        vector_entry_point=f"{_MJ}.batch:AntBatch",
-        max_episode_steps=1000,
-        reward_threshold=6000.0,
+        entry_point=f"{_MJ}.locomotion:AntEnv", max_episode_steps=1000, reward_threshold=6000.0
     ),
     "Humanoid-v5": dict(entry_point=f"{_MJ}.locomotion:HumanoidEnv", max_episode_steps=1000),
     "HumanoidStandup-v5": dict(
@@ -134,7 +130,9 @@ _MUJOCO: dict[str, dict] = {
 }
 for _id, _kwargs in _MUJOCO.items():
     if _id not in registry:
-        register(id=_id, **_kwargs)
+        # each v5 env's native batch is its class's name with Batch for Env (mujoco/batch.py)
+        _batch = _kwargs["entry_point"].rsplit(":", 1)[1].removesuffix("Env") + "Batch"
+        register(id=_id, vector_entry_point=f"{_MJ}.batch:{_batch}", **_kwargs)
 
 # Toy text: Gymnasium 1.4's ids, kwargs, limits and thresholds. Older versions (Taxi-v3,
 # CliffWalking-v0, FrozenLake-v0, Blackjack-v0) are not registered, as in Gymnasium: making one

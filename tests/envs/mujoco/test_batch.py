@@ -1,4 +1,4 @@
-"""The MuJoCo native batches (HalfCheetah-v5, Ant-v5): row i is the single env seeded seed + i,
+"""The MuJoCo native batches (all eleven v5 envs): row i is the single env seeded seed + i,
 bit for bit, on both vector faces and in every autoreset mode."""
 
 from __future__ import annotations
@@ -10,14 +10,22 @@ import pytest
 
 pytest.importorskip("mujoco")
 
+from tests.envs.mujoco.cases import MUJOCO_IDS, OPTIONS
+
 import palaestra as gym
 from palaestra import error
+from palaestra.envs.mujoco import batch as mujoco_batch
+from palaestra.envs.mujoco._base import MujocoWarning
 from palaestra.envs.mujoco.batch import AntBatch, HalfCheetahBatch
 from palaestra.vec_env import DummyVecEnv, make_vec_env
 from palaestra.vector.native import BatchedVectorEnv
 
-BATCHED = ["HalfCheetah-v5", "Ant-v5"]
 MODES = ["NextStep", "SameStep", "Disabled"]
+# Arguments that make episodes end within the test's steps (terminations, not only time limits).
+ENDING: dict[str, dict[str, Any]] = {
+    "Ant-v5": {"healthy_z_range": (0.45, 1.0)},
+    "Humanoid-v5": {"healthy_z_range": (1.2, 2.0)},
+}
 
 
 def assert_same(ours: Any, theirs: Any, where: str) -> None:
@@ -69,19 +77,50 @@ def test_make_vec_returns_the_native_batch() -> None:
     envs.close()
 
 
-@pytest.mark.parametrize("env_id", BATCHED)
+@pytest.mark.parametrize("env_id", MUJOCO_IDS)
+def test_every_v5_id_has_its_batch(env_id: str) -> None:
+    envs = gym.make_vec(env_id, num_envs=2)
+    assert isinstance(envs, BatchedVectorEnv)
+    name = env_id.removesuffix("-v5")
+    assert type(envs.batch) is getattr(mujoco_batch, f"{name}Batch")
+    assert type(envs.batch.envs[0]).__name__ == f"{name}Env"
+    single = gym.make(env_id)
+    assert envs.single_observation_space == single.observation_space
+    assert envs.single_action_space == single.action_space
+    envs.close()
+
+
+@pytest.mark.parametrize("env_id", MUJOCO_IDS)
 @pytest.mark.parametrize("mode", MODES)
-@pytest.mark.parametrize("num_threads", [1, 2])
-def test_rows_equal_single_envs_in_every_autoreset_mode(
-    env_id: str, mode: str, num_threads: int
+def test_rows_equal_single_envs_in_every_autoreset_mode(env_id: str, mode: str) -> None:
+    """Each env, 100 steps across many resets (a time limit of 20 steps, and falls) against a
+    SyncVectorEnv of single envs: obs, rewards, terminations, truncations and infos equal bit
+    for bit."""
+    check_rows(env_id, mode, 1, {"max_episode_steps": 20, **ENDING.get(env_id, {})}, steps=100)
+
+
+@pytest.mark.parametrize("env_id", ["HalfCheetah-v5", "Ant-v5", "Humanoid-v5"])
+@pytest.mark.parametrize("mode", MODES)
+def test_rows_equal_single_envs_with_two_threads(env_id: str, mode: str) -> None:
+    check_rows(env_id, mode, 2, {"max_episode_steps": 40, **ENDING.get(env_id, {})}, steps=300)
+
+
+@pytest.mark.parametrize("env_id", MUJOCO_IDS)
+def test_constructor_arguments_reach_every_row(env_id: str) -> None:
+    """The parity suite's first option set of each env, passed through make_vec."""
+    kwargs = {"max_episode_steps": 30, **OPTIONS[env_id][0]}
+    check_rows(env_id, "NextStep", 1, kwargs, steps=60, min_ends=3)
+
+
+def check_rows(
+    env_id: str,
+    mode: str,
+    num_threads: int,
+    kwargs: dict[str, Any],
+    steps: int,
+    min_ends: int | None = None,
 ) -> None:
-    """300 steps across many resets (a time limit of 40 steps, and Ant's falls with
-    healthy_z_range narrowed) against a SyncVectorEnv of single envs: obs, rewards,
-    terminations, truncations and infos equal bit for bit."""
     n = 5
-    kwargs: dict[str, Any] = {"max_episode_steps": 40}
-    if env_id == "Ant-v5":
-        kwargs["healthy_z_range"] = (0.45, 1.0)  # the torso drops below it now and then
     vector_kwargs = {"autoreset_mode": mode}
     ours = gym.make_vec(env_id, n, vector_kwargs=vector_kwargs, num_threads=num_threads, **kwargs)
     theirs = gym.make_vec(
@@ -92,7 +131,7 @@ def test_rows_equal_single_envs_in_every_autoreset_mode(
     rng = np.random.default_rng(0)
     shape = (n, *ours.single_action_space.shape)
     ends = 0
-    for t in range(300):
+    for t in range(steps):
         actions = rng.uniform(-1.2, 1.2, shape).astype(np.float32)
         mine, ref = ours.step(actions), theirs.step(actions)
         assert_same(mine, ref, f"step {t}")
@@ -104,16 +143,19 @@ def test_rows_equal_single_envs_in_every_autoreset_mode(
                 theirs.reset(options={"reset_mask": done.copy()}),
                 f"partial reset at {t}",
             )
-    assert ends >= n * 5
+    assert ends >= (n * steps // kwargs["max_episode_steps"] if min_ends is None else min_ends)
     ours.close()
     theirs.close()
 
 
-@pytest.mark.parametrize("env_id", BATCHED)
+@pytest.mark.parametrize(
+    "env_id", ["HalfCheetah-v5", "Ant-v5", "Hopper-v5", "Humanoid-v5", "InvertedPendulum-v5"]
+)
 def test_make_vec_env_face_equals_dummy_vec_env(env_id: str) -> None:
     """SB3's face: make_vec_env's native batch against a DummyVecEnv of Monitor-wrapped envs
-    (Ant with a narrow healthy_z_range ends episodes; HalfCheetah runs without resets)."""
-    env_kwargs = {"healthy_z_range": (0.45, 1.0)} if env_id == "Ant-v5" else {}
+    (Ant with a narrow healthy_z_range, Hopper and InvertedPendulum end episodes; HalfCheetah
+    runs without resets; Humanoid's infos hold arrays)."""
+    env_kwargs = ENDING.get(env_id, {})
     ours = make_vec_env(env_id, n_envs=3, seed=5, env_kwargs=env_kwargs)
     theirs = make_vec_env(env_id, n_envs=3, seed=5, vec_env_cls=DummyVecEnv, env_kwargs=env_kwargs)
     assert type(ours).__name__ == "VecMonitor"
@@ -138,7 +180,7 @@ def test_make_vec_env_face_equals_dummy_vec_env(env_id: str) -> None:
                     ref_infos[i]["episode"]["r"], abs=1e-4
                 )
                 assert infos[i]["episode"]["l"] == ref_infos[i]["episode"]["l"]
-    assert ends >= (5 if env_id == "Ant-v5" else 0)
+    assert ends >= (0 if env_id in ("HalfCheetah-v5", "Humanoid-v5") else 5)
 
 
 def test_bad_actions_name_the_actions_and_the_space() -> None:
@@ -164,6 +206,29 @@ def test_step_before_reset_and_bad_arguments() -> None:
         HalfCheetahBatch(2, num_threads=0)
     with pytest.raises(TypeError, match=r"num_threads must be an int, got 1\.5"):
         HalfCheetahBatch(2, num_threads=1.5)
+
+
+def test_bad_constructor_arguments_raise_as_the_single_env() -> None:
+    with pytest.raises(ValueError, match=r"healthy_z_range must have low <= high, got \(1\.0, 0"):
+        gym.make_vec("Hopper-v5", 2, healthy_z_range=(1.0, 0.5))
+    with pytest.raises(TypeError, match="unexpected keyword argument 'bogus'"):
+        gym.make_vec("Reacher-v5", 2, bogus=1)
+    with pytest.raises(ValueError, match="main_body 'nose' is not a body of"):
+        gym.make_vec("Ant-v5", 2, main_body="nose")
+
+
+def test_an_unstable_row_warns_and_flags_only_its_info() -> None:
+    batch = HalfCheetahBatch(3)
+    batch.reset(seed=0)
+    row = batch.envs[1]
+    row.set_state(row.init_qpos, np.full(row.model.nv, 1e300))
+    with pytest.warns(MujocoWarning, match=r"HalfCheetahEnv \(row 1\): MuJoCo reported mjWARN_BAD"):
+        batch.step(np.zeros((3, 6), np.float32))
+    infos = batch.last_infos()
+    assert infos[1]["mujoco_warnings"] and all(
+        w.startswith("mjWARN_BAD") for w in infos[1]["mujoco_warnings"]
+    )
+    assert "mujoco_warnings" not in infos[0] and "mujoco_warnings" not in infos[2]
 
 
 def test_a_render_mode_gives_real_envs() -> None:

@@ -1,8 +1,8 @@
 """Native batches of the MuJoCo envs: N ``MjData`` stepped together, maths on ``[N, ...]`` arrays.
 
-``make_vec("HalfCheetah-v5", n)`` (and ``make_vec_env``) build one (HalfCheetah-v5, Ant-v5):
-each row owns a single env (its model, ``MjData`` and generator, so resets are the single env's
-own code and draws), the physics of all rows runs as bare ``mj_step`` calls, spread over
+``make_vec("HalfCheetah-v5", n)`` (and ``make_vec_env``) build one for each of the eleven v5
+envs: each row owns a single env (its model, ``MjData`` and generator, so resets are the single
+env's own code and draws), the physics of all rows runs as bare ``mj_step`` calls, spread over
 ``num_threads`` threads (MuJoCo releases the GIL while it steps), and the observations,
 rewards, terminations and infos are computed once for all rows by the env's own row maths
 (``rows_before``/``rows_step`` of :class:`~palaestra.envs.mujoco._base.MujocoEnv`, which the
@@ -30,14 +30,37 @@ import numpy as np
 from palaestra import error
 from palaestra.envs.batch_args import row_mask, row_seeds
 from palaestra.envs.mujoco._base import MujocoEnv, warn_unstable, warning_names
-from palaestra.envs.mujoco.locomotion import AntEnv, HalfCheetahEnv
+from palaestra.envs.mujoco.fixed_base import (
+    InvertedDoublePendulumEnv,
+    InvertedPendulumEnv,
+    PusherEnv,
+    ReacherEnv,
+)
+from palaestra.envs.mujoco.locomotion import (
+    AntEnv,
+    HalfCheetahEnv,
+    HopperEnv,
+    HumanoidEnv,
+    HumanoidStandupEnv,
+    SwimmerEnv,
+    Walker2dEnv,
+)
 from palaestra.spaces import Box
 from palaestra.utils.stacked_infos import StackedInfos
 
 __all__ = [
     "AntBatch",
     "HalfCheetahBatch",
+    "HopperBatch",
+    "HumanoidBatch",
+    "HumanoidStandupBatch",
+    "InvertedDoublePendulumBatch",
+    "InvertedPendulumBatch",
     "MujocoBatch",
+    "PusherBatch",
+    "ReacherBatch",
+    "SwimmerBatch",
+    "Walker2dBatch",
 ]
 
 # What mj_rnePostConstraint computes: rows run it only when their maths reads one of these.
@@ -344,3 +367,57 @@ class HalfCheetahBatch(MujocoBatch):
     """HalfCheetah-v5's rows (:class:`~palaestra.envs.mujoco.locomotion.HalfCheetahEnv`)."""
 
     env_class = HalfCheetahEnv
+
+
+class HopperBatch(MujocoBatch):
+    """Hopper-v5's rows (:class:`~palaestra.envs.mujoco.locomotion.HopperEnv`)."""
+
+    env_class = HopperEnv
+
+
+class HumanoidBatch(MujocoBatch):
+    """Humanoid-v5's rows (:class:`~palaestra.envs.mujoco.locomotion.HumanoidEnv`)."""
+
+    env_class = HumanoidEnv
+
+
+class HumanoidStandupBatch(MujocoBatch):
+    """HumanoidStandup-v5's rows (:class:`~palaestra.envs.mujoco.locomotion.HumanoidStandupEnv`)."""
+
+    env_class = HumanoidStandupEnv
+
+
+class InvertedDoublePendulumBatch(MujocoBatch):
+    """InvertedDoublePendulum-v5's rows (``fixed_base.InvertedDoublePendulumEnv``)."""
+
+    env_class = InvertedDoublePendulumEnv
+
+
+class InvertedPendulumBatch(MujocoBatch):
+    """InvertedPendulum-v5's rows (``fixed_base.InvertedPendulumEnv``)."""
+
+    env_class = InvertedPendulumEnv
+
+
+class PusherBatch(MujocoBatch):
+    """Pusher-v5's rows (:class:`~palaestra.envs.mujoco.fixed_base.PusherEnv`)."""
+
+    env_class = PusherEnv
+
+
+class ReacherBatch(MujocoBatch):
+    """Reacher-v5's rows (:class:`~palaestra.envs.mujoco.fixed_base.ReacherEnv`)."""
+
+    env_class = ReacherEnv
+
+
+class SwimmerBatch(MujocoBatch):
+    """Swimmer-v5's rows (:class:`~palaestra.envs.mujoco.locomotion.SwimmerEnv`)."""
+
+    env_class = SwimmerEnv
+
+
+class Walker2dBatch(MujocoBatch):
+    """Walker2d-v5's rows (:class:`~palaestra.envs.mujoco.locomotion.Walker2dEnv`)."""
+
+    env_class = Walker2dEnv
