@@ -143,6 +143,20 @@ def warn_unstable(who: str, names: list[str], time: float, stacklevel: int) -> N
     )
 
 
+class _DefaultCamera:
+    """``default_camera_config``'s default: the env's own camera settings (Gymnasium's
+    ``DEFAULT_CAMERA_CONFIG``); an explicit None means none, as there."""
+
+    def __repr__(self) -> str:
+        return "DEFAULT_CAMERA"
+
+    def __reduce__(self) -> str:
+        return "DEFAULT_CAMERA"  # one object, also after a copy
+
+
+DEFAULT_CAMERA: Any = _DefaultCamera()
+
+
 class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
     """One MuJoCo model stepped ``frame_skip`` times per action.
 
@@ -156,6 +170,8 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
     """
 
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES)}
+    #: the camera settings used when ``default_camera_config`` is not given (Gymnasium's)
+    default_camera: ClassVar[dict[str, Any] | None] = None
 
     def __init__(
         self,
@@ -166,11 +182,13 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
         height: int = 480,
         camera_id: int | None = None,
         camera_name: str | None = None,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         max_geom: int = 1000,
         visual_options: dict[int, bool] | None = None,
     ) -> None:
         self._init_render(render_mode)
+        if default_camera_config is DEFAULT_CAMERA:
+            default_camera_config = self.default_camera  # the renderer keeps a copy
         if render_mode == "human":
             check_display()
         self.frame_skip = check_frame_skip(frame_skip)

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.envs.mujoco._base import MujocoEnv, check_weights
+from palaestra.envs.mujoco._base import DEFAULT_CAMERA, MujocoEnv, check_weights
 
 __all__ = ["InvertedDoublePendulumEnv", "InvertedPendulumEnv", "PusherEnv", "ReacherEnv"]
 
@@ -33,17 +33,17 @@ def body_ids(model: Any, *names: str) -> list[int]:
 class InvertedPendulumEnv(MujocoEnv):
     """Push a cart so that the pole hinged on it stays up; +1 a step until it tips past 0.2 rad."""
 
+    default_camera = {"trackbodyid": 0, "distance": 2.04}
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "inverted_pendulum.xml",
         frame_skip: int = 2,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         reset_noise_scale: float = 0.01,
         **kwargs: Any,
     ) -> None:
         (self._reset_noise_scale,) = check_weights(reset_noise_scale=reset_noise_scale)
-        if default_camera_config is None:
-            default_camera_config = {"trackbodyid": 0, "distance": 2.04}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
@@ -77,7 +77,7 @@ class InvertedDoublePendulumEnv(MujocoEnv):
         self,
         xml_file: str | os.PathLike[str] = "inverted_double_pendulum.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         healthy_reward: float = 10.0,
         reset_noise_scale: float = 0.1,
         **kwargs: Any,
@@ -134,11 +134,13 @@ class InvertedDoublePendulumEnv(MujocoEnv):
 class ReacherEnv(MujocoEnv):
     """A two-joint arm rewarded for bringing its fingertip to a random target cheaply."""
 
+    default_camera = {"trackbodyid": 0}
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "reacher.xml",
         frame_skip: int = 2,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         reward_dist_weight: float = 1,
         reward_control_weight: float = 1,
         **kwargs: Any,
@@ -146,8 +148,6 @@ class ReacherEnv(MujocoEnv):
         self._reward_dist_weight, self._reward_control_weight = check_weights(
             reward_dist_weight=reward_dist_weight, reward_control_weight=reward_control_weight
         )
-        if default_camera_config is None:
-            default_camera_config = {"trackbodyid": 0}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
@@ -201,11 +201,13 @@ class ReacherEnv(MujocoEnv):
 class PusherEnv(MujocoEnv):
     """A seven-joint arm rewarded for pushing a cylinder onto a goal (and keeping near it)."""
 
+    default_camera = {"trackbodyid": -1, "distance": 4.0}
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "pusher_v5.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         reward_near_weight: float = 0.5,
         reward_dist_weight: float = 1,
         reward_control_weight: float = 0.1,
@@ -218,8 +220,6 @@ class PusherEnv(MujocoEnv):
                 reward_control_weight=reward_control_weight,
             )
         )
-        if default_camera_config is None:
-            default_camera_config = {"trackbodyid": -1, "distance": 4.0}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )

@@ -14,6 +14,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from palaestra.envs.mujoco._base import (
+    DEFAULT_CAMERA,
     MujocoEnv,
     check_flags,
     check_range,
@@ -56,11 +57,13 @@ def _qpos_x_before(rows: dict[str, np.ndarray]) -> np.ndarray:
 class HalfCheetahEnv(MujocoEnv):
     """A planar cat-like robot rewarded for running forward (+x) with little control effort."""
 
+    default_camera = {"distance": 4.0}
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "half_cheetah.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.0,
         ctrl_cost_weight: float = 0.1,
         reset_noise_scale: float = 0.1,
@@ -77,8 +80,6 @@ class HalfCheetahEnv(MujocoEnv):
         (self._exclude_current_positions_from_observation,) = check_flags(
             exclude_current_positions_from_observation=exclude_current_positions_from_observation
         )
-        if default_camera_config is None:
-            default_camera_config = {"distance": 4.0}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
@@ -238,11 +239,18 @@ class _PlanarWalker(MujocoEnv):
 class HopperEnv(_PlanarWalker):
     """A one-legged planar robot rewarded for hopping forward without falling."""
 
+    default_camera = {
+        "trackbodyid": 2,
+        "distance": 3.0,
+        "lookat": np.array((0.0, 0.0, 1.15)),
+        "elevation": -20.0,
+    }
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "hopper.xml",
         frame_skip: int = 4,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.0,
         ctrl_cost_weight: float = 1e-3,
         healthy_reward: float = 1.0,
@@ -255,13 +263,6 @@ class HopperEnv(_PlanarWalker):
         **kwargs: Any,
     ) -> None:
         self._healthy_state_range = check_range("healthy_state_range", healthy_state_range)
-        if default_camera_config is None:
-            default_camera_config = {
-                "trackbodyid": 2,
-                "distance": 3.0,
-                "lookat": np.array((0.0, 0.0, 1.15)),
-                "elevation": -20.0,
-            }
         super().__init__(
             xml_file,
             frame_skip,
@@ -297,11 +298,18 @@ class HopperEnv(_PlanarWalker):
 class Walker2dEnv(_PlanarWalker):
     """A two-legged planar robot rewarded for walking forward without falling."""
 
+    default_camera = {
+        "trackbodyid": 2,
+        "distance": 4.0,
+        "lookat": np.array((0.0, 0.0, 1.15)),
+        "elevation": -20.0,
+    }
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "walker2d_v5.xml",
         frame_skip: int = 4,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.0,
         ctrl_cost_weight: float = 1e-3,
         healthy_reward: float = 1.0,
@@ -312,13 +320,6 @@ class Walker2dEnv(_PlanarWalker):
         exclude_current_positions_from_observation: bool = True,
         **kwargs: Any,
     ) -> None:
-        if default_camera_config is None:
-            default_camera_config = {
-                "trackbodyid": 2,
-                "distance": 4.0,
-                "lookat": np.array((0.0, 0.0, 1.15)),
-                "elevation": -20.0,
-            }
         super().__init__(
             xml_file,
             frame_skip,
@@ -364,7 +365,7 @@ class SwimmerEnv(MujocoEnv):
         self,
         xml_file: str | os.PathLike[str] = "swimmer.xml",
         frame_skip: int = 4,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.0,
         ctrl_cost_weight: float = 1e-4,
         reset_noise_scale: float = 0.1,
@@ -434,11 +435,13 @@ class SwimmerEnv(MujocoEnv):
 class AntEnv(MujocoEnv):
     """A four-legged 3D robot rewarded for moving forward (+x) while its torso stays up."""
 
+    default_camera = {"distance": 4.0}
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "ant.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1,
         ctrl_cost_weight: float = 0.5,
         contact_cost_weight: float = 5e-4,
@@ -476,8 +479,6 @@ class AntEnv(MujocoEnv):
         )
         self._healthy_z_range = check_range("healthy_z_range", healthy_z_range)
         self._contact_force_range = check_range("contact_force_range", contact_force_range)
-        if default_camera_config is None:
-            default_camera_config = {"distance": 4.0}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
@@ -704,11 +705,18 @@ class _Humanoid(MujocoEnv):
 class HumanoidEnv(_Humanoid):
     """A 3D two-legged robot rewarded for walking forward (+x) without falling."""
 
+    default_camera = {
+        "trackbodyid": 1,
+        "distance": 4.0,
+        "lookat": np.array((0.0, 0.0, 2.0)),
+        "elevation": -20.0,
+    }
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "humanoid.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.25,
         ctrl_cost_weight: float = 0.1,
         contact_cost_weight: float = 5e-7,
@@ -749,13 +757,6 @@ class HumanoidEnv(_Humanoid):
             include_qfrc_actuator_in_observation,
             include_cfrc_ext_in_observation,
         )
-        if default_camera_config is None:
-            default_camera_config = {
-                "trackbodyid": 1,
-                "distance": 4.0,
-                "lookat": np.array((0.0, 0.0, 2.0)),
-                "elevation": -20.0,
-            }
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
@@ -826,11 +827,18 @@ class HumanoidEnv(_Humanoid):
 class HumanoidStandupEnv(_Humanoid):
     """The humanoid lying on its back, rewarded for raising its torso (height per timestep)."""
 
+    default_camera = {
+        "trackbodyid": 1,
+        "distance": 4.0,
+        "lookat": np.array((0.0, 0.0, 0.8925)),
+        "elevation": -20.0,
+    }
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "humanoidstandup.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         uph_cost_weight: float = 1,
         ctrl_cost_weight: float = 0.1,
         impact_cost_weight: float = 0.5e-6,
@@ -863,13 +871,6 @@ class HumanoidStandupEnv(_Humanoid):
             include_qfrc_actuator_in_observation,
             include_cfrc_ext_in_observation,
         )
-        if default_camera_config is None:
-            default_camera_config = {
-                "trackbodyid": 1,
-                "distance": 4.0,
-                "lookat": np.array((0.0, 0.0, 0.8925)),
-                "elevation": -20.0,
-            }
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
