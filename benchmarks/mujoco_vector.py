@@ -6,10 +6,13 @@ it reports env-steps per wall second and per CPU second, the CPU time being the 
 its threads) plus its live children's (AsyncVectorEnv's workers), read with psutil before
 closing. EnvPool's tasks are its v4-era ones on its own MuJoCo build (a speed reference only).
 
-    heavy python benchmarks/mujoco_vector.py --envs HalfCheetah-v5 Ant-v5 --num-envs 1 8 64 256
+    heavy python benchmarks/mujoco_vector.py --envs HalfCheetah-v5 Ant-v5 Hopper-v5 \
+        --num-envs 1 8 64 256
 
 Needs ``pip install -r requirements/bench.txt`` for Gymnasium and EnvPool. ``--profile`` prints
-the share of a native Ant step spent inside MuJoCo's ``mj_step``/``mj_rnePostConstraint``.
+the share of a native step (N=64) spent inside MuJoCo's ``mj_step`` (and
+``mj_rnePostConstraint`` where the batch calls it). ``--single`` compares one env's
+``step`` (``make(id)``, time limit and checks included) with Gymnasium's, both in this run.
 """
 
 from __future__ import annotations
@@ -111,7 +114,8 @@ def profile(env_id: str, n: int, steps: int = 300) -> dict:
         for i, d in enumerate(batch._datas):
             d.ctrl[:] = a[i]
             mujoco.mj_step(batch._models[i], d, nstep=batch.frame_skip)
-            mujoco.mj_rnePostConstraint(batch._models[i], d)
+            if batch._post:
+                mujoco.mj_rnePostConstraint(batch._models[i], d)
     bare = time.process_time() - t0
     return {
         "env": env_id,
@@ -120,6 +124,30 @@ def profile(env_id: str, n: int, steps: int = 300) -> dict:
         "mujoco_cpu_s": bare,
         "mujoco_share": bare / total,
     }
+
+
+def single(env_id: str, lib: str, steps: int) -> dict:
+    """CPU microseconds per ``step`` of one env made by ``lib.make`` (random float32 actions,
+    resets included); the best of 5 blocks."""
+    import numpy as np
+
+    if lib == "gymnasium":
+        import gymnasium as module
+    else:
+        import palaestra as module  # type: ignore[no-redef]
+    env = module.make(env_id)
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    acts = rng.uniform(-1, 1, (256, *env.action_space.shape)).astype(np.float32)
+    blocks = []
+    for _ in range(6):
+        t0 = time.process_time()
+        for k in range(steps):
+            _, _, terminated, truncated, _ = env.step(acts[k % 256])
+            if terminated or truncated:
+                env.reset()
+        blocks.append((time.process_time() - t0) / steps * 1e6)
+    return {"env": env_id, "lib": lib, "us_per_step": min(blocks[1:])}
 
 
 def main() -> None:
@@ -131,8 +159,14 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--max-async", type=int, default=64, help="largest N for gym-async")
     parser.add_argument("--profile", action="store_true")
+    parser.add_argument("--single", action="store_true", help="one env's step vs Gymnasium's")
     parser.add_argument("--case", help=argparse.SUPPRESS)
+    parser.add_argument("--single-case", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.single_case:
+        env_id, lib = args.single_case.split(",")
+        print(json.dumps(single(env_id, lib, 2000)))
+        return
     if args.case:
         impl, env_id, n = args.case.split(",")
         print(json.dumps(run_case(impl, env_id, int(n), args.seconds)))
@@ -140,6 +174,23 @@ def main() -> None:
     if args.profile:
         for env_id in args.envs:
             print(json.dumps(profile(env_id, 64)))
+        return
+    if args.single:
+        print(f"load average at start: {os.getloadavg()}")
+        for env_id in args.envs:
+            out = {}
+            for lib in ("palaestra", "gymnasium", "palaestra", "gymnasium"):  # interleaved
+                case = [sys.executable, __file__, "--single-case", f"{env_id},{lib}"]
+                run = subprocess.run(case, capture_output=True, text=True, check=True)
+                us = json.loads(run.stdout.strip().splitlines()[-1])["us_per_step"]
+                out[lib] = min(us, out.get(lib, us))
+            ours, theirs = out["palaestra"], out["gymnasium"]
+            print(
+                f"{env_id:15s} palaestra {ours:7.1f} us/step  gymnasium {theirs:7.1f} us/step  "
+                f"palaestra's speed {theirs / ours:.2f}x Gymnasium's",
+                flush=True,
+            )
+        print(f"load average at end: {os.getloadavg()}")
         return
     print(f"load average at start: {os.getloadavg()}")
     for env_id in args.envs:
