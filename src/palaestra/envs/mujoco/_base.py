@@ -232,6 +232,7 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
         warning counters and, for the row maths, one-row views of ``row_fields``."""
         data = self.data
         self._warning_counts = data.warning.number
+        self._ctrl = data.ctrl
         names = dict.fromkeys(self.before_fields + self.row_fields)
         self._rows = {name: getattr(data, name)[None] for name in names}
 
@@ -282,7 +283,7 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         del state["_mujoco"]  # a module: imported again by the copy
-        del state["_warning_counts"], state["_rows"]  # views of the original's MjData
+        del state["_warning_counts"], state["_rows"], state["_ctrl"]  # views of its MjData
         state.pop("_window", None)  # a human window stays with the original
         return state
 
@@ -320,7 +321,7 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
         # HalfCheetah's physics); they only grow, so equal bytes mean no new warning.
         counts = self._warning_counts
         before = counts.tobytes()
-        data.ctrl[:] = ctrl
+        self._ctrl[:] = ctrl
         mujoco.mj_step(self.model, data, nstep=n_frames)
         # cfrc_ext and friends are only computed on request (no force sensors in the models)
         mujoco.mj_rnePostConstraint(self.model, data)
