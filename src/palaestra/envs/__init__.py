@@ -130,7 +130,9 @@ _MUJOCO: dict[str, dict] = {
 }
 for _id, _kwargs in _MUJOCO.items():
     if _id not in registry:
-        register(id=_id, **_kwargs)
+        # each v5 env's native batch is its class's name with Batch for Env (mujoco/batch.py)
+        _batch = _kwargs["entry_point"].rsplit(":", 1)[1].removesuffix("Env") + "Batch"
+        register(id=_id, vector_entry_point=f"{_MJ}.batch:{_batch}", **_kwargs)
 
 # Toy text: Gymnasium 1.4's ids, kwargs, limits and thresholds. Older versions (Taxi-v3,
 # CliffWalking-v0, FrozenLake-v0, Blackjack-v0) are not registered, as in Gymnasium: making one

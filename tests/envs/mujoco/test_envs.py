@@ -238,3 +238,23 @@ def test_another_mujoco_version_warns_once(monkeypatch: pytest.MonkeyPatch) -> N
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         palaestra.make("InvertedPendulum-v5")
+
+
+@pytest.mark.parametrize(
+    "env_id", ["HalfCheetah-v5", "Hopper-v5", "InvertedDoublePendulum-v5", "Pusher-v5"]
+)
+def test_default_camera_config_none_is_no_camera_config_as_in_gymnasium(env_id: str) -> None:
+    """Left out: the env's own camera settings; an explicit None: none (Gymnasium's rule)."""
+    gymnasium = pytest.importorskip("gymnasium")
+    ours = palaestra.make(env_id, default_camera_config=None).unwrapped
+    theirs = gymnasium.make(env_id, default_camera_config=None).unwrapped
+    assert ours._renderer.default_camera_config is None
+    assert theirs.mujoco_renderer.default_cam_config is None
+    ours_default = palaestra.make(env_id).unwrapped._renderer.default_camera_config
+    theirs_default = gymnasium.make(env_id).unwrapped.mujoco_renderer.default_cam_config
+    if theirs_default is None:  # InvertedDoublePendulum's default is None
+        assert ours_default is None
+        return
+    assert set(ours_default) == set(theirs_default)
+    for key, value in theirs_default.items():
+        assert np.array_equal(ours_default[key], value), key

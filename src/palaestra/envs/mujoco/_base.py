@@ -12,7 +12,7 @@ import math
 import os
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -127,6 +127,36 @@ def check_weights(**weights: Any) -> list[float]:
     return [check_real(name, value) for name, value in weights.items()]
 
 
+def warning_names(counts: np.ndarray, before: np.ndarray) -> list[str]:
+    """The names of MuJoCo's warnings whose counters grew from ``before`` to ``counts``."""
+    kinds = import_mujoco().mjtWarning
+    return [kinds(int(k)).name for k in np.flatnonzero(counts > before)]
+
+
+def warn_unstable(who: str, names: list[str], time: float, stacklevel: int) -> None:
+    """Raise :class:`MujocoWarning` naming MuJoCo's warnings of one step."""
+    warnings.warn(
+        f"{who}: MuJoCo reported {', '.join(names)} at time {time:.4f} (the simulation is "
+        "unstable; MuJoCo may have reset it)",
+        MujocoWarning,
+        stacklevel=stacklevel,
+    )
+
+
+class _DefaultCamera:
+    """``default_camera_config``'s default: the env's own camera settings (Gymnasium's
+    ``DEFAULT_CAMERA_CONFIG``); an explicit None means none, as there."""
+
+    def __repr__(self) -> str:
+        return "DEFAULT_CAMERA"
+
+    def __reduce__(self) -> str:
+        return "DEFAULT_CAMERA"  # one object, also after a copy
+
+
+DEFAULT_CAMERA: Any = _DefaultCamera()
+
+
 class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
     """One MuJoCo model stepped ``frame_skip`` times per action.
 
@@ -140,6 +170,8 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
     """
 
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES)}
+    #: the camera settings used when ``default_camera_config`` is not given (Gymnasium's)
+    default_camera: ClassVar[dict[str, Any] | None] = None
 
     def __init__(
         self,
@@ -150,11 +182,13 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
         height: int = 480,
         camera_id: int | None = None,
         camera_name: str | None = None,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         max_geom: int = 1000,
         visual_options: dict[int, bool] | None = None,
     ) -> None:
         self._init_render(render_mode)
+        if default_camera_config is DEFAULT_CAMERA:
+            default_camera_config = self.default_camera  # the renderer keeps a copy
         if render_mode == "human":
             check_display()
         self.frame_skip = check_frame_skip(frame_skip)
@@ -172,6 +206,7 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
         glob.offwidth = max(glob.offwidth, width)
         glob.offheight = max(glob.offheight, height)
         self.data = self._mujoco.MjData(self.model)
+        self._bind_views()
         self.init_qpos = self.data.qpos.ravel().copy()
         self.init_qvel = self.data.qvel.ravel().copy()
         low, high = self.model.actuator_ctrlrange.copy().astype(np.float32).T
@@ -192,15 +227,70 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
     def _float_box(size: int) -> Box:
         return Box(low=-np.inf, high=np.inf, shape=(size,), dtype=np.float64)
 
+    def _bind_views(self) -> None:
+        """Views of ``data``'s arrays that steps read (they live as long as ``data``): the
+        warning counters and, for the row maths, one-row views of ``row_fields``."""
+        data = self.data
+        self._warning_counts = data.warning.number
+        self._ctrl = data.ctrl
+        names = dict.fromkeys(self.before_fields + self.row_fields)
+        self._rows = {name: getattr(data, name)[None] for name in names}
+
+    # -- the row maths --------------------------------------------------------------------------
+    # Each env's observation, reward, termination and info maths is written once, on arrays
+    # with a leading row axis: the single env calls it with its one row (views of its MjData),
+    # its native batch (palaestra.envs.mujoco.batch) with the stacked arrays of N rows.
+
+    #: MjData arrays that ``rows_step``/``rows_obs`` read, and that ``rows_before`` reads
+    row_fields: ClassVar[tuple[str, ...]] = ("qpos", "qvel")
+    before_fields: ClassVar[tuple[str, ...]] = ()
+    #: info keys (and the reward) that Gymnasium's single env gives as Python scalars
+    python_infos: ClassVar[dict[str, type]] = {}
+    python_reward: ClassVar[type | None] = None
+
+    def rows_before(self, rows: dict[str, np.ndarray]) -> Any:
+        """What a step's maths needs from before the physics (e.g. positions), per row; it
+        must not be a view of ``rows``' arrays (the single env's rows are its live data)."""
+        return None
+
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        """The observations ``[R, obs_dim]`` of the rows' states."""
+        raise NotImplementedError
+
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """After the physics: ``(obs [R, obs_dim], reward [R], terminated [R] bool, infos)``,
+        each info an ``[R, ...]`` array; ``actions`` are the checked actions ``[R, act_dim]``."""
+        raise NotImplementedError
+
+    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
+        """Apply ``action`` for ``frame_skip`` MuJoCo steps (the row maths on this env's row)."""
+        action = self._check_action(action)
+        rows = self._rows
+        before = self.rows_before(rows)
+        self.do_simulation(action, self.frame_skip)
+        obs, reward, terminated, infos = self.rows_step(rows, before, action[None])
+        info = {key: value[0] for key, value in infos.items()}
+        for key, kind in self.python_infos.items():
+            info[key] = kind(info[key])
+        r = reward[0] if self.python_reward is None else self.python_reward(reward[0])
+        return obs[0], r, bool(terminated[0]), False, self._add_warnings(info)
+
+    def _get_obs(self) -> np.ndarray:
+        return self.rows_obs(self._rows)[0]
+
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         del state["_mujoco"]  # a module: imported again by the copy
+        del state["_warning_counts"], state["_rows"], state["_ctrl"]  # views of its MjData
         state.pop("_window", None)  # a human window stays with the original
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._mujoco = import_mujoco()
+        self._bind_views()
 
     def _frame(self) -> Any:
         mode = str(self.render_mode)  # render() calls this only with a mode
@@ -227,23 +317,19 @@ class MujocoEnv(RenderedEnv[np.ndarray, np.ndarray]):
         """Write ``ctrl`` and advance ``n_frames`` MuJoCo steps; MuJoCo's warnings of those
         steps are raised as :class:`MujocoWarning` and kept in ``self._step_warnings``."""
         mujoco, data = self._mujoco, self.data
-        before = [w.number for w in data.warning]
-        data.ctrl[:] = ctrl
+        # MuJoCo's warning counters as one array (reading them struct by struct cost more than
+        # HalfCheetah's physics); they only grow, so equal bytes mean no new warning.
+        counts = self._warning_counts
+        before = counts.tobytes()
+        self._ctrl[:] = ctrl
         mujoco.mj_step(self.model, data, nstep=n_frames)
         # cfrc_ext and friends are only computed on request (no force sensors in the models)
         mujoco.mj_rnePostConstraint(self.model, data)
-        self._step_warnings = [
-            mujoco.mjtWarning(i).name
-            for i, (w, n) in enumerate(zip(data.warning, before))
-            if w.number > n
-        ]
-        if self._step_warnings:
-            warnings.warn(
-                f"{type(self).__name__}: MuJoCo reported {', '.join(self._step_warnings)} at "
-                f"time {data.time:.4f} (the simulation is unstable; MuJoCo may have reset it)",
-                MujocoWarning,
-                stacklevel=3,
-            )
+        if counts.tobytes() == before:
+            self._step_warnings = []
+        else:
+            self._step_warnings = warning_names(counts, np.frombuffer(before, counts.dtype))
+            warn_unstable(type(self).__name__, self._step_warnings, data.time, stacklevel=4)
         if self.render_mode == "human":  # every step calls this once: Gymnasium's step's frame
             self.render()
 

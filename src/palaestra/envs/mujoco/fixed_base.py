@@ -13,42 +13,56 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.envs.mujoco._base import MujocoEnv, check_weights
+from palaestra.envs.mujoco._base import DEFAULT_CAMERA, MujocoEnv, check_weights
 
 __all__ = ["InvertedDoublePendulumEnv", "InvertedPendulumEnv", "PusherEnv", "ReacherEnv"]
+
+
+def _squared(x: np.ndarray) -> np.ndarray:
+    """``x ** 2`` as Gymnasium's scalar ``x**2`` computes it: C's ``pow``. An array's ``x**2``
+    is ``x * x``, which differs from ``pow`` in the last bit now and then; an array exponent
+    keeps ``np.power`` on ``pow``."""
+    return np.power(x, np.full(x.shape, 2.0))
+
+
+def body_ids(model: Any, *names: str) -> list[int]:
+    """The ids of the model's bodies named ``names`` (their rows in ``data.xpos``)."""
+    return [model.body(name).id for name in names]
 
 
 class InvertedPendulumEnv(MujocoEnv):
     """Push a cart so that the pole hinged on it stays up; +1 a step until it tips past 0.2 rad."""
 
+    default_camera = {"trackbodyid": 0, "distance": 2.04}
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "inverted_pendulum.xml",
         frame_skip: int = 2,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         reset_noise_scale: float = 0.01,
         **kwargs: Any,
     ) -> None:
         (self._reset_noise_scale,) = check_weights(reset_noise_scale=reset_noise_scale)
-        if default_camera_config is None:
-            default_camera_config = {"trackbodyid": 0, "distance": 2.04}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
         self.observation_structure = {"qpos": self.data.qpos.size, "qvel": self.data.qvel.size}
         self.observation_space = self._float_box(4)
 
-    def step(self, action: Any) -> tuple[np.ndarray, int, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        self.do_simulation(action, self.frame_skip)
-        observation = self._get_obs()
-        terminated = bool(not np.isfinite(observation).all() or np.abs(observation[1]) > 0.2)
-        reward = int(not terminated)
-        info = {"reward_survive": reward}
-        return observation, reward, terminated, False, self._add_warnings(info)
+    python_infos = {"reward_survive": int}  # Gymnasium's reward is int(not terminated)
+    python_reward = int
 
-    def _get_obs(self) -> np.ndarray:
-        return np.concatenate([self.data.qpos, self.data.qvel])
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        observation = self.rows_obs(rows)
+        terminated = ~np.isfinite(observation).all(axis=1) | (np.abs(observation[:, 1]) > 0.2)
+        reward = (~terminated).astype(np.int64)
+        return observation, reward, terminated, {"reward_survive": reward}
+
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        return np.concatenate((rows["qpos"], rows["qvel"]), axis=1)
 
     def reset_model(self) -> np.ndarray:
         self._noisy_reset(normal_qvel=False)
@@ -63,7 +77,7 @@ class InvertedDoublePendulumEnv(MujocoEnv):
         self,
         xml_file: str | os.PathLike[str] = "inverted_double_pendulum.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         healthy_reward: float = 10.0,
         reset_noise_scale: float = 0.1,
         **kwargs: Any,
@@ -76,34 +90,40 @@ class InvertedDoublePendulumEnv(MujocoEnv):
         )
         self.observation_space = self._float_box(9)
 
-    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        self.do_simulation(action, self.frame_skip)
-        x, _, y = self.data.site_xpos[0]
-        observation = self._get_obs()
-        terminated = bool(y <= 1)
-        v1, v2 = self.data.qvel[1:3]
-        dist_penalty = 0.01 * x**2 + (y - 2) ** 2
-        vel_penalty = 1e-3 * v1**2 + 5e-3 * v2**2
-        alive_bonus = self._healthy_reward * int(not terminated)
+    row_fields = ("qpos", "qvel", "site_xpos", "qfrc_constraint")
+    python_infos = {"reward_survive": float}  # Gymnasium's is a float times an int
+
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        tip = rows["site_xpos"][:, 0]
+        x, y = tip[:, 0], tip[:, 2]
+        observation = self.rows_obs(rows)
+        terminated = y <= 1
+        qvel = rows["qvel"]
+        v1, v2 = qvel[:, 1], qvel[:, 2]
+        dist_penalty = 0.01 * _squared(x) + _squared(y - 2)
+        vel_penalty = 1e-3 * _squared(v1) + 5e-3 * _squared(v2)
+        alive_bonus = self._healthy_reward * (~terminated)
         reward = alive_bonus - dist_penalty - vel_penalty
         info = {
             "reward_survive": alive_bonus,
             "distance_penalty": -dist_penalty,
             "velocity_penalty": -vel_penalty,
         }
-        return observation, reward, terminated, False, self._add_warnings(info)
+        return observation, reward, terminated, info
 
-    def _get_obs(self) -> np.ndarray:
-        qpos, data = self.data.qpos, self.data
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        qpos = rows["qpos"]
         return np.concatenate(
-            [
-                qpos[:1],
-                np.sin(qpos[1:]),
-                np.cos(qpos[1:]),
-                np.clip(data.qvel, -10, 10),
-                np.clip(data.qfrc_constraint, -10, 10)[:1],
-            ]
+            (
+                qpos[:, :1],
+                np.sin(qpos[:, 1:]),
+                np.cos(qpos[:, 1:]),
+                np.clip(rows["qvel"], -10, 10),
+                np.clip(rows["qfrc_constraint"], -10, 10)[:, :1],
+            ),
+            axis=1,
         )
 
     def reset_model(self) -> np.ndarray:
@@ -114,11 +134,13 @@ class InvertedDoublePendulumEnv(MujocoEnv):
 class ReacherEnv(MujocoEnv):
     """A two-joint arm rewarded for bringing its fingertip to a random target cheaply."""
 
+    default_camera = {"trackbodyid": 0}
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "reacher.xml",
         frame_skip: int = 2,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         reward_dist_weight: float = 1,
         reward_control_weight: float = 1,
         **kwargs: Any,
@@ -126,23 +148,28 @@ class ReacherEnv(MujocoEnv):
         self._reward_dist_weight, self._reward_control_weight = check_weights(
             reward_dist_weight=reward_dist_weight, reward_control_weight=reward_control_weight
         )
-        if default_camera_config is None:
-            default_camera_config = {"trackbodyid": 0}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
         self.observation_space = self._float_box(10)
+        self._fingertip, self._target = body_ids(self.model, "fingertip", "target")
 
-    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        self.do_simulation(action, self.frame_skip)
-        observation = self._get_obs()
-        to_target = self.get_body_com("fingertip") - self.get_body_com("target")
-        reward_dist = -np.linalg.norm(to_target) * self._reward_dist_weight
-        reward_ctrl = -np.square(action).sum() * self._reward_control_weight
+    row_fields = ("qpos", "qvel", "xpos")
+
+    def _to_target(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        xpos = rows["xpos"]
+        return xpos[:, self._fingertip] - xpos[:, self._target]
+
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        observation = self.rows_obs(rows)
+        to_target = self._to_target(rows)
+        reward_dist = -np.linalg.norm(to_target, axis=1) * self._reward_dist_weight
+        reward_ctrl = -np.square(actions).sum(axis=1) * self._reward_control_weight
         reward = reward_dist + reward_ctrl
         info = {"reward_dist": reward_dist, "reward_ctrl": reward_ctrl}
-        return observation, reward, False, False, self._add_warnings(info)
+        return observation, reward, np.zeros(len(reward), bool), info
 
     def reset_model(self) -> np.ndarray:
         qpos = self.np_random.uniform(low=-0.1, high=0.1, size=self.model.nq) + self.init_qpos
@@ -156,23 +183,31 @@ class ReacherEnv(MujocoEnv):
         self.set_state(qpos, qvel)
         return self._get_obs()
 
-    def _get_obs(self) -> np.ndarray:
-        qpos = self.data.qpos.flatten()
-        theta = qpos[:2]
-        to_target = self.get_body_com("fingertip") - self.get_body_com("target")
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        qpos = rows["qpos"]
+        theta = qpos[:, :2]
         return np.concatenate(
-            [np.cos(theta), np.sin(theta), qpos[2:], self.data.qvel.flatten()[:2], to_target[:2]]
+            (
+                np.cos(theta),
+                np.sin(theta),
+                qpos[:, 2:],
+                rows["qvel"][:, :2],
+                self._to_target(rows)[:, :2],
+            ),
+            axis=1,
         )
 
 
 class PusherEnv(MujocoEnv):
     """A seven-joint arm rewarded for pushing a cylinder onto a goal (and keeping near it)."""
 
+    default_camera = {"trackbodyid": -1, "distance": 4.0}
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "pusher_v5.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         reward_near_weight: float = 0.5,
         reward_dist_weight: float = 1,
         reward_control_weight: float = 0.1,
@@ -185,26 +220,26 @@ class PusherEnv(MujocoEnv):
                 reward_control_weight=reward_control_weight,
             )
         )
-        if default_camera_config is None:
-            default_camera_config = {"trackbodyid": -1, "distance": 4.0}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
         self.observation_space = self._float_box(23)
+        self._tips, self._object, self._goal = body_ids(self.model, "tips_arm", "object", "goal")
 
-    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        self.do_simulation(action, self.frame_skip)
-        observation = self._get_obs()
-        obj = self.get_body_com("object")
-        reward_near = (
-            -np.linalg.norm(obj - self.get_body_com("tips_arm")) * self._reward_near_weight
-        )
-        reward_dist = -np.linalg.norm(obj - self.get_body_com("goal")) * self._reward_dist_weight
-        reward_ctrl = -np.square(action).sum() * self._reward_control_weight
+    row_fields = ("qpos", "qvel", "xpos")
+
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        observation = self.rows_obs(rows)
+        xpos = rows["xpos"]
+        obj = xpos[:, self._object]
+        reward_near = -np.linalg.norm(obj - xpos[:, self._tips], axis=1) * self._reward_near_weight
+        reward_dist = -np.linalg.norm(obj - xpos[:, self._goal], axis=1) * self._reward_dist_weight
+        reward_ctrl = -np.square(actions).sum(axis=1) * self._reward_control_weight
         reward = reward_dist + reward_ctrl + reward_near
         info = {"reward_dist": reward_dist, "reward_ctrl": reward_ctrl, "reward_near": reward_near}
-        return observation, reward, False, False, self._add_warnings(info)
+        return observation, reward, np.zeros(len(reward), bool), info
 
     def reset_model(self) -> np.ndarray:
         qpos = self.init_qpos.copy()
@@ -225,14 +260,15 @@ class PusherEnv(MujocoEnv):
         self.set_state(qpos, qvel)
         return self._get_obs()
 
-    def _get_obs(self) -> np.ndarray:
-        qpos, qvel = self.data.qpos.flatten(), self.data.qvel.flatten()
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        xpos = rows["xpos"]
         return np.concatenate(
-            [
-                qpos[:7],
-                qvel[:7],
-                self.get_body_com("tips_arm"),
-                self.get_body_com("object"),
-                self.get_body_com("goal"),
-            ]
+            (
+                rows["qpos"][:, :7],
+                rows["qvel"][:, :7],
+                xpos[:, self._tips],
+                xpos[:, self._object],
+                xpos[:, self._goal],
+            ),
+            axis=1,
         )

@@ -9,11 +9,12 @@ cost is a float32 sum, as there), so rewards and infos are the same bits.
 from __future__ import annotations
 
 import os
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from palaestra.envs.mujoco._base import (
+    DEFAULT_CAMERA,
     MujocoEnv,
     check_flags,
     check_range,
@@ -37,14 +38,32 @@ def _x_reward_info(forward_reward: Any, ctrl_cost: Any) -> dict[str, Any]:
     return {"reward_forward": forward_reward, "reward_ctrl": -ctrl_cost}
 
 
+def _ctrl_costs(weight: float, actions: np.ndarray) -> np.ndarray:
+    """``weight`` times each row's sum of squared actions (a float32 row sums in float32)."""
+    return weight * np.square(actions).sum(axis=1)  # the method: np.sum's wrapper costs more
+
+
+def _x_progress(env: MujocoEnv, rows: dict[str, np.ndarray], before: np.ndarray) -> Any:
+    """Each row's x position after the step, its x velocity and the forward reward."""
+    x_after = rows["qpos"][:, 0]
+    x_velocity = (x_after - before) / env.dt
+    return x_after, x_velocity, env._forward_reward_weight * x_velocity  # type: ignore[attr-defined]
+
+
+def _qpos_x_before(rows: dict[str, np.ndarray]) -> np.ndarray:
+    return rows["qpos"][:, 0].copy()
+
+
 class HalfCheetahEnv(MujocoEnv):
     """A planar cat-like robot rewarded for running forward (+x) with little control effort."""
+
+    default_camera = {"distance": 4.0}
 
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "half_cheetah.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.0,
         ctrl_cost_weight: float = 0.1,
         reset_noise_scale: float = 0.1,
@@ -61,8 +80,6 @@ class HalfCheetahEnv(MujocoEnv):
         (self._exclude_current_positions_from_observation,) = check_flags(
             exclude_current_positions_from_observation=exclude_current_positions_from_observation
         )
-        if default_camera_config is None:
-            default_camera_config = {"distance": 4.0}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
@@ -76,31 +93,31 @@ class HalfCheetahEnv(MujocoEnv):
             self.data.qpos.size + self.data.qvel.size - skipped
         )
 
+    before_fields = ("qpos",)
+
     def control_cost(self, action: np.ndarray) -> Any:
         """``ctrl_cost_weight`` times the sum of squared actions."""
-        return self._ctrl_cost_weight * np.sum(np.square(action))
+        return _ctrl_costs(self._ctrl_cost_weight, np.asarray(action)[None])[0]
 
-    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        x_before = self.data.qpos[0]
-        self.do_simulation(action, self.frame_skip)
-        x_after = self.data.qpos[0]
-        x_velocity = (x_after - x_before) / self.dt
-        forward_reward = self._forward_reward_weight * x_velocity
-        ctrl_cost = self.control_cost(action)
+    def rows_before(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        return _qpos_x_before(rows)
+
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        x_after, x_velocity, forward_reward = _x_progress(self, rows, before)
+        ctrl_cost = _ctrl_costs(self._ctrl_cost_weight, actions)
         reward = forward_reward - ctrl_cost
         info = {
             "x_position": x_after,
             "x_velocity": x_velocity,
             **_x_reward_info(forward_reward, ctrl_cost),
         }
-        return self._get_obs(), reward, False, False, self._add_warnings(info)
+        return self.rows_obs(rows), reward, np.zeros(len(reward), bool), info
 
-    def _get_obs(self) -> np.ndarray:
-        position = self.data.qpos.flatten()
-        if self._exclude_current_positions_from_observation:
-            position = position[1:]
-        return np.concatenate((position, self.data.qvel.flatten()))
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        skipped = int(self._exclude_current_positions_from_observation)
+        return np.concatenate((rows["qpos"][:, skipped:], rows["qvel"]), axis=1)
 
     def reset_model(self) -> np.ndarray:
         self._noisy_reset(normal_qvel=True)
@@ -160,48 +177,53 @@ class _PlanarWalker(MujocoEnv):
             self.data.qpos.size + self.data.qvel.size - skipped
         )
 
-    @property
-    def is_healthy(self) -> Any:
-        """Whether the robot is upright: height and torso angle (and for Hopper, the state)
+    before_fields = ("qpos",)
+
+    def rows_healthy(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        """Whether each row is upright: height and torso angle (and for Hopper, the state)
         inside their ranges."""
         raise NotImplementedError
 
     @property
-    def healthy_reward(self) -> Any:
+    def is_healthy(self) -> bool:
+        """Whether the robot is upright (:meth:`rows_healthy` of this env's state)."""
+        return bool(self.rows_healthy(self._rows)[0])
+
+    @property
+    def healthy_reward(self) -> float:
         """``healthy_reward`` while healthy, else 0."""
         return self.is_healthy * self._healthy_reward
 
     def control_cost(self, action: np.ndarray) -> Any:
         """``ctrl_cost_weight`` times the sum of squared actions."""
-        return self._ctrl_cost_weight * np.sum(np.square(action))
+        return _ctrl_costs(self._ctrl_cost_weight, np.asarray(action)[None])[0]
 
-    def _get_obs(self) -> np.ndarray:
-        position = self.data.qpos.flatten()
-        velocity = np.clip(self.data.qvel.flatten(), -10, 10)
-        if self._exclude_current_positions_from_observation:
-            position = position[1:]
-        return np.concatenate((position, velocity))
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        skipped = int(self._exclude_current_positions_from_observation)
+        velocity = np.clip(rows["qvel"], -10, 10)
+        return np.concatenate((rows["qpos"][:, skipped:], velocity), axis=1)
 
-    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        x_before = self.data.qpos[0]
-        self.do_simulation(action, self.frame_skip)
-        x_after = self.data.qpos[0]
-        x_velocity = (x_after - x_before) / self.dt
-        observation = self._get_obs()
-        forward_reward = self._forward_reward_weight * x_velocity
-        healthy_reward = self.healthy_reward
-        ctrl_cost = self.control_cost(action)
+    def rows_before(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        return _qpos_x_before(rows)
+
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        x_after, x_velocity, forward_reward = _x_progress(self, rows, before)
+        observation = self.rows_obs(rows)
+        healthy = self.rows_healthy(rows)
+        healthy_reward = healthy * self._healthy_reward
+        ctrl_cost = _ctrl_costs(self._ctrl_cost_weight, actions)
         reward = (forward_reward + healthy_reward) - ctrl_cost
-        terminated = not self.is_healthy and self._terminate_when_unhealthy
+        terminated = ~healthy & self._terminate_when_unhealthy
         info = {
             "x_position": x_after,
-            "z_distance_from_origin": self.data.qpos[1] - self.init_qpos[1],
+            "z_distance_from_origin": rows["qpos"][:, 1] - self.init_qpos[1],
             "x_velocity": x_velocity,
             **_x_reward_info(forward_reward, ctrl_cost),
             "reward_survive": healthy_reward,
         }
-        return observation, reward, terminated, False, self._add_warnings(info)
+        return observation, reward, terminated, info
 
     def reset_model(self) -> np.ndarray:
         self._noisy_reset(normal_qvel=False)
@@ -217,11 +239,18 @@ class _PlanarWalker(MujocoEnv):
 class HopperEnv(_PlanarWalker):
     """A one-legged planar robot rewarded for hopping forward without falling."""
 
+    default_camera = {
+        "trackbodyid": 2,
+        "distance": 3.0,
+        "lookat": np.array((0.0, 0.0, 1.15)),
+        "elevation": -20.0,
+    }
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "hopper.xml",
         frame_skip: int = 4,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.0,
         ctrl_cost_weight: float = 1e-3,
         healthy_reward: float = 1.0,
@@ -234,13 +263,6 @@ class HopperEnv(_PlanarWalker):
         **kwargs: Any,
     ) -> None:
         self._healthy_state_range = check_range("healthy_state_range", healthy_state_range)
-        if default_camera_config is None:
-            default_camera_config = {
-                "trackbodyid": 2,
-                "distance": 3.0,
-                "lookat": np.array((0.0, 0.0, 1.15)),
-                "elevation": -20.0,
-            }
         super().__init__(
             xml_file,
             frame_skip,
@@ -256,31 +278,38 @@ class HopperEnv(_PlanarWalker):
             **kwargs,
         )
 
-    @property
-    def is_healthy(self) -> bool:
+    python_infos = {"reward_survive": float}  # Gymnasium's is a bool times a float
+
+    def rows_healthy(self, rows: dict[str, np.ndarray]) -> np.ndarray:
         """Height, torso angle and every other state component inside their ranges."""
-        z, angle = self.data.qpos[1:3]
-        state = self.state_vector()[2:]
+        qpos = rows["qpos"]
+        z, angle = qpos[:, 1], qpos[:, 2]
+        state = np.concatenate((qpos[:, 2:], rows["qvel"]), axis=1)
         low_state, high_state = self._healthy_state_range
         low_z, high_z = self._healthy_z_range
         low_angle, high_angle = self._healthy_angle_range
-        return all(
-            (
-                np.all(np.logical_and(low_state < state, state < high_state)),
-                low_z < z < high_z,
-                low_angle < angle < high_angle,
-            )
+        return (
+            np.all((low_state < state) & (state < high_state), axis=1)
+            & ((low_z < z) & (z < high_z))
+            & ((low_angle < angle) & (angle < high_angle))
         )
 
 
 class Walker2dEnv(_PlanarWalker):
     """A two-legged planar robot rewarded for walking forward without falling."""
 
+    default_camera = {
+        "trackbodyid": 2,
+        "distance": 4.0,
+        "lookat": np.array((0.0, 0.0, 1.15)),
+        "elevation": -20.0,
+    }
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "walker2d_v5.xml",
         frame_skip: int = 4,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.0,
         ctrl_cost_weight: float = 1e-3,
         healthy_reward: float = 1.0,
@@ -291,13 +320,6 @@ class Walker2dEnv(_PlanarWalker):
         exclude_current_positions_from_observation: bool = True,
         **kwargs: Any,
     ) -> None:
-        if default_camera_config is None:
-            default_camera_config = {
-                "trackbodyid": 2,
-                "distance": 4.0,
-                "lookat": np.array((0.0, 0.0, 1.15)),
-                "elevation": -20.0,
-            }
         super().__init__(
             xml_file,
             frame_skip,
@@ -313,21 +335,27 @@ class Walker2dEnv(_PlanarWalker):
             **kwargs,
         )
 
-    @property
-    def is_healthy(self) -> Any:
+    def rows_healthy(self, rows: dict[str, np.ndarray]) -> np.ndarray:
         """Height and torso angle inside their ranges."""
-        z, angle = self.data.qpos[1:3]
+        qpos = rows["qpos"]
+        z, angle = qpos[:, 1], qpos[:, 2]
         low_z, high_z = self._healthy_z_range
         low_angle, high_angle = self._healthy_angle_range
-        return (low_z < z < high_z) and (low_angle < angle < high_angle)
+        return ((low_z < z) & (z < high_z)) & ((low_angle < angle) & (angle < high_angle))
 
 
 def _xy_info(qpos: np.ndarray) -> dict[str, Any]:
+    """Positions and distance from the origin of each row (``qpos`` is ``[R, nq]``)."""
     return {
-        "x_position": qpos[0],
-        "y_position": qpos[1],
-        "distance_from_origin": np.linalg.norm(qpos[0:2], ord=2),
+        "x_position": qpos[:, 0],
+        "y_position": qpos[:, 1],
+        "distance_from_origin": np.linalg.norm(qpos[:, 0:2], ord=2, axis=1),
     }
+
+
+def _xy_velocities(env: MujocoEnv, xy_after: np.ndarray, before: np.ndarray) -> Any:
+    velocity = (xy_after - before) / env.dt
+    return velocity[:, 0], velocity[:, 1]
 
 
 class SwimmerEnv(MujocoEnv):
@@ -337,7 +365,7 @@ class SwimmerEnv(MujocoEnv):
         self,
         xml_file: str | os.PathLike[str] = "swimmer.xml",
         frame_skip: int = 4,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.0,
         ctrl_cost_weight: float = 1e-4,
         reset_noise_scale: float = 0.1,
@@ -367,49 +395,53 @@ class SwimmerEnv(MujocoEnv):
             self.data.qpos.size + self.data.qvel.size - skipped
         )
 
+    before_fields = ("qpos",)
+
     def control_cost(self, action: np.ndarray) -> Any:
         """``ctrl_cost_weight`` times the sum of squared actions."""
-        return self._ctrl_cost_weight * np.sum(np.square(action))
+        return _ctrl_costs(self._ctrl_cost_weight, np.asarray(action)[None])[0]
 
-    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        xy_before = self.data.qpos[0:2].copy()
-        self.do_simulation(action, self.frame_skip)
-        xy_after = self.data.qpos[0:2].copy()
-        x_velocity, y_velocity = (xy_after - xy_before) / self.dt
+    def rows_before(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        return rows["qpos"][:, 0:2].copy()
+
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        qpos = rows["qpos"]
+        x_velocity, y_velocity = _xy_velocities(self, qpos[:, 0:2], before)
         forward_reward = self._forward_reward_weight * x_velocity
-        ctrl_cost = self.control_cost(action)
+        ctrl_cost = _ctrl_costs(self._ctrl_cost_weight, actions)
         reward = forward_reward - ctrl_cost
         info = {
-            **_xy_info(xy_after),
+            **_xy_info(qpos),
             "x_velocity": x_velocity,
             "y_velocity": y_velocity,
             **_x_reward_info(forward_reward, ctrl_cost),
         }
-        return self._get_obs(), reward, False, False, self._add_warnings(info)
+        return self.rows_obs(rows), reward, np.zeros(len(reward), bool), info
 
-    def _get_obs(self) -> np.ndarray:
-        position = self.data.qpos.flatten()
-        if self._exclude_current_positions_from_observation:
-            position = position[2:]
-        return np.concatenate([position, self.data.qvel.flatten()])
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        skipped = 2 * int(self._exclude_current_positions_from_observation)
+        return np.concatenate((rows["qpos"][:, skipped:], rows["qvel"]), axis=1)
 
     def reset_model(self) -> np.ndarray:
         self._noisy_reset(normal_qvel=False)
         return self._get_obs()
 
     def _get_reset_info(self) -> dict[str, Any]:
-        return _xy_info(self.data.qpos)
+        return {key: value[0] for key, value in _xy_info(self._rows["qpos"]).items()}
 
 
 class AntEnv(MujocoEnv):
     """A four-legged 3D robot rewarded for moving forward (+x) while its torso stays up."""
 
+    default_camera = {"distance": 4.0}
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "ant.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1,
         ctrl_cost_weight: float = 0.5,
         contact_cost_weight: float = 5e-4,
@@ -447,12 +479,11 @@ class AntEnv(MujocoEnv):
         )
         self._healthy_z_range = check_range("healthy_z_range", healthy_z_range)
         self._contact_force_range = check_range("contact_force_range", contact_force_range)
-        if default_camera_config is None:
-            default_camera_config = {"distance": 4.0}
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
         self._main_body = _check_body(self, main_body)
+        self._main_body_id = self.data.body(main_body).id
         skipped = 2 * int(self._exclude_current_positions_from_observation)
         cfrc = self.data.cfrc_ext[1:].size * int(self._include_cfrc_ext_in_observation)
         self.observation_structure = {
@@ -465,6 +496,20 @@ class AntEnv(MujocoEnv):
             self.data.qpos.size + self.data.qvel.size - skipped + cfrc
         )
 
+    row_fields = ("qpos", "qvel", "xpos", "cfrc_ext")
+    before_fields = ("xpos",)
+
+    def rows_healthy(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        """A finite state with the torso's height inside ``healthy_z_range``, per row."""
+        state = np.concatenate((rows["qpos"], rows["qvel"]), axis=1)
+        low_z, high_z = self._healthy_z_range
+        return np.isfinite(state).all(axis=1) & ((low_z <= state[:, 2]) & (state[:, 2] <= high_z))
+
+    @property
+    def is_healthy(self) -> bool:
+        """A finite state with the torso's height inside ``healthy_z_range``."""
+        return bool(self.rows_healthy(self._rows)[0])
+
     @property
     def healthy_reward(self) -> Any:
         """``healthy_reward`` while healthy, else 0."""
@@ -472,65 +517,67 @@ class AntEnv(MujocoEnv):
 
     def control_cost(self, action: np.ndarray) -> Any:
         """``ctrl_cost_weight`` times the sum of squared actions."""
-        return self._ctrl_cost_weight * np.sum(np.square(action))
+        return _ctrl_costs(self._ctrl_cost_weight, np.asarray(action)[None])[0]
+
+    def rows_contact_forces(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        """The bodies' external forces (``cfrc_ext``, ``[R, nbody, 6]``), clipped to
+        ``contact_force_range``."""
+        low, high = self._contact_force_range
+        return np.clip(rows["cfrc_ext"], low, high)
 
     @property
     def contact_forces(self) -> np.ndarray:
         """The bodies' external forces (``cfrc_ext``), clipped to ``contact_force_range``."""
-        low, high = self._contact_force_range
-        return np.clip(self.data.cfrc_ext, low, high)
+        return self.rows_contact_forces(self._rows)[0]
 
     @property
     def contact_cost(self) -> Any:
         """``contact_cost_weight`` times the sum of squared clipped contact forces."""
-        return self._contact_cost_weight * np.sum(np.square(self.contact_forces))
+        return _square_sums(self._contact_cost_weight, self.rows_contact_forces(self._rows))[0]
 
-    @property
-    def is_healthy(self) -> Any:
-        """A finite state with the torso's height inside ``healthy_z_range``."""
-        state = self.state_vector()
-        low_z, high_z = self._healthy_z_range
-        return np.isfinite(state).all() and low_z <= state[2] <= high_z
+    def rows_before(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        return rows["xpos"][:, self._main_body_id, :2].copy()
 
-    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        body = self.data.body(self._main_body)
-        xy_before = body.xpos[:2].copy()
-        self.do_simulation(action, self.frame_skip)
-        xy_after = body.xpos[:2].copy()
-        x_velocity, y_velocity = (xy_after - xy_before) / self.dt
-        observation = self._get_obs()
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        xy_after = rows["xpos"][:, self._main_body_id, :2]
+        x_velocity, y_velocity = _xy_velocities(self, xy_after, before)
+        forces = self.rows_contact_forces(rows)
+        observation = self._obs_of(rows, forces)
         forward_reward = x_velocity * self._forward_reward_weight
-        healthy_reward = self.healthy_reward
-        ctrl_cost = self.control_cost(action)
-        contact_cost = self.contact_cost
+        healthy = self.rows_healthy(rows)
+        healthy_reward = healthy * self._healthy_reward
+        ctrl_cost = _ctrl_costs(self._ctrl_cost_weight, actions)
+        contact_cost = _square_sums(self._contact_cost_weight, forces)
         reward = (forward_reward + healthy_reward) - (ctrl_cost + contact_cost)
-        terminated = not self.is_healthy and self._terminate_when_unhealthy
+        terminated = ~healthy & self._terminate_when_unhealthy
         info = {
-            **_xy_info(self.data.qpos),
+            **_xy_info(rows["qpos"]),
             "x_velocity": x_velocity,
             "y_velocity": y_velocity,
             **_x_reward_info(forward_reward, ctrl_cost),
             "reward_contact": -contact_cost,
             "reward_survive": healthy_reward,
         }
-        return observation, reward, terminated, False, self._add_warnings(info)
+        return observation, reward, terminated, info
 
-    def _get_obs(self) -> np.ndarray:
-        position = self.data.qpos.flatten()
-        if self._exclude_current_positions_from_observation:
-            position = position[2:]
-        parts = [position, self.data.qvel.flatten()]
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        return self._obs_of(rows, self.rows_contact_forces(rows))
+
+    def _obs_of(self, rows: dict[str, np.ndarray], forces: np.ndarray) -> np.ndarray:
+        skipped = 2 * int(self._exclude_current_positions_from_observation)
+        parts = [rows["qpos"][:, skipped:], rows["qvel"]]
         if self._include_cfrc_ext_in_observation:
-            parts.append(self.contact_forces[1:].flatten())
-        return np.concatenate(parts)
+            parts.append(forces[:, 1:].reshape(len(forces), -1))
+        return np.concatenate(parts, axis=1)
 
     def reset_model(self) -> np.ndarray:
         self._noisy_reset(normal_qvel=True)
         return self._get_obs()
 
     def _get_reset_info(self) -> dict[str, Any]:
-        return _xy_info(self.data.qpos)
+        return {key: value[0] for key, value in _xy_info(self._rows["qpos"]).items()}
 
 
 def _check_body(env: MujocoEnv, body: Any) -> int | str:
@@ -546,10 +593,20 @@ def _check_body(env: MujocoEnv, body: Any) -> int | str:
     return body
 
 
+def _square_sums(weight: float, arrays: np.ndarray) -> np.ndarray:
+    """``weight`` times the sum of squares of each row's array (``[R, ...]``)."""
+    return weight * np.square(arrays).reshape(len(arrays), -1).sum(axis=1)
+
+
+def mass_centers(body_mass: np.ndarray, xipos: np.ndarray) -> np.ndarray:
+    """The (x, y) of each row's centre of mass (``xipos`` is ``[R, nbody, 3]``)."""
+    total = np.einsum("b,rbj->rj", body_mass, xipos)
+    return (total / body_mass.sum())[:, 0:2]
+
+
 def mass_center(model: Any, data: Any) -> np.ndarray:
     """The (x, y) of the model's centre of mass."""
-    total = np.einsum("b,bj->j", model.body_mass, data.xipos)
-    return (total / model.body_mass.sum())[0:2].copy()
+    return mass_centers(model.body_mass, data.xipos[None])[0]
 
 
 class _Humanoid(MujocoEnv):
@@ -594,27 +651,51 @@ class _Humanoid(MujocoEnv):
         size = sum(n for key, n in structure.items() if key != "skipped_qpos")
         self.observation_space = self._float_box(size)
 
-    def _get_obs(self) -> np.ndarray:
-        data = self.data
-        position = data.qpos.flatten()
-        if self._exclude_current_positions_from_observation:
-            position = position[2:]
-        parts = [position, data.qvel.flatten()]
-        if self._include_cinert_in_observation:
-            parts.append(data.cinert[1:].flatten())
-        if self._include_cvel_in_observation:
-            parts.append(data.cvel[1:].flatten())
-        if self._include_qfrc_actuator_in_observation:
-            parts.append(data.qfrc_actuator[6:].flatten())
-        if self._include_cfrc_ext_in_observation:
-            parts.append(data.cfrc_ext[1:].flatten())
-        return np.concatenate(parts)
+    row_fields: ClassVar[tuple[str, ...]] = (
+        "qpos",
+        "qvel",
+        "cinert",
+        "cvel",
+        "qfrc_actuator",
+        "cfrc_ext",
+        "ctrl",
+        "ten_length",
+        "ten_velocity",
+    )
 
-    def _tendon_info(self) -> dict[str, Any]:
+    def rows_obs(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        n = len(rows["qpos"])
+        skipped = 2 * int(self._exclude_current_positions_from_observation)
+        parts = [rows["qpos"][:, skipped:], rows["qvel"]]
+        if self._include_cinert_in_observation:
+            parts.append(rows["cinert"][:, 1:].reshape(n, -1))
+        if self._include_cvel_in_observation:
+            parts.append(rows["cvel"][:, 1:].reshape(n, -1))
+        if self._include_qfrc_actuator_in_observation:
+            parts.append(rows["qfrc_actuator"][:, 6:])
+        if self._include_cfrc_ext_in_observation:
+            parts.append(rows["cfrc_ext"][:, 1:].reshape(n, -1))
+        return np.concatenate(parts, axis=1)
+
+    @staticmethod
+    def _tendon_info(rows: dict[str, np.ndarray]) -> dict[str, Any]:
         return {
-            "tendon_length": self.data.ten_length.copy(),
-            "tendon_velocity": self.data.ten_velocity.copy(),
+            "tendon_length": rows["ten_length"].copy(),
+            "tendon_velocity": rows["ten_velocity"].copy(),
         }
+
+    def _positions_info(self, rows: dict[str, np.ndarray]) -> dict[str, Any]:
+        """Humanoid's reset info, per row (and the start of its step info)."""
+        qpos = rows["qpos"]
+        return {
+            "x_position": qpos[:, 0],
+            "y_position": qpos[:, 1],
+            **self._tendon_info(rows),
+            "distance_from_origin": np.linalg.norm(qpos[:, 0:2], ord=2, axis=1),
+        }
+
+    def _get_reset_info(self) -> dict[str, Any]:
+        return {key: value[0] for key, value in self._positions_info(self._rows).items()}
 
     def reset_model(self) -> np.ndarray:
         self._noisy_reset(normal_qvel=False)
@@ -624,11 +705,18 @@ class _Humanoid(MujocoEnv):
 class HumanoidEnv(_Humanoid):
     """A 3D two-legged robot rewarded for walking forward (+x) without falling."""
 
+    default_camera = {
+        "trackbodyid": 1,
+        "distance": 4.0,
+        "lookat": np.array((0.0, 0.0, 2.0)),
+        "elevation": -20.0,
+    }
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "humanoid.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         forward_reward_weight: float = 1.25,
         ctrl_cost_weight: float = 0.1,
         contact_cost_weight: float = 5e-7,
@@ -669,17 +757,24 @@ class HumanoidEnv(_Humanoid):
             include_qfrc_actuator_in_observation,
             include_cfrc_ext_in_observation,
         )
-        if default_camera_config is None:
-            default_camera_config = {
-                "trackbodyid": 1,
-                "distance": 4.0,
-                "lookat": np.array((0.0, 0.0, 2.0)),
-                "elevation": -20.0,
-            }
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
         self._set_observation_space()
+
+    row_fields: ClassVar[tuple[str, ...]] = (*_Humanoid.row_fields, "xipos")
+    before_fields = ("xipos",)
+
+    def rows_healthy(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        """The torso's height inside ``healthy_z_range``, per row."""
+        low_z, high_z = self._healthy_z_range
+        z = rows["qpos"][:, 2]
+        return (low_z < z) & (z < high_z)
+
+    @property
+    def is_healthy(self) -> bool:
+        """The torso's height inside ``healthy_z_range``."""
+        return bool(self.rows_healthy(self._rows)[0])
 
     @property
     def healthy_reward(self) -> Any:
@@ -688,67 +783,62 @@ class HumanoidEnv(_Humanoid):
 
     def control_cost(self, action: np.ndarray) -> Any:
         """``ctrl_cost_weight`` times the sum of squared controls (``data.ctrl``, float64)."""
-        return self._ctrl_cost_weight * np.sum(np.square(self.data.ctrl))
+        return _ctrl_costs(self._ctrl_cost_weight, self._rows["ctrl"])[0]
+
+    def rows_contact_cost(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        """``contact_cost_weight`` times the sum of squared ``cfrc_ext``, clipped to
+        ``contact_cost_range``, per row."""
+        low, high = self._contact_cost_range
+        return np.clip(_square_sums(self._contact_cost_weight, rows["cfrc_ext"]), low, high)
 
     @property
     def contact_cost(self) -> Any:
         """``contact_cost_weight`` times the sum of squared ``cfrc_ext``, clipped to
         ``contact_cost_range``."""
-        cost = self._contact_cost_weight * np.sum(np.square(self.data.cfrc_ext))
-        low, high = self._contact_cost_range
-        return np.clip(cost, low, high)
+        return self.rows_contact_cost(self._rows)[0]
 
-    @property
-    def is_healthy(self) -> Any:
-        """The torso's height inside ``healthy_z_range``."""
-        low_z, high_z = self._healthy_z_range
-        return low_z < self.data.qpos[2] < high_z
+    def rows_before(self, rows: dict[str, np.ndarray]) -> np.ndarray:
+        return mass_centers(self.model.body_mass, rows["xipos"])
 
-    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        xy_before = mass_center(self.model, self.data)
-        self.do_simulation(action, self.frame_skip)
-        xy_after = mass_center(self.model, self.data)
-        x_velocity, y_velocity = (xy_after - xy_before) / self.dt
-        observation = self._get_obs()
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        xy_after = mass_centers(self.model.body_mass, rows["xipos"])
+        x_velocity, y_velocity = _xy_velocities(self, xy_after, before)
+        observation = self.rows_obs(rows)
         forward_reward = self._forward_reward_weight * x_velocity
-        healthy_reward = self.healthy_reward
-        ctrl_cost = self.control_cost(action)
-        contact_cost = self.contact_cost
+        healthy = self.rows_healthy(rows)
+        healthy_reward = healthy * self._healthy_reward
+        ctrl_cost = _ctrl_costs(self._ctrl_cost_weight, rows["ctrl"])
+        contact_cost = self.rows_contact_cost(rows)
         reward = (forward_reward + healthy_reward) - (ctrl_cost + contact_cost)
-        terminated = not self.is_healthy and self._terminate_when_unhealthy
-        qpos = self.data.qpos
+        terminated = ~healthy & self._terminate_when_unhealthy
         info = {
-            "x_position": qpos[0],
-            "y_position": qpos[1],
-            **self._tendon_info(),
-            "distance_from_origin": np.linalg.norm(qpos[0:2], ord=2),
+            **self._positions_info(rows),
             "x_velocity": x_velocity,
             "y_velocity": y_velocity,
             "reward_survive": healthy_reward,
             **_x_reward_info(forward_reward, ctrl_cost),
             "reward_contact": -contact_cost,
         }
-        return observation, reward, terminated, False, self._add_warnings(info)
-
-    def _get_reset_info(self) -> dict[str, Any]:
-        qpos = self.data.qpos
-        return {
-            "x_position": qpos[0],
-            "y_position": qpos[1],
-            **self._tendon_info(),
-            "distance_from_origin": np.linalg.norm(qpos[0:2], ord=2),
-        }
+        return observation, reward, terminated, info
 
 
 class HumanoidStandupEnv(_Humanoid):
     """The humanoid lying on its back, rewarded for raising its torso (height per timestep)."""
 
+    default_camera = {
+        "trackbodyid": 1,
+        "distance": 4.0,
+        "lookat": np.array((0.0, 0.0, 0.8925)),
+        "elevation": -20.0,
+    }
+
     def __init__(
         self,
         xml_file: str | os.PathLike[str] = "humanoidstandup.xml",
         frame_skip: int = 5,
-        default_camera_config: dict[str, Any] | None = None,
+        default_camera_config: dict[str, Any] | None = DEFAULT_CAMERA,
         uph_cost_weight: float = 1,
         ctrl_cost_weight: float = 0.1,
         impact_cost_weight: float = 0.5e-6,
@@ -781,42 +871,35 @@ class HumanoidStandupEnv(_Humanoid):
             include_qfrc_actuator_in_observation,
             include_cfrc_ext_in_observation,
         )
-        if default_camera_config is None:
-            default_camera_config = {
-                "trackbodyid": 1,
-                "distance": 4.0,
-                "lookat": np.array((0.0, 0.0, 0.8925)),
-                "elevation": -20.0,
-            }
         super().__init__(
             xml_file, frame_skip, default_camera_config=default_camera_config, **kwargs
         )
         self._set_observation_space()
 
-    def step(self, action: Any) -> tuple[np.ndarray, Any, bool, bool, dict[str, Any]]:
-        action = self._check_action(action)
-        self.do_simulation(action, self.frame_skip)
-        data = self.data
-        height = data.qpos[2]
+    def rows_step(
+        self, rows: dict[str, np.ndarray], before: Any, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        height = rows["qpos"][:, 2]
         uph_cost = (height - 0) / self.model.opt.timestep
-        quad_ctrl_cost = self._ctrl_cost_weight * np.square(data.ctrl).sum()
-        quad_impact_cost = self._impact_cost_weight * np.square(data.cfrc_ext).sum()
+        quad_ctrl_cost = _ctrl_costs(self._ctrl_cost_weight, rows["ctrl"])
         low, high = self._impact_cost_range
-        quad_impact_cost = np.clip(quad_impact_cost, low, high)
+        quad_impact_cost = np.clip(
+            _square_sums(self._impact_cost_weight, rows["cfrc_ext"]), low, high
+        )
         reward = uph_cost - quad_ctrl_cost - quad_impact_cost + 1
         info = {
-            **self._get_reset_info(),
+            **self._positions_info(rows),
             "reward_linup": uph_cost,
             "reward_quadctrl": -quad_ctrl_cost,
             "reward_impact": -quad_impact_cost,
         }
-        return self._get_obs(), reward, False, False, self._add_warnings(info)
+        return self.rows_obs(rows), reward, np.zeros(len(reward), bool), info
 
-    def _get_reset_info(self) -> dict[str, Any]:
-        qpos = self.data.qpos
+    def _positions_info(self, rows: dict[str, np.ndarray]) -> dict[str, Any]:
+        qpos = rows["qpos"]
         return {
-            "x_position": qpos[0],
-            "y_position": qpos[1],
-            "z_distance_from_origin": qpos[2] - self.init_qpos[2],
-            **self._tendon_info(),
+            "x_position": qpos[:, 0],
+            "y_position": qpos[:, 1],
+            "z_distance_from_origin": qpos[:, 2] - self.init_qpos[2],
+            **self._tendon_info(rows),
         }
