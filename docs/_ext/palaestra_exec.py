@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -67,8 +68,13 @@ class RunDirective(SphinxDirective):
     def run(self) -> list[nodes.Node]:
         docname = self.env.docname
         code = "\n".join(self.content)
-        namespace = _NAMESPACES.setdefault(docname, {"__name__": "__main__"})
         workdir = Path(self.env.app.outdir).parent / "exec" / docname
+        if docname not in _NAMESPACES:
+            # The page's first block: a fresh namespace and an empty folder, so a page never
+            # depends on what an earlier build left (a run folder, a saved model).
+            _NAMESPACES[docname] = {"__name__": "__main__"}
+            shutil.rmtree(workdir, ignore_errors=True)
+        namespace = _NAMESPACES[docname]
         workdir.mkdir(parents=True, exist_ok=True)
         expected = self.options.get("raises")
         out = _Tee()

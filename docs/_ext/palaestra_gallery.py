@@ -19,6 +19,7 @@ import multiprocessing
 import os
 import shutil
 import time
+import zlib
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,7 @@ FAMILIES = env_notes.FAMILIES
 STEPS = 60
 MAX_SIDE = 200
 MUJOCO_SIDE = 192  # MuJoCo renders in software (EGL, llvmpipe) on CI: its cost grows with pixels
-RENDER_VERSION = "2"
+RENDER_VERSION = "3"
 
 
 def family_of(env_id: str) -> str:
@@ -105,8 +106,11 @@ def render_gif(env_id: str, path: Path) -> int:
     spec_skip = palaestra.spec(env_id).kwargs.get("frameskip", 4)
     # Atari's NoFrameskip ids step one emulator frame at a time: film every 4th.
     stride = 4 if family_of(env_id) == "atari" and spec_skip == 1 else 1
-    env.action_space.seed(0)
-    env.reset(seed=0)
+    # A seed of its own per id: two ids of one game (ALE/X-v5, XNoFrameskip-v4) or one model
+    # (CartPole-v0/v1) would otherwise film the same random episode.
+    seed = zlib.crc32(env_id.encode()) % 10_000
+    env.action_space.seed(seed)
+    env.reset(seed=seed)
     frames = [env.render()]
     for step in range(STEPS * stride):
         _, _, terminated, truncated, _ = env.step(env.action_space.sample())

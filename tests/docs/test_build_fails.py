@@ -19,6 +19,8 @@ if os.environ.get("PALAESTRA_DOCS_BUILT") != "1":
     pytest.importorskip("sphinx", reason="make docs installs Sphinx (requirements/docs.txt)")
 
 ROOT = Path(__file__).resolve().parents[2]
+# Each builds a small site (3-5 s); ``make docs`` runs them with ``-m "slow or not slow"``.
+pytestmark = pytest.mark.slow
 
 CONF = f"""
 __file__ = {str(ROOT / "docs" / "conf.py")!r}
