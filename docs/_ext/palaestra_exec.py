@@ -7,6 +7,10 @@ build warning carrying the traceback, which ``-W`` turns into a failed build. A 
 is meant to raise says which exception with ``:raises: InvalidAction``; it then fails the build
 if it does not raise that exception, and shows the exception's line as its output.
 
+Each page's namespace starts with ``ROOT`` (the repository) and ``SRCDIR`` (the docs source
+folder): a block can read the repository's data files and write a figure under
+``SRCDIR/_generated`` that the page shows with ``{image}``.
+
 Options:
     ``:raises: NAME``   the block must raise an exception whose class name is NAME.
     ``:hide-code:``     run the block and show only its output (set-up code).
@@ -72,7 +76,13 @@ class RunDirective(SphinxDirective):
         if docname not in _NAMESPACES:
             # The page's first block: a fresh namespace and an empty folder, so a page never
             # depends on what an earlier build left (a run folder, a saved model).
-            _NAMESPACES[docname] = {"__name__": "__main__"}
+            # ROOT and SRCDIR let a block read the repository's files and write a figure
+            # that the page then shows with an image directive.
+            _NAMESPACES[docname] = {
+                "__name__": "__main__",
+                "ROOT": str(_ROOT),
+                "SRCDIR": str(self.env.srcdir),
+            }
             shutil.rmtree(workdir, ignore_errors=True)
         namespace = _NAMESPACES[docname]
         workdir.mkdir(parents=True, exist_ok=True)

@@ -38,6 +38,9 @@ STEPS = 60
 MAX_SIDE = 200
 MUJOCO_SIDE = 192  # MuJoCo renders in software (EGL, llvmpipe) on CI: its cost grows with pixels
 RENDER_VERSION = "3"
+# Random steps taken before filming, per family: many Atari games play an intro of a few
+# seconds in which no action matters, and the film would show only that.
+WARMUP = {"atari": 150}
 
 
 def family_of(env_id: str) -> str:
@@ -87,6 +90,9 @@ def _source_hash(env_id: str) -> str:
     )
     digest.update(Path(inspect.getfile(module)).read_bytes())
     digest.update(RENDER_VERSION.encode())
+    warmup = WARMUP.get(family_of(env_id))
+    if warmup:
+        digest.update(f"warmup {warmup}".encode())
     return digest.hexdigest()[:16]
 
 
@@ -111,6 +117,10 @@ def render_gif(env_id: str, path: Path) -> int:
     seed = zlib.crc32(env_id.encode()) % 10_000
     env.action_space.seed(seed)
     env.reset(seed=seed)
+    for _ in range(WARMUP.get(family_of(env_id), 0) * stride):
+        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        if terminated or truncated:
+            env.reset()
     frames = [env.render()]
     for step in range(STEPS * stride):
         _, _, terminated, truncated, _ = env.step(env.action_space.sample())
