@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -54,9 +55,13 @@ class _Tee(io.StringIO):
         return False
 
 
+_ANSI = re.compile(r"\x1b\[[0-9;]*m")
+
+
 def _format_output(text: str) -> str:
-    # Progress bars redraw with carriage returns: keep the last state of each line.
-    lines = [line.rsplit("\r", 1)[-1] for line in text.splitlines()]
+    # Progress bars redraw with carriage returns: keep the last state of each line; colour
+    # codes (palaestra's logger colours its warnings) do not belong in a web page.
+    lines = [_ANSI.sub("", line.rsplit("\r", 1)[-1]) for line in text.splitlines()]
     return "\n".join(line.rstrip() for line in lines).strip("\n")
 
 
