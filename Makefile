@@ -4,7 +4,9 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-user-install test-all lint bench clean
+DOCS_STAMP := $(VENV)/.docs-installed
+
+.PHONY: demo test test-user-install test-all lint bench docs clean
 
 $(STAMP): requirements/dev.txt requirements/dev-no-deps.txt pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -38,8 +40,20 @@ lint: $(STAMP)
 	$(BIN)/ruff format --check src tests benchmarks
 	$(BIN)/mypy
 
+# The documentation site: docs/_build/html/index.html. Strict (-W: any warning, a broken
+# reference or a code block that raises, fails it) and offline; -E reads every page again, so
+# every code block runs on every build; then the checks that read the built site (tests/docs).
+# Environment animations are rendered once and cached in docs/_build/gallery-cache/.
+$(DOCS_STAMP): $(STAMP) requirements/docs.txt
+	$(BIN)/pip install --quiet -r requirements/docs.txt
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	MUJOCO_GL=egl $(BIN)/python -m sphinx -b html -E -W --keep-going -n -q docs docs/_build/html
+	PALAESTRA_DOCS_BUILT=1 $(BIN)/python -m pytest -q -p no:cacheprovider -m "slow or not slow" tests/docs
+
 bench: $(STAMP)
 	$(BIN)/python benchmarks/env_step.py
 
 clean:
-	rm -rf $(VENV) build src/*.egg-info
+	rm -rf $(VENV) build src/*.egg-info docs/_build docs/api docs/envs

@@ -70,7 +70,7 @@ class VecMonitor(VecEnvWrapper):
 
     def log_per_env(self, filenames: Sequence[str], override_existing: bool = True) -> None:
         """Log env i's episodes to ``filenames[i]`` (what ``make_vec_env(monitor_dir=...)``
-        gives a native batch: one ``<rank>.monitor.csv`` per env, as SB3's ``Monitor``s)."""
+        gives a native batch: one ``<rank>.monitor.csv`` per env, as SB3's ``Monitor`` does)."""
         if len(filenames) != self.num_envs:
             raise ValueError(f"Expected {self.num_envs} monitor file names, got {len(filenames)}")
         self._env_writers = [self._writer(name, override_existing) for name in filenames]
