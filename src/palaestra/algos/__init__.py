@@ -107,7 +107,7 @@ def __getattr__(name: str) -> object:
         raise ImportError(
             "HER is a replay buffer class, HerReplayBuffer, since Stable-Baselines3 2.1.0 (and "
             "in palaestra): pass replay_buffer_class=HerReplayBuffer to DQN, SAC, TD3 or DDPG. "
-            "Please check the documentation for more information (palaestra's README, "
-            "'Training agents'; SB3's https://stable-baselines3.readthedocs.io/en/master/modules/her.html)"
+            "Please check the documentation for more information (palaestra's guide "
+            "docs/guides/training.md; SB3's https://stable-baselines3.readthedocs.io/en/master/modules/her.html)"
         )
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
