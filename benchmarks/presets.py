@@ -14,13 +14,14 @@ Each run is built exactly as ``palaestra train ALGO ENV --preset NAME --seed S``
 says ``normalize``), ``ALGO(policy, env, seed=S, **resolve(hyperparams))``, then
 ``learn(n_timesteps)`` with ``torch.set_num_threads(1)``. Only ``learn`` is timed, in wall-clock
 and in process CPU seconds (the second is what other jobs on a shared machine do not inflate).
-The trained model then plays 100 deterministic episodes with ``evaluate_policy`` on a fresh
-``palaestra.make(env_id)`` reset once with seed ``10_000 + S`` (later resets continue its
-generator). Goal envs also report the success rate: the env's ``info["is_success"]`` at each
-episode's end where it reports one (BitFlipping), else episodes that end before the time limit
-(MountainCar, Acrobot). One row per (preset, seed) as it finishes, then per preset the medians
-and how many seeds reach the env's target (the env spec's ``reward_threshold``; -200 for
-Pendulum-v1, which has none). Run one training at a time on a quiet machine: wall times are
+The trained model then plays 100 deterministic episodes (10 on MuJoCo's 1000-step robots) with
+``evaluate_policy`` on a fresh ``palaestra.make(env_id)`` reset once with seed ``10_000 + S``
+(later resets continue its generator). Goal envs also report the success rate: the env's
+``info["is_success"]`` at each episode's end where it reports one (BitFlipping), else episodes
+that end before the time limit (MountainCar, Acrobot). One row per (preset, seed) as it
+finishes, then per preset the medians, the interquartile mean and range over seeds and how many
+seeds reach the env's target (the env spec's ``reward_threshold``; -200 for Pendulum-v1, which
+has none). Run one training at a time on a quiet machine: wall times are
 the point; where the machine is shared, the CPU seconds say what an idle core would take.
 Atari presets (``"atari"`` in the preset) are left to ``benchmarks/atari_presets.py``.
 """
@@ -43,10 +44,15 @@ import palaestra
 from palaestra import presets
 from palaestra.runs.files import is_goal_env
 from palaestra.runs.settings import ALGOS, parse_value
+from palaestra.runs.stats import iqm
 from palaestra.utils.atomic_write import atomic_write
 
 PRESETS_JSON = Path(__file__).resolve().parents[1] / "src/palaestra/presets/presets.json"
 EVAL_EPISODES = 100
+# MuJoCo's robots run 1000-step episodes on a deterministic policy from a small reset noise:
+# 10 episodes cost a tenth of the CPU of 100 (100,000 policy steps on HalfCheetah) and vary
+# little between episodes.
+LONG_EVAL_EPISODES = 10
 EVAL_SEED = 10_000
 # Targets where the env spec has no reward_threshold ("solved" as the RL Zoo reports it).
 # BitFlipping15-v0: a policy that flips each zero bit once returns -(zeros - 1), about -6.5 from
@@ -80,6 +86,13 @@ def target(env_id: str) -> float:
     if env_id in EXTRA_TARGETS:
         return EXTRA_TARGETS[env_id]
     raise KeyError(f"no target return known for {env_id!r}; add it to EXTRA_TARGETS")
+
+
+def eval_episodes(env_id: str) -> int:
+    """How many deterministic episodes evaluate a preset on ``env_id``."""
+    entry = palaestra.spec(env_id).entry_point
+    mujoco = isinstance(entry, str) and entry.startswith("palaestra.envs.mujoco")
+    return LONG_EVAL_EPISODES if mujoco else EVAL_EPISODES
 
 
 def make_training_env(env_id: str, preset: dict[str, Any], seed: int) -> Any:
@@ -119,13 +132,15 @@ def evaluate(
     wall: float,
     cpu: float,
 ) -> Run:
-    """100 deterministic episodes on a fresh env reset once with ``EVAL_SEED + seed``."""
+    """:func:`eval_episodes` deterministic episodes on a fresh env reset once with
+    ``EVAL_SEED + seed``."""
     from palaestra.algos import evaluate_policy
 
     policy = NormalizedPolicy(model, venv) if preset.get("normalize") else model
     env = palaestra.make(env_id, **(preset.get("env_kwargs") or {}))
     env.reset(seed=EVAL_SEED + seed)
     reported: list[bool] = []  # info["is_success"] at each episode's end, where the env says
+    episodes = eval_episodes(env_id)
 
     def on_step(locals_: dict[str, Any], globals_: dict[str, Any]) -> None:
         if locals_["done"] and "is_success" in locals_["info"]:
@@ -134,7 +149,7 @@ def evaluate(
     returns, lengths = evaluate_policy(
         policy,
         env,
-        n_eval_episodes=EVAL_EPISODES,
+        n_eval_episodes=episodes,
         deterministic=True,
         return_episode_rewards=True,
         callback=on_step,
@@ -142,7 +157,7 @@ def evaluate(
     if preset.get("normalize"):
         venv.training = True  # evaluation paused training; it goes on normalising as before
     success = None
-    if len(reported) == EVAL_EPISODES:  # every episode's end said whether it succeeded
+    if len(reported) == episodes:  # every episode's end said whether it succeeded
         success = float(np.mean(reported))
     elif is_goal_env(env_id):
         limit = env.spec.max_episode_steps if env.spec is not None else None
@@ -231,12 +246,17 @@ def row(run: Run) -> str:
 
 
 def summary(runs: list[Run]) -> dict[str, Any]:
-    """Per-seed results and medians of one preset (the ``measured`` record)."""
+    """Per-seed results, medians and the interquartile mean and range of one preset (the
+    ``measured`` record)."""
     goal = target(runs[0].env_id)
+    returns = [r.mean_return for r in runs]
     out: dict[str, Any] = {
         "seeds": [r.seed for r in runs],
-        "mean_return": [round(r.mean_return, 1) for r in runs],
-        "median_return": round(statistics.median(r.mean_return for r in runs), 1),
+        "mean_return": [round(x, 1) for x in returns],
+        "median_return": round(statistics.median(returns), 1),
+        # The IQM over seeds (palaestra compare's statistic) and the 25th-75th percentiles.
+        "iqm_return": round(iqm(returns), 1),
+        "interquartile_range": [round(float(q), 1) for q in np.percentile(returns, [25, 75])],
         "target": goal,
         "seeds_meeting_target": sum(r.mean_return >= goal for r in runs),
         "wall_s": [round(r.wall_s, 1) for r in runs],
@@ -244,6 +264,8 @@ def summary(runs: list[Run]) -> dict[str, Any]:
         "cpu_s": [round(r.cpu_s, 1) for r in runs],
         "cpu_s_median": round(statistics.median(r.cpu_s for r in runs), 1),
     }
+    if eval_episodes(runs[0].env_id) != EVAL_EPISODES:
+        out["eval_episodes"] = eval_episodes(runs[0].env_id)
     if runs[0].success is not None:
         out["success_rate"] = [r.success for r in runs]
     if runs[0].env_id in SUCCESS_TARGETS:
@@ -258,7 +280,8 @@ def summary_line(runs: list[Run]) -> str:
     s = summary(runs)
     head = f"{runs[0].algo} {runs[0].env_id} {runs[0].name}:"
     return (
-        f"{head} median return {s['median_return']:.1f}, "
+        f"{head} median return {s['median_return']:.1f}, IQM {s['iqm_return']:.1f} "
+        f"(IQR {s['interquartile_range'][0]:.1f} to {s['interquartile_range'][1]:.1f}), "
         f"{s['seeds_meeting_target']}/{len(runs)} seeds >= {s['target']:g}, "
         f"median train wall {s['wall_s_median']:.1f}s, CPU {s['cpu_s_median']:.1f}s"
     )

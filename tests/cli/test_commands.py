@@ -21,9 +21,9 @@ def test_envs_lists_spaces_and_marks_atari() -> None:
     assert result.code == 0, result.err
     lines = result.out.splitlines()
     assert lines[0].split() == ["id", "action", "space", "threshold", "max", "steps",
-                                "observation", "space"]  # fmt: skip
+                                "presets", "observation", "space"]  # fmt: skip
     cartpole = next(line for line in lines if line.startswith("CartPole-v1 "))
-    assert cartpole.split()[1:4] == ["Discrete(2)", "475", "500"]
+    assert cartpole.split()[1:5] == ["Discrete(2)", "475", "500", "a2c,dqn,ppo,qrdqn"]
     assert cartpole.endswith(
         "Box([-4.8               -inf -0.41887903        -inf], "
         "[4.8               inf 0.41887903        inf], (4,), float32)"

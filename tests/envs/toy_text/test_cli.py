@@ -16,8 +16,9 @@ def test_envs_lists_every_toy_text_id_with_its_spaces() -> None:
     rows = {line.split()[0]: line for line in result.out.splitlines() if line}
     for env_id in TOY_TEXT_IDS:
         assert env_id in rows, env_id
-    assert rows["FrozenLake-v1"].split()[1:5] == ["Discrete(4)", "0.7", "100", "Discrete(16)"]
-    assert rows["Taxi-v4"].split()[1:5] == ["Discrete(6)", "8", "200", "Discrete(500)"]
+    # action space, threshold, max steps, presets (none), observation space
+    assert rows["FrozenLake-v1"].split()[1:6] == ["Discrete(4)", "0.7", "100", "-", "Discrete(16)"]
+    assert rows["Taxi-v4"].split()[1:6] == ["Discrete(6)", "8", "200", "-", "Discrete(500)"]
     assert "Tuple(Discrete(32), Discrete(11), Discrete(2))" in rows["Blackjack-v1"]
 
 
