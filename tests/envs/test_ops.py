@@ -134,3 +134,47 @@ def test_constants_are_0d_arrays_of_the_same_values() -> None:
     c = ARRAY.constants(p)
     assert isinstance(c.tau, np.ndarray) and c.tau.shape == () and c.tau == p.tau
     assert c.kinematics_integrator == p.kinematics_integrator  # non-floats kept as they are
+
+
+def test_hard_squares_come_from_numpy_power_loop_not_python(monkeypatch: Any) -> None:
+    """Near-midpoint rows take libm's answer through numpy's array-exponent power loop, in C.
+
+    Rows where pow and ``x*x`` differ are found and fixed there; where numpy's loop is not
+    libm (an AVX-512 build's SVML pow), the per-row Python path gives the same bits.
+    """
+    from palaestra.envs.classic_control import _ops
+
+    assert _ops.numpy_power_is_libm()  # x86-64 without AVX-512, numpy 2.4: the CI machines
+    x = np.random.default_rng(7).uniform(-30, 30, 50_000)
+    expected = np.array([v**2 for v in x.tolist()])
+    assert (expected != x * x).sum() > 10
+    power, calls = np.power, []
+
+    def spy(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        calls.append(a.size)
+        return power(a, b)
+
+    monkeypatch.setattr(_ops.np, "power", spy)
+    np.testing.assert_array_equal(ARRAY.pow2(x), expected)
+    assert calls and 0 < calls[0] < 0.06 * x.size  # only the hard rows, all at once
+    monkeypatch.setattr(_ops, "numpy_power_is_libm", lambda: False)
+    calls.clear()
+    np.testing.assert_array_equal(ARRAY.pow2(x), expected)
+    assert calls == []
+    u = np.random.default_rng(8).uniform(-3, 3, 50_000).astype(np.float32)
+    np.testing.assert_array_equal(ARRAY.powf2(u.astype(np.float64)), [float(v**2) for v in u])
+
+
+def test_pow2s_equals_pow2_of_each() -> None:
+    a, b, c = np.random.default_rng(9).uniform(-30, 30, (3, 20_000))
+    for got, x in zip(ARRAY.pow2s(a, b[::-1], c), (a, b[::-1], c)):
+        np.testing.assert_array_equal(got, [v**2 for v in x.tolist()])
+    assert SCALAR.pow2s(1.5, -3.0) == [2.25, 9.0]
+
+
+def test_squares_that_underflow_dekker_or_overflow_match_numpy_scalars() -> None:
+    x = np.array([0.0, -0.0, 1e-160, -3e-170, 1e-200, 2.0**-600, 1.0, np.inf, np.nan, 1e200])
+    with np.errstate(all="ignore"):
+        got = ARRAY.pow2(x)
+        expected = np.array([float(np.float64(v) ** 2) for v in x.tolist()])  # Gymnasium's
+    np.testing.assert_array_equal(got, expected)

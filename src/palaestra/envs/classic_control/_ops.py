@@ -14,17 +14,26 @@ on numpy scalars (CartPole, Pendulum, Acrobot); both are the same function here.
 
 Squares are the exception. Gymnasium writes ``x**2`` on numpy scalars, which calls libm
 ``pow`` (``powf`` for float32), and glibc's pow is not correctly rounded: on a million random
-doubles ``pow(x, 2) != x*x`` about 900 times (powf: ~700 per million), while numpy's array
-``x**2`` is the exact square and its general ``np.power`` loop is SIMD and differs more often.
-So :meth:`ArrayOps.pow2` takes the exact square ``x*x``, finds the rows whose square lies
-within 0.02 ulp of a rounding midpoint (the only ones where a pow with glibc's documented
-< 0.52 ulp error can round the other way; measured: none beyond 0.007 ulp in 10^7 draws) and
-recomputes just those with Python's ``**`` (the same libm call), a few percent of rows.
+doubles ``pow(x, 2) != x*x`` about 900 times (powf: ~700 per million). numpy's array ``x**2``
+and ``np.power(x, 2.0)`` (a scalar exponent) are the exact square ``x*x`` (numpy's fast path
+for power 2), while ``np.power(x, y)`` with an *array* exponent runs numpy's general power
+loop, which on x86-64 without AVX-512 (numpy 2.4) calls libm ``pow``/``powf`` element by
+element -- on AVX-512 machines it is SVML's vector pow instead, which differs from libm.
+
+So :meth:`ArrayOps.pow2` takes the exact square ``x*x``, finds the rows whose exact square
+lies within 0.02 ulp of a rounding midpoint -- the only ones where a pow with glibc's
+documented < 0.52 ulp error can round the other way (measured: none beyond 0.007 ulp) -- from
+the square's exact rounding error (a Dekker two-product), and gives just those rows libm's own
+answer through numpy's general power loop: a few percent of rows, in C. Whether that loop is
+libm here is checked once per process on points where pow and ``x*x`` differ
+(:func:`numpy_power_is_libm`); where it is not, those rows take Python's ``**`` (the same libm
+call) one by one, slower and as exact.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import struct
 from typing import Any
@@ -33,9 +42,64 @@ import numpy as np
 
 _f32 = np.float32
 _pack_f32, _unpack_f32 = struct.Struct("f").pack, struct.Struct("f").unpack
-_SPLIT = 134217729.0  # 2**27 + 1: Veltkamp's splitter for the exact error of x*x
 _POW_HARD = 0.48  # ulps from the exact square beyond which libm pow may round differently
 _POWF_HARD = 0.45  # the same for powf (measured mismatches all beyond 0.498)
+_HI_BITS = np.uint64(0xFFFF_FFFF_F800_0000)  # a double's sign, exponent and top 26 bits
+_EXP_BITS = np.uint64(0x7FF0_0000_0000_0000)  # its exponent: 2**floor(log2|x|) by a bit mask
+_POW_ULPS = _POW_HARD * 2.0**-52  # _POW_HARD ulps of a double in [1, 2)
+_POWF_ULPS = _POWF_HARD * 2.0**-23  # _POWF_HARD ulps of a float32 in [1, 2)
+_TINY = 2.0**-900  # below this the square's error underflows: libm decides those rows
+
+
+@functools.cache
+def numpy_power_is_libm() -> bool:
+    """Whether ``np.power`` with an array exponent is libm ``pow``/``powf`` here, bit for bit.
+
+    Checked on squares near rounding midpoints, where pow and ``x*x`` (and a vector pow with
+    another error) part ways: about 1,200 float64 and 1,200 float32 points, a few ms once.
+    """
+    rng = np.random.default_rng(12345)
+    x = rng.uniform(-30.0, 30.0, 30_000)
+    x = x[_near_midpoint(x)]
+    u = rng.uniform(-3.0, 3.0, 12_000).astype(np.float32)
+    d = u.astype(np.float64) ** 2
+    u = u[_near_midpoint32(d, d.astype(np.float32))]
+    with np.errstate(all="ignore"):
+        got = np.power(x, np.full_like(x, 2.0))
+        got32 = np.power(u, np.full_like(u, 2.0))
+    return got.tolist() == [v**2 for v in x.tolist()] and got32.tolist() == [float(v**2) for v in u]
+
+
+def _near_midpoint(x: np.ndarray) -> np.ndarray:
+    """Rows whose exact square lies near a rounding midpoint of ``x*x``, as a boolean mask.
+
+    The rounding error of ``p = x*x`` from Dekker's product: ``x = hi + lo`` with ``hi`` its
+    top 26 bits (a bit mask; ``lo`` takes the other 27), so ``hi*hi`` is exact and
+    ``x**2 - p = (hi*hi - p) + lo*(x + hi)`` to ~1e-7 ulp. Squares below ``_TINY`` (where
+    that error underflows) count as near.
+    """
+    p = x * x
+    hi = (x.view(np.uint64) & _HI_BITS).view(np.float64)
+    hh = hi * hi
+    hh -= p
+    x_hi = x + hi
+    x_hi *= x - hi
+    hh += x_hi  # x**2 - p
+    np.abs(hh, out=hh)
+    ulp = (p.view(np.uint64) & _EXP_BITS).view(np.float64)
+    near = hh > ulp * _POW_ULPS
+    if ulp.min() < _TINY:  # rare: squares that underflow Dekker's error (x = 0 is exact)
+        near |= (ulp < _TINY) & (x != 0)
+    return near
+
+
+def _near_midpoint32(d: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Rows whose exact square ``d`` (float64) lies near a midpoint of its float32 rounding
+    ``f``, as a boolean mask (``d - f`` is exact: both are multiples of d's last bit)."""
+    err = d - f
+    np.abs(err, out=err)
+    ulp = (d.view(np.uint64) & _EXP_BITS).view(np.float64)  # d's binade: where it rounds
+    return err > ulp * _POWF_ULPS
 
 
 class ScalarOps:
@@ -116,6 +180,11 @@ class ScalarOps:
         """``u**2`` of a float32 scalar (libm ``powf``), as a Python float."""
         return float(_f32(x) ** 2)
 
+    @staticmethod
+    def pow2s(*xs: float) -> list[float]:
+        """``pow2`` of each argument."""
+        return [x**2 for x in xs]
+
 
 class ArrayOps:
     """The same operations on numpy float64/bool arrays of shape ``[N]``."""
@@ -163,26 +232,41 @@ class ArrayOps:
 
     @staticmethod
     def pow2(x: np.ndarray) -> np.ndarray:
-        """Elementwise libm ``pow(x, 2)``: the exact square, near-midpoint rows redone by pow."""
+        """Elementwise libm ``pow(x, 2)``: the exact square, near-midpoint rows from libm."""
         p = x * x
-        c = x * _SPLIT
-        hi = c - (c - x)
-        lo = x - hi
-        err = ((hi * hi - p) + 2 * hi * lo) + lo * lo  # exact rounding error of x*x (Dekker)
-        hard = np.flatnonzero(np.abs(err) > _POW_HARD * np.spacing(p))
+        hard = np.flatnonzero(_near_midpoint(x))
         if hard.size:
-            p[hard] = [v**2 for v in x[hard].tolist()]
+            p[hard] = _libm_square(x[hard])
         return p
+
+    @staticmethod
+    def pow2s(*xs: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``pow2`` of each ``[N]`` array, in one pass over them stacked.
+
+        The near-midpoint search is ~15 numpy calls whatever the length: at 1024 rows their
+        fixed cost dominates, so three squares cost little more than one.
+        """
+        if xs[0].size > 4096:  # past 32 KiB a stacked copy costs more than the calls save
+            return tuple(ArrayOps.pow2(x) for x in xs)
+        return tuple(ArrayOps.pow2(np.concatenate(xs)).reshape(len(xs), -1))
 
     @staticmethod
     def powf2(x: np.ndarray) -> np.ndarray:
         """Elementwise ``np.float32(u)**2`` (libm ``powf``) of float32 values held as float64."""
         d = x * x  # exact: a float32 squared needs 48 bits
         f = d.astype(np.float32)
-        hard = np.flatnonzero(np.abs(d - f) > _POWF_HARD * np.spacing(f).astype(np.float64))
+        hard = np.flatnonzero(_near_midpoint32(d, f))
         if hard.size:
-            f[hard] = [_f32(v) ** 2 for v in x[hard].tolist()]
+            f[hard] = _libm_square(x[hard].astype(np.float32))
         return f.astype(np.float64)
+
+
+def _libm_square(x: np.ndarray) -> np.ndarray:
+    """libm ``pow(x, 2)`` (``powf`` for float32) of each element of a 1-d array."""
+    if numpy_power_is_libm():
+        # An exponent *array*: numpy squares with x*x when the exponent is a scalar 2.
+        return np.power(x, np.full_like(x, 2.0))
+    return np.array([v**2 for v in x.tolist()] if x.dtype == np.float64 else [v**2 for v in x])
 
 
 SCALAR = ScalarOps()

@@ -60,14 +60,15 @@ def dsdt(
     d1 = m1 * lc1**2 + m2 * (l1**2 + lc2**2 + 2 * l1 * lc2 * cos2) + i1 + i2
     d2 = m2 * (lc2**2 + l1 * lc2 * cos2) + i2
     phi2 = m2 * lc2 * g * ops.cos(theta1 + theta2 - math.pi / 2.0)
+    sq_dtheta2, sq_dtheta1, sq_d2 = ops.pow2s(dtheta2, dtheta1, d2)  # x**2: libm pow
     phi1 = (
-        -m2 * l1 * lc2 * ops.pow2(dtheta2) * sin2
+        -m2 * l1 * lc2 * sq_dtheta2 * sin2
         - 2 * m2 * l1 * lc2 * dtheta2 * dtheta1 * sin2
         + (m1 * lc1 + m2 * l1) * g * ops.cos(theta1 - math.pi / 2)
         + phi2
     )
-    ddtheta2 = (a + d2 / d1 * phi1 - m2 * l1 * lc2 * ops.pow2(dtheta1) * sin2 - phi2) / (
-        m2 * lc2**2 + i2 - ops.pow2(d2) / d1
+    ddtheta2 = (a + d2 / d1 * phi1 - m2 * l1 * lc2 * sq_dtheta1 * sin2 - phi2) / (
+        m2 * lc2**2 + i2 - sq_d2 / d1
     )
     ddtheta1 = -(d2 * ddtheta2 + phi1) / d1
     return dtheta1, dtheta2, ddtheta1, ddtheta2

@@ -55,7 +55,8 @@ def step_state(ops: Any, p: PendulumParams, th: Any, thdot: Any, u: Any) -> Any:
     """One step: ``(theta, theta_dot, reward, clipped_u)``; ``u`` holds float32 values."""
     u = ops.clip(u, -p.max_torque, p.max_torque)
     f32_cost = ops.f32(ops.f32(0.001) * ops.powf2(u))  # 0.001 * u**2 in float32
-    costs = ops.pow2(angle_normalize(ops, th)) + 0.1 * ops.pow2(thdot) + f32_cost
+    sq_angle, sq_thdot = ops.pow2s(angle_normalize(ops, th), thdot)  # x**2: libm pow
+    costs = sq_angle + 0.1 * sq_thdot + f32_cost
     torque_term = ops.f32(ops.f32(3.0 / (p.m * p.l**2)) * u)  # float32 product, as in Gymnasium
     newthdot = thdot + (3 * p.g / (2 * p.l) * ops.sin(th) + torque_term) * p.dt
     newthdot = ops.clip(newthdot, -p.max_speed, p.max_speed)
