@@ -144,7 +144,8 @@ def test_hard_squares_come_from_numpy_power_loop_not_python(monkeypatch: Any) ->
     """
     from palaestra.envs.classic_control import _ops
 
-    assert _ops.numpy_power_is_libm()  # x86-64 without AVX-512, numpy 2.4: the CI machines
+    # x86-64 without AVX-512, numpy 2.4 (this machine): numpy's loop calls libm's pow
+    libm_loop = _ops.numpy_power_is_libm()
     x = np.random.default_rng(7).uniform(-30, 30, 50_000)
     expected = np.array([v**2 for v in x.tolist()])
     assert (expected != x * x).sum() > 10
@@ -156,7 +157,10 @@ def test_hard_squares_come_from_numpy_power_loop_not_python(monkeypatch: Any) ->
 
     monkeypatch.setattr(_ops.np, "power", spy)
     np.testing.assert_array_equal(ARRAY.pow2(x), expected)
-    assert calls and 0 < calls[0] < 0.06 * x.size  # only the hard rows, all at once
+    if libm_loop:
+        assert calls and 0 < calls[0] < 0.06 * x.size  # only the hard rows, all at once
+    else:  # another pow in numpy's loop: the hard rows went the per-row Python way
+        assert calls == []
     monkeypatch.setattr(_ops, "numpy_power_is_libm", lambda: False)
     calls.clear()
     np.testing.assert_array_equal(ARRAY.pow2(x), expected)
