@@ -54,6 +54,7 @@ nitpick_ignore = [
     ("py:class", "palaestra.algos.common.continuous_policies.SquashedGaussianActor"),
     ("py:class", "palaestra.algos.common.continuous_policies.DeterministicActor"),
     ("py:class", "palaestra.envs.registration.EnvSpec"),
+    ("py:class", "palaestra.algos.common.action_noise.ActionNoise"),
     ("py:func", "read_torch_state_dict"),
     ("py:func", "palaestra.envs.registration.make_vec"),
     ("py:mod", "palaestra.vector.engine"),
