@@ -59,7 +59,19 @@ def _take_arrays(store: Any, rows: np.ndarray, cols: np.ndarray) -> Any:
     return store[rows, cols]
 
 
-def _flat(prefix: str, store: Any, n: int) -> dict[str, np.ndarray]:
+def check_saved_arrays(arrays: dict[str, np.ndarray], targets: dict[str, np.ndarray]) -> None:
+    """``ValueError`` unless a saved buffer has exactly ``targets``' arrays, each of its shape."""
+    if set(targets) != set(arrays):
+        raise ValueError(f"replay buffer arrays {sorted(arrays)} do not match {sorted(targets)}")
+    for key, target in targets.items():
+        if arrays[key].shape != target.shape:
+            raise ValueError(
+                f"replay buffer {key!r} has shape {arrays[key].shape}, expected {target.shape}"
+            )
+
+
+def flat_rows(prefix: str, store: Any, n: int) -> dict[str, np.ndarray]:
+    """The first ``n`` rows of an array, or of each array of a dict store as ``prefix/key``."""
     if isinstance(store, dict):
         return {f"{prefix}/{key}": sub[:n] for key, sub in store.items()}
     return {prefix: store[:n]}
@@ -168,8 +180,8 @@ class TransitionRing:
         """JSON metadata and the filled part of every array."""
         n = self.size()
         arrays = {
-            **_flat("observations", self.observations, n),
-            **_flat("next_observations", self.next_observations, n),
+            **flat_rows("observations", self.observations, n),
+            **flat_rows("next_observations", self.next_observations, n),
             "actions": self.actions[:n],
             "rewards": self.rewards[:n],
             "terminated": self.terminated[:n],
@@ -198,8 +210,8 @@ class TransitionRing:
             )
         n = saved_rows(meta, arrays, self.n_envs, self.buffer_size)
         targets = {
-            **_flat("observations", self.observations, n),
-            **_flat("next_observations", self.next_observations, n),
+            **flat_rows("observations", self.observations, n),
+            **flat_rows("next_observations", self.next_observations, n),
             "actions": self.actions[:n],
             "rewards": self.rewards[:n],
             "terminated": self.terminated[:n],
@@ -213,15 +225,8 @@ class TransitionRing:
                 "the saved replay buffer does not record where episodes ended (saved with "
                 f"n_steps=1), which n-step returns need (this model has n_steps={self.n_steps})"
             )
-        if set(targets) != set(arrays):
-            raise ValueError(
-                f"replay buffer arrays {sorted(arrays)} do not match {sorted(targets)}"
-            )
+        check_saved_arrays(arrays, targets)
         for key, target in targets.items():
-            if arrays[key].shape != target.shape:
-                raise ValueError(
-                    f"replay buffer {key!r} has shape {arrays[key].shape}, expected {target.shape}"
-                )
             target[...] = arrays[key]
         pos, full = meta["pos"], meta["full"]
         if not isinstance(full, bool) or isinstance(pos, bool) or not isinstance(pos, int):

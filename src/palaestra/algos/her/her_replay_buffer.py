@@ -36,7 +36,7 @@ import torch
 
 from palaestra import spaces
 from palaestra.algos.common.buffers import DictReplayBuffer, DictReplayBufferSamples
-from palaestra.algos.common.transition_ring import saved_rows
+from palaestra.algos.common.transition_ring import check_saved_arrays, flat_rows, saved_rows
 from palaestra.algos.her.goal_selection_strategy import GoalSelectionStrategy, goal_strategy
 
 __all__ = ["HerReplayBuffer"]
@@ -302,12 +302,11 @@ class HerReplayBuffer(DictReplayBuffer):
         stores += [self.ep_start, self.ep_length, self._current_ep_start]
         return int(sum(a.nbytes for a in stores))
 
-    def state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-        """JSON metadata and the filled part of every array."""
-        n = self.size()
-        arrays = {
-            **{f"observations/{k}": v[:n] for k, v in self.observations.items()},
-            **{f"next_observations/{k}": v[:n] for k, v in self.next_observations.items()},
+    def _saved_arrays(self, n: int) -> dict[str, np.ndarray]:
+        """The arrays a saved buffer holds, as views of this buffer's first ``n`` rows."""
+        return {
+            **flat_rows("observations", self.observations, n),
+            **flat_rows("next_observations", self.next_observations, n),
             "actions": self.actions[:n],
             "rewards": self.rewards[:n],
             "dones": self.dones[:n],
@@ -316,6 +315,11 @@ class HerReplayBuffer(DictReplayBuffer):
             "ep_length": self.ep_length[:n],
             "current_ep_start": self._current_ep_start,
         }
+
+    def state(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        """JSON metadata and the filled part of every array."""
+        n = self.size()
+        arrays = self._saved_arrays(n)
         meta: dict[str, Any] = {
             "kind": "her",
             "buffer_size": self.buffer_size,
@@ -339,26 +343,8 @@ class HerReplayBuffer(DictReplayBuffer):
                 "HerReplayBuffer (replay_buffer_class)"
             )
         n = saved_rows(meta, arrays, self.n_envs, self.buffer_size)
-        targets = {
-            **{f"observations/{k}": v[:n] for k, v in self.observations.items()},
-            **{f"next_observations/{k}": v[:n] for k, v in self.next_observations.items()},
-            "actions": self.actions[:n],
-            "rewards": self.rewards[:n],
-            "dones": self.dones[:n],
-            "timeouts": self.timeouts[:n],
-            "ep_start": self.ep_start[:n],
-            "ep_length": self.ep_length[:n],
-            "current_ep_start": self._current_ep_start,
-        }
-        if set(targets) != set(arrays):
-            raise ValueError(
-                f"replay buffer arrays {sorted(arrays)} do not match {sorted(targets)}"
-            )
-        for key, target in targets.items():
-            if arrays[key].shape != target.shape:
-                raise ValueError(
-                    f"replay buffer {key!r} has shape {arrays[key].shape}, expected {target.shape}"
-                )
+        targets = self._saved_arrays(n)
+        check_saved_arrays(arrays, targets)
         pos, full = meta["pos"], meta["full"]
         if not isinstance(full, bool) or isinstance(pos, bool) or not isinstance(pos, int):
             raise ValueError(f"replay buffer position {pos!r}/full {full!r} are malformed")
