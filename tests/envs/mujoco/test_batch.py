@@ -105,6 +105,26 @@ def test_rows_equal_single_envs_with_two_threads(env_id: str, mode: str) -> None
     check_rows(env_id, mode, 2, {"max_episode_steps": 40, **ENDING.get(env_id, {})}, steps=300)
 
 
+def test_rows_share_one_model_also_after_pickling() -> None:
+    """All rows step one MjModel (each its own MjData); a pickled batch keeps that and
+    continues bit for bit."""
+    import pickle
+
+    batch = HalfCheetahBatch(3)
+    models = {id(env.model) for env in batch.envs}
+    datas = {id(env.data) for env in batch.envs}
+    assert len(models) == 1 and len(datas) == 3
+    batch.reset(seed=5)
+    actions = np.random.default_rng(0).uniform(-1, 1, (3, 6))
+    batch.step(actions)
+    copy = pickle.loads(pickle.dumps(batch))
+    assert len({id(env.model) for env in copy.envs}) == 1
+    for _ in range(3):
+        ours = [a.copy() for a in batch.step(actions)]
+        theirs = [a.copy() for a in copy.step(actions)]
+        assert_same(theirs, ours, "pickled batch")
+
+
 @pytest.mark.parametrize("env_id", MUJOCO_IDS)
 def test_constructor_arguments_reach_every_row(env_id: str) -> None:
     """The parity suite's first option set of each env, passed through make_vec."""
