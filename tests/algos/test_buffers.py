@@ -1,5 +1,7 @@
 """Replay and rollout buffers: layout, time-limit bootstrapping, sampling, persistence."""
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -129,3 +131,45 @@ def test_replay_buffer_contents_are_checked(tmp_path, change, message) -> None: 
     write_archive(tmp_path / "bad.zip", "replay_buffer", meta, arrays)
     with pytest.raises(ModelFileError, match=message):
         model.load_replay_buffer(tmp_path / "bad.zip")
+
+
+@pytest.mark.parametrize("dict_obs", [False, True])
+def test_one_env_sample_is_get_of_column_zero(dict_obs: bool) -> None:
+    """One env: the column draw (which takes nothing from the stream) is skipped and the
+    column read directly; the same transitions and the same generator state as ``get``."""
+    space: Any = spaces.Box(-5, 5, (3,), np.float32)
+    if dict_obs:
+        space = spaces.Dict({"x": space, "k": spaces.Discrete(4)})
+    buf = TransitionRing(50, space, spaces.Box(-1, 1, (2,), np.float32))
+    rng = np.random.default_rng(0)
+    for _ in range(70):  # wraps
+        obs, next_obs = space.sample(), space.sample()
+        if dict_obs:
+            obs = {k: np.asarray(v)[None] for k, v in obs.items()}
+            next_obs = {k: np.asarray(v)[None] for k, v in next_obs.items()}
+        else:
+            obs, next_obs = obs[None], next_obs[None]
+        buf.add(
+            obs,
+            next_obs,
+            rng.uniform(-1, 1, (1, 2)),
+            rng.normal(size=1),
+            rng.random(1) < 0.2,
+            np.array([False]),
+        )
+    fast_rng, ref_rng = np.random.default_rng(5), np.random.default_rng(5)
+    got = buf.sample_arrays(32, fast_rng)
+    rows = ref_rng.integers(0, buf.size(), size=32)
+    cols = ref_rng.integers(0, 1, size=32)
+    expected = buf.get(rows, cols)
+    assert fast_rng.bit_generator.state == ref_rng.bit_generator.state
+    assert len(got) == len(expected) == 5
+    for g, e in zip(got, expected):
+        if dict_obs and isinstance(e, dict):
+            assert g.keys() == e.keys()
+            for key in e:
+                np.testing.assert_array_equal(g[key], e[key])
+                assert g[key].dtype == e[key].dtype and g[key].shape == e[key].shape
+        else:
+            np.testing.assert_array_equal(g, e)
+            assert g.dtype == e.dtype and g.shape == e.shape

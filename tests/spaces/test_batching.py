@@ -78,6 +78,34 @@ def test_concatenate_writes_into_out() -> None:
     np.testing.assert_array_equal(out["a"][1], items[1]["a"])
 
 
+@pytest.mark.parametrize(
+    "item",
+    [
+        np.array([0.5, -1.0], dtype=np.float64),  # cast to the space's float32, as np.stack
+        np.array([0.25, 0.75], dtype=np.float32),
+    ],
+)
+def test_concatenate_one_row_is_np_stack(item: np.ndarray) -> None:
+    """The one-row fast path writes what np.stack writes, into ``out``."""
+    space = Box(-2, 2, (2,))
+    out = batching.create_empty_array(space, 1, np.empty)
+    result = batching.concatenate(space, [item], out)
+    assert result is out
+    expected = np.stack([item], axis=0, out=np.empty((1, 2), np.float32))
+    np.testing.assert_array_equal(out, expected)
+    assert out.dtype == np.float32
+
+
+def test_concatenate_one_row_keeps_np_stack_errors() -> None:
+    int_box = Box(0, 9, (2,), dtype=np.int64)
+    out = batching.create_empty_array(int_box, 1)
+    with pytest.raises(TypeError, match="Cannot cast array data from dtype\\('float64'\\)"):
+        batching.concatenate(int_box, [np.array([1.5, 2.0])], out)
+    box_out = batching.create_empty_array(Box(0, 1, (2,)), 1)
+    with pytest.raises(ValueError, match="Output array is the wrong shape"):
+        batching.concatenate(Box(0, 1, (2,)), [np.zeros(3, np.float32)], box_out)
+
+
 DIFFERING: list[Any] = [
     lambda S: [S.Discrete(3), S.Discrete(5, start=2), S.Discrete(4, dtype=np.int32)],
     lambda S: [S.Box(0, 1, (2,)), S.Box(-1, 3, (2,))],

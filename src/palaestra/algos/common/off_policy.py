@@ -266,7 +266,8 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         self._collected_steps += 1
         running = self._stepped(callback, actions, new_obs, rewards, dones, infos)
         next_obs, timeouts = new_obs, self._no_timeouts  # [n_envs] all False
-        if np.count_nonzero(dones):  # dones.any() costs ~3x more per step
+        ended = np.count_nonzero(dones)  # dones.any() costs ~3x more per step
+        if ended:
             next_obs, timeouts = self._real_next_obs(new_obs, dones, infos)
         if isinstance(self.replay_buffer, HerReplayBuffer):  # SB3's add: it reads the infos
             self.replay_buffer.add(self._last_obs, next_obs, buffer_actions, rewards, dones, infos)
@@ -278,7 +279,7 @@ class OffPolicyAlgorithm(BaseAlgorithm):
         self._update_progress()
         self._n_calls += 1
         self._on_step()
-        for index in np.flatnonzero(dones).tolist():
+        for index in np.flatnonzero(dones).tolist() if ended else ():
             self._on_episode_end(index)
             self._collected_episodes += 1
             self._episode_num += 1

@@ -135,9 +135,10 @@ class DQN(OffPolicyAlgorithm):
         return self.learner.forward("q", obs).argmax(axis=1) + int(self.action_space.start)
 
     def _random_actions(self, n: int) -> np.ndarray:
-        return self._rng.integers(0, int(self.action_space.n), size=n) + int(
-            self.action_space.start
-        )
+        high = int(self.action_space.n)
+        if n == 1:  # a scalar draw: the same number from the stream, in a fifth of the time
+            return np.array([self._rng.integers(0, high) + int(self.action_space.start)])
+        return self._rng.integers(0, high, size=n) + int(self.action_space.start)
 
     def _predict(self, observation: Any, deterministic: bool) -> np.ndarray:
         greedy = self._greedy(observation)
@@ -153,6 +154,10 @@ class DQN(OffPolicyAlgorithm):
     def _explore(self) -> np.ndarray:
         if self.num_timesteps < self.learning_starts:
             return self._random_actions(self.n_envs)
+        if self.n_envs == 1:  # scalar draws, the same numbers as the [1] arrays below
+            explore_one = self._rng.random() < self.exploration_rate
+            random_action = self._random_actions(1)  # drawn either way, as below
+            return random_action if explore_one else self._greedy(self._last_obs)
         explore = self._rng.random(self.n_envs) < self.exploration_rate
         if explore.all():
             return self._random_actions(self.n_envs)
