@@ -244,7 +244,7 @@ def render(env: Any, mode: str, dims: Dims) -> np.ndarray:
     _draw_indicators(canvas, car)
     _draw_score(canvas, env.reward)
     size = dims.state_size if mode == "state_pixels" else dims.video_size
-    return spans.shrink_packed(canvas.compose(), *size)
+    return canvas.shrink(*size)
 
 
 # Seven-segment digits for the score: segments a-g as (x0, y0, x1, y1) boxes in a 20x30 cell.

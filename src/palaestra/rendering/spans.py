@@ -3,25 +3,30 @@
 Drawing polygon by polygon into an image costs a numpy call per row of every polygon, which
 made CarRacing's frame ~50 ms. A :class:`Canvas` instead collects what a frame draws, in
 order, as data: the horizontal spans of every fill (computed for all polygons in one
-vectorised pass) and the pixels of every anti-aliased outline with their weights. ``compose``
-then decides each pixel once: per row, the spans' ends cut the row into pieces, each piece
-takes the colour of the last span covering it, and the row is written with one ``np.repeat``
-for the whole image. An outline pixel is kept only where no later fill covers it, and blended
-in draw order onto what was under it then (the last earlier fill, or an earlier outline).
-The result is the same pixels as drawing one call at a time (tests/envs/box2d/test_gfx.py).
+vectorised pass) and the pixels of every anti-aliased outline with their weights. The frame
+is then resolved once: the spans' ends cut each row into pieces, each piece takes the colour
+of the last span covering it, and an outline pixel is kept only where no later fill covers
+it, blended in draw order onto what was under it then (the last earlier fill, or an earlier
+outline). ``compose`` writes those pieces out as pixels; ``shrink`` goes straight to the
+smaller picture (CarRacing's observation) without the full-size frame: the area-average
+filter only needs each row's running sums at ~2 points per output column, and those are
+sums over the pieces plus the outline pixels' differences. The result is the same pixels as
+drawing one call at a time (tests/envs/box2d/test_spans.py) and then shrinking.
 
-Pixels are packed as ``uint64`` with one 16-bit lane per channel (R, G, B, 0), so that
-:func:`shrink_packed` can sum up to 257 pixels of all three channels in one integer addition
-(pygame's area-averaging ``smoothscale``, exactly: :func:`gfx.shrink_packed`).
+Pixels are packed as ``uint64`` with one 16-bit lane per channel (R, G, B, 0), so that a sum
+of up to 257 pixels of all three channels is one integer addition (pygame's area-averaging
+``smoothscale``, exactly: :func:`gfx.shrink_from_running`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
+from palaestra.rendering import gfx
 from palaestra.rendering.gfx import _BOTTOM, _LEFT, _RIGHT, _TOP, _clip_line, lanes, shrink_packed
 
 Color = tuple[int, int, int]
@@ -231,6 +236,15 @@ def aa_outline_pixels(
     return e // n, x, y, a, (e << 12) + k
 
 
+@lru_cache(maxsize=4)
+def _queries(h: int, w: int, width: int) -> np.ndarray:
+    """The flat positions (row * w + x) where a frame's shrink to ``width`` reads its rows'
+    running sums (:func:`gfx.shrink_points` in every row)."""
+    query = ((np.arange(h, dtype=np.int64) * w)[:, None] + gfx.shrink_points(w, width)).ravel()
+    query.flags.writeable = False
+    return query
+
+
 class Canvas:
     """An ``h x w`` frame drawn as a list of fills and outlines, composed at the end."""
 
@@ -297,8 +311,11 @@ class Canvas:
         self._spans = [(o, self.h - 1 - r, a, b) for o, r, a, b in self._spans]
         self._lines = [(o, x, self.h - 1 - y, a, s) for o, x, y, a, s in self._lines]
 
-    def compose(self) -> np.ndarray:
-        """The frame as packed pixels, ``[h, w] uint64`` (see :func:`pack`)."""
+    def _resolve(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The frame as pieces and outline pixels: ``(starts, colors, pixels, values)``, where
+        the pieces of one fill colour start at the flat positions ``starts`` (row * w + x,
+        ascending from 0, each running to the next) with packed ``colors``, and the outline
+        pixels at the flat positions ``pixels`` (ascending, unique) end up as ``values``."""
         self._flush()
         h, w = self.h, self.w
         palette = np.array([0, *self._palette], dtype=np.uint64)  # order -1: black
@@ -315,42 +332,96 @@ class Canvas:
         np.maximum.at(base, row[whole], order[whole])
         seen = order > base[row]
         order, row, lo, hi = order[seen], row[seen], lo[seen], hi[seen]
-        # Per row, a table of its spans; their ends cut the row into pieces.
-        by_row = np.argsort(row, kind="stable")
-        order, row, lo, hi = order[by_row], row[by_row], lo[by_row], hi[by_row]
-        counts = np.bincount(row, minlength=h)
-        width = max(int(counts.max(initial=0)), 1)
-        slot = np.arange(len(row)) - (np.cumsum(counts) - counts)[row]
-        t_lo = np.full((h, width), w, dtype=np.int64)
-        t_hi = np.full((h, width), w - 1, dtype=np.int64)
-        t_order = np.full((h, width), -1, dtype=np.int64)
-        t_lo[row, slot], t_hi[row, slot], t_order[row, slot] = lo, hi, order
-        cuts = np.concatenate(
-            [np.zeros((h, 1), np.int64), t_lo, t_hi + 1, np.full((h, 1), w, np.int64)], axis=1
-        )
-        cuts.sort(axis=1)
-        start = cuts[:, :-1, None]  # [h, pieces, 1]
-        cover = (t_lo[:, None, :] <= start) & (t_hi[:, None, :] >= start)
-        winner = np.where(cover, t_order[:, None, :], base[:, None, None]).max(axis=2)
-        lengths = np.diff(cuts, axis=1).ravel()
-        canvas = np.repeat(palette[winner.ravel() + 1], lengths)
-        if self._lines:
-            self._blend_lines(canvas, np.repeat(winner.ravel(), lengths), palette)
-        return canvas.reshape(h, w)
+        # The spans' ends cut each row into pieces. Keys number the positions of row r as
+        # r * (w + 1) + x, so that a row's end (x = w) is not the next row's start.
+        stride = w + 1
+        first = np.arange(h, dtype=np.int64) * stride
+        keys = np.unique(np.concatenate([first, row * stride + lo, row * stride + hi + 1]))
+        keys = keys[keys % stride != w]
+        # Each piece takes the colour of the last span covering it (the row's base if none).
+        piece_row = keys // stride
+        winner = base[piece_row]
+        a = np.searchsorted(keys, row * stride + lo)
+        count = np.searchsorted(keys, row * stride + hi + 1) - a
+        total = int(count.sum())
+        covered = np.arange(total) + np.repeat(a - (np.cumsum(count) - count), count)
+        np.maximum.at(winner, covered, np.repeat(order, count))
+        starts = keys - piece_row  # row * w + x
+        colors = palette[winner + 1]
+        if not self._lines:
+            return starts, colors, empty, np.zeros(0, dtype=np.uint64)
+        pixels, values = self._blend_lines(starts, winner, palette)
+        return starts, colors, pixels, values
 
-    def _blend_lines(self, canvas: np.ndarray, owner: np.ndarray, palette: np.ndarray) -> None:
-        """Outline pixels onto the composed fills: each kept where no later fill covers it,
-        blended in draw order onto the last fill under it (SDL_gfx's ``d + ((c-d)*a >> 8)``)."""
+    def compose(self) -> np.ndarray:
+        """The frame as packed pixels, ``[h, w] uint64`` (see :func:`pack`)."""
+        starts, colors, pixels, values = self._resolve()
+        lengths = np.diff(starts, append=self.h * self.w)
+        canvas = np.repeat(colors, lengths)
+        canvas[pixels] = values
+        return canvas.reshape(self.h, self.w)
+
+    def shrink(self, width: int, height: int) -> np.ndarray:
+        """``shrink_packed(self.compose(), width, height)`` without the full-size frame: the
+        first pass's running sums come from the pieces (a piece adds its colour once per pixel)
+        and the outline pixels (each adds its value less the fill under it)."""
+        h, w = self.h, self.w
+        gfx.check_shrink(w, h, width, height)
+        starts, colors, pixels, values = self._resolve()
+        lengths = np.diff(starts, append=h * w)
+        # Sums of the pieces before each piece (uint64 wraps: only differences are used).
+        before = np.cumsum(colors * lengths.astype(np.uint64)) - colors * lengths.astype(np.uint64)
+        points = gfx.shrink_points(w, width)
+        n = len(points)
+        query = _queries(h, w, width)
+        m = len(query)
+        # Scratch arrays kept between frames (see gfx._workspace).
+        count = gfx._workspace("count", (m + n,), np.int64)
+        index = gfx._workspace("index", (m,), np.int64)
+        running = gfx._workspace("running", (m,), np.uint64)
+        tmp = gfx._workspace("tmp", (m,), np.uint64)
+        # The piece under each query: the pieces starting at or before it, counted by where
+        # each piece's start falls among its row's points (no binary search per query).
+        count[:] = 0
+        row = starts // w
+        np.add.at(count, row * n + np.searchsorted(points, starts - row * w), 1)
+        np.cumsum(count[:m], out=index)
+        index -= 1
+        # before + (query - start) * colour, as offset + query * colour per piece.
+        offset = before - starts.astype(np.uint64) * colors
+        np.take(colors, index, out=running)
+        running *= query.view(np.uint64)
+        running += np.take(offset, index, out=tmp)
+        if len(pixels):
+            under = colors[np.searchsorted(starts, pixels, side="right") - 1]
+            delta = np.zeros(len(pixels) + 1, dtype=np.uint64)
+            np.cumsum(values - under, out=delta[1:])
+            # The outline pixels strictly before each query, counted the same way.
+            count[:] = 0
+            row = pixels // w
+            np.add.at(count, row * n + np.searchsorted(points, pixels - row * w, side="right"), 1)
+            np.cumsum(count[:m], out=index)
+            running += np.take(delta, index, out=tmp)
+        rows = gfx.shrink_from_running(running.reshape(h, -1), w, width)
+        return gfx.shrink_columns(rows, height)
+
+    def _blend_lines(
+        self, starts: np.ndarray, winner: np.ndarray, palette: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Outline pixels onto the composed fills (pieces at ``starts`` won by the fills
+        ``winner``): each kept where no later fill covers it, blended in draw order onto the
+        last fill under it (SDL_gfx's ``d + ((c-d)*a >> 8)``); ``(pixels, values)``."""
         order, x, y, alpha, seq = (np.concatenate([p[i] for p in self._lines]) for i in range(5))
         pix = y * self.w + x
-        kept = order > owner[pix]
-        order, pix, alpha, seq = order[kept], pix[kept], alpha[kept], seq[kept]
+        owner = winner[np.searchsorted(starts, pix, side="right") - 1]
+        kept = order > owner
+        order, pix, alpha, seq, owner = order[kept], pix[kept], alpha[kept], seq[kept], owner[kept]
         if not len(pix):
-            return
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.uint64)
         by_pixel = np.argsort((pix << _SEQ_BITS + 12) + seq)
-        order, pix, alpha = order[by_pixel], pix[by_pixel], alpha[by_pixel]
+        order, pix, alpha, owner = order[by_pixel], pix[by_pixel], alpha[by_pixel], owner[by_pixel]
         blended = np.empty((len(pix), 3), dtype=np.int64)
-        color, under = lanes(palette[order + 1]), lanes(canvas[pix])
+        color, under = lanes(palette[order + 1]), lanes(palette[owner + 1])
         first = np.ones(len(pix), dtype=bool)
         first[1:] = pix[1:] != pix[:-1]
         # Pixels drawn over by several outlines: each blend starts from the previous one.
@@ -363,7 +434,7 @@ class Canvas:
         last = np.ones(len(pix), dtype=bool)
         last[:-1] = pix[1:] != pix[:-1]
         out = blended[last].astype(np.uint64)
-        canvas[pix[last]] = out[:, 0] | out[:, 1] << np.uint64(16) | out[:, 2] << np.uint64(32)
+        return pix[last], out[:, 0] | out[:, 1] << np.uint64(16) | out[:, 2] << np.uint64(32)
 
 
 __all__ = [
