@@ -407,6 +407,7 @@ def shrink_points(src: int, dst: int) -> np.ndarray:
 
 _LANES_02 = np.uint64(0x0000FFFF0000FFFF)  # 16-bit lanes 0 and 2 of a packed pixel
 _LOW_BYTES = np.uint64(0x000000FF000000FF)
+_HIGH_BYTES = np.uint64(0x0000FF000000FF00)
 _LOW_BITS = np.uint64(0x0000000100000001)
 
 
@@ -464,15 +465,18 @@ def shrink_from_running(running: np.ndarray, src: int, dst: int) -> np.ndarray:
         acc *= recip  # < 2**32 per lane: both factors < 2**16
         acc >>= np.uint64(16)
         acc &= _LANES_02
-        # Saturate each lane at 255 (pygame packs with unsigned saturation).
-        np.right_shift(acc, np.uint64(8), out=part)
-        part &= _LOW_BYTES
-        part += _LOW_BYTES
-        part >>= np.uint64(8)
-        part &= _LOW_BITS
-        part *= np.uint64(255)
-        acc |= part
-        acc &= _LOW_BYTES
+        # Saturate each lane at 255 (pygame packs with unsigned saturation); averages of
+        # pixels seldom reach 256, so first check whether any lane does.
+        np.bitwise_and(acc, _HIGH_BYTES, out=part)
+        if part.any():
+            np.right_shift(acc, np.uint64(8), out=part)
+            part &= _LOW_BYTES
+            part += _LOW_BYTES
+            part >>= np.uint64(8)
+            part &= _LOW_BITS
+            part *= np.uint64(255)
+            acc |= part
+            acc &= _LOW_BYTES
         if shift:
             acc <<= np.uint64(16)
         out[:, :reached] |= acc

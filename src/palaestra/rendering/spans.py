@@ -336,8 +336,12 @@ class Canvas:
         # r * (w + 1) + x, so that a row's end (x = w) is not the next row's start.
         stride = w + 1
         first = np.arange(h, dtype=np.int64) * stride
-        keys = np.unique(np.concatenate([first, row * stride + lo, row * stride + hi + 1]))
-        keys = keys[keys % stride != w]
+        keys = np.concatenate([first, row * stride + lo, row * stride + hi + 1])
+        keys.sort()
+        distinct = np.empty(len(keys), dtype=bool)
+        distinct[0] = True
+        np.not_equal(keys[1:], keys[:-1], out=distinct[1:])
+        keys = keys[distinct & (keys % stride != w)]
         # Each piece takes the colour of the last span covering it (the row's base if none).
         piece_row = keys // stride
         winner = base[piece_row]
