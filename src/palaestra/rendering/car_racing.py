@@ -269,8 +269,10 @@ def _draw_score(canvas: spans.Canvas, reward: float) -> None:
     cell, gap = 20, 4
     width = len(text) * (cell + gap) - gap
     x0, y0 = 60 - width // 2, 750 - 15
+    boxes = []
     for k, ch in enumerate(text):
+        left = x0 + k * (cell + gap)
         for seg in _DIGITS.get(ch, ""):
             a, b, c, d = _SEGMENTS[seg]
-            left = x0 + k * (cell + gap)
-            canvas.rect(left + a, y0 + b, left + c, y0 + d, (255, 255, 255))
+            boxes.append((left + a, y0 + b, left + c, y0 + d))
+    canvas.rects(boxes, (255, 255, 255))

@@ -14,6 +14,7 @@ truncate floats toward zero, as pygame does when it hands them to SDL_gfx).
 
 from __future__ import annotations
 
+import math
 import threading
 from collections.abc import Sequence
 from functools import lru_cache
@@ -418,7 +419,7 @@ def _workspace(name: str, shape: tuple[int, ...], dtype: Any) -> np.ndarray:
     buffers = getattr(_BUFFERS, "scratch", None)
     if buffers is None:
         buffers = _BUFFERS.scratch = {}
-    size = int(np.prod(shape))
+    size = math.prod(shape)
     buf = buffers.get((name, np.dtype(dtype)))
     if buf is None or len(buf) < size:
         buf = buffers[name, np.dtype(dtype)] = np.empty(size, dtype=dtype)

@@ -298,12 +298,20 @@ class Canvas:
 
     def rect(self, x0: int, y0: int, x1: int, y1: int, color: Sequence[int]) -> None:
         """Fill ``[x0, x1) x [y0, y1)`` (as ``img[y0:y1, x0:x1] = color``)."""
-        if x1 <= x0 or y1 <= y0:
+        self.rects([(x0, y0, x1, y1)], color)
+
+    def rects(self, boxes: Sequence[Sequence[int]], color: Sequence[int]) -> None:
+        """:meth:`rect` for each ``(x0, y0, x1, y1)`` of ``boxes``, in order, in one colour."""
+        box = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
+        box = box[(box[:, 2] > box[:, 0]) & (box[:, 3] > box[:, 1])]
+        if not len(box):
             return
-        row = np.arange(y0, y1, dtype=np.int64)
-        order = self._orders([color])
-        self._spans.append((np.repeat(order, len(row)), row, np.full_like(row, x0),
-                            np.full_like(row, x1 - 1)))  # fmt: skip
+        order = self._orders([color] * len(box))
+        height = box[:, 3] - box[:, 1]
+        which = np.repeat(np.arange(len(box)), height)
+        row = np.arange(len(which)) - np.repeat(np.cumsum(height) - height, height)
+        self._spans.append((order[which], box[which, 1] + row, box[which, 0],
+                            box[which, 2] - 1))  # fmt: skip
 
     def flip(self) -> None:
         """``pygame.transform.flip(surface, False, True)`` of what is drawn so far."""
@@ -393,9 +401,9 @@ class Canvas:
         index -= 1
         # before + (query - start) * colour, as offset + query * colour per piece.
         offset = before - starts.astype(np.uint64) * colors
-        np.take(colors, index, out=running)
+        np.take(colors, index, out=running, mode="clip")  # in range: no checks
         running *= query.view(np.uint64)
-        running += np.take(offset, index, out=tmp)
+        running += np.take(offset, index, out=tmp, mode="clip")
         if len(pixels):
             under = colors[np.searchsorted(starts, pixels, side="right") - 1]
             delta = np.zeros(len(pixels) + 1, dtype=np.uint64)
@@ -405,7 +413,7 @@ class Canvas:
             row = pixels // w
             np.add.at(count, row * n + np.searchsorted(points, pixels - row * w, side="right"), 1)
             np.cumsum(count[:m], out=index)
-            running += np.take(delta, index, out=tmp)
+            running += np.take(delta, index, out=tmp, mode="clip")
         rows = gfx.shrink_from_running(running.reshape(h, -1), w, width)
         return gfx.shrink_columns(rows, height)
 

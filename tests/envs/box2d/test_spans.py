@@ -119,3 +119,16 @@ def test_shrink_rejects_sizes_that_are_not_smaller(size: tuple[int, int]) -> Non
         canvas.shrink(*size)
     with pytest.raises(ValueError, match=match):
         spans.shrink_packed(canvas.compose(), *size)
+
+
+def test_rects_fill_like_slices_and_skip_empty_boxes() -> None:
+    boxes = [(0, 0, 5, 5), (3, 2, 10, 4), (7, 7, 7, 9), (12, 1, 10, 3), (W - 4, H - 3, W, H)]
+    canvas = spans.Canvas(H, W)
+    canvas.rects([], (1, 2, 3))
+    canvas.rects(boxes, (200, 100, 50))
+    canvas.rect(4, 3, 6, 8, (9, 9, 9))
+    ref = np.zeros((H, W, 3), dtype=np.uint8)
+    for x0, y0, x1, y1 in boxes:
+        ref[y0:y1, x0:x1] = (200, 100, 50)
+    ref[3:8, 4:6] = (9, 9, 9)
+    assert np.array_equal(_unpack(canvas.compose()), ref)
