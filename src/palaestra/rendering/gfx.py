@@ -426,15 +426,31 @@ def _workspace(name: str, shape: tuple[int, ...], dtype: Any) -> np.ndarray:
     return buf[:size].reshape(shape)
 
 
+def running_samples(running: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """From rows' running sums at :func:`shrink_points` (``[R, 2 * reached + 1] uint64``,
+    wrapping: only differences are used), each output's whole samples' sum and split sample's
+    pixel, ``([R, reached], [R, reached])`` packed (scratch arrays: use before the next call)."""
+    shape = (running.shape[0], running.shape[1] // 2)
+    whole, tail = _workspace("whole", shape, np.uint64), _workspace("tail", shape, np.uint64)
+    np.subtract(running[:, 1::2], running[:, 0:-1:2], out=whole)
+    np.subtract(running[:, 2::2], running[:, 1::2], out=tail)
+    return whole, tail
+
+
 def shrink_from_running(running: np.ndarray, src: int, dst: int) -> np.ndarray:
     """pygame's SSE2 area-average shrink of rows of ``src`` packed pixels to ``dst``, from each
-    row's running sums at :func:`shrink_points` (``[R, 2 * reached + 1] uint64``, wrapping:
-    only differences are used, each a sum of at most 257 pixels per lane): ``[R, dst]``
-    packed pixels, lanes 0..255.
+    row's running sums at :func:`shrink_points` (see :func:`running_samples`)."""
+    return shrink_samples(*running_samples(running), src, dst)
+
+
+def shrink_samples(whole: np.ndarray, tail: np.ndarray, src: int, dst: int) -> np.ndarray:
+    """pygame's SSE2 area-average shrink of rows of ``src`` packed pixels to ``dst``, from each
+    output's whole samples' sum and split sample's pixel (``[R, reached]`` packed, each sum of
+    at most 257 pixels per lane): ``[R, dst]`` packed pixels, lanes 0..255.
 
     The arithmetic runs on two ``uint64`` words per pixel, (R, B) and (G, 0) in 32-bit lanes,
     where pygame's 16-bit products (a lane times a weight or reciprocal < 2**16) fit."""
-    rows = running.shape[0]
+    rows = whole.shape[0]
     space = _ONE * src // dst
     recip = np.uint64((0x40000000 // space) & 0xFFFF)
     _, head_w, _, _, _, tail_w = _shrink_plan(src, dst)
@@ -442,9 +458,6 @@ def shrink_from_running(running: np.ndarray, src: int, dst: int) -> np.ndarray:
     tail_w4 = (4 * tail_w).astype(np.uint64)  # <= 2**16: a lane's product < 2**24
     head_w4 = (4 * head_w[1:]).astype(np.uint64)
     shape = (rows, reached)
-    whole, tail = _workspace("whole", shape, np.uint64), _workspace("tail", shape, np.uint64)
-    np.subtract(running[:, 1::2], running[:, 0:-1:2], out=whole)
-    np.subtract(running[:, 2::2], running[:, 1::2], out=tail)  # the split sample's pixel
     out = np.zeros((rows, dst), dtype=np.uint64)  # unreached samples stay zero, as pygame's
     acc, part = _workspace("acc", shape, np.uint64), _workspace("part", shape, np.uint64)
     for shift in (0, 16):  # the (R, B) word, then the (G, 0) one

@@ -404,17 +404,20 @@ class Canvas:
         np.take(colors, index, out=running, mode="clip")  # in range: no checks
         running *= query.view(np.uint64)
         running += np.take(offset, index, out=tmp, mode="clip")
+        whole, tail = gfx.running_samples(running.reshape(h, n))
         if len(pixels):
-            under = colors[np.searchsorted(starts, pixels, side="right") - 1]
-            delta = np.zeros(len(pixels) + 1, dtype=np.uint64)
-            np.cumsum(values - under, out=delta[1:])
-            # The outline pixels strictly before each query, counted the same way.
-            count[:] = 0
+            # An outline pixel changes one output's whole samples or its split sample.
+            delta = values - colors[np.searchsorted(starts, pixels, side="right") - 1]
             row = pixels // w
-            np.add.at(count, row * n + np.searchsorted(points, pixels - row * w, side="right"), 1)
-            np.cumsum(count[:m], out=index)
-            running += np.take(delta, index, out=tmp, mode="clip")
-        rows = gfx.shrink_from_running(running.reshape(h, -1), w, width)
+            x = pixels - row * w
+            split = points[1::2]
+            col = np.searchsorted(split, x)
+            reached = col < len(split)  # beyond the last split sample: read by no output
+            row, x, col, delta = row[reached], x[reached], col[reached], delta[reached]
+            is_split = split[col] == x
+            np.add.at(tail, (row[is_split], col[is_split]), delta[is_split])
+            np.add.at(whole, (row[~is_split], col[~is_split]), delta[~is_split])
+        rows = gfx.shrink_samples(whole, tail, w, width)
         return gfx.shrink_columns(rows, height)
 
     def _blend_lines(
