@@ -124,15 +124,19 @@ def _draw_road(
 ) -> None:
     b = dims.playfield
     field = np.array([[(b, b), (b, -b), (-b, -b), (-b, b)]])
-    _gfx_polygons(canvas, _to_screen(field, rot, zoom, trans), [_rgb(env.bg_color)])
+    quads = [_to_screen(field, rot, zoom, trans)]
+    colors = [_rgb(env.bg_color)]
     grass = _to_screen(_grass_patches(dims.grass_dim), rot, zoom, trans)
-    grass = grass[_visible(grass, dims.max_shape_dim)]
-    _gfx_polygons(canvas, grass, [_rgb(env.grass_color)] * len(grass))
+    quads.append(grass[_visible(grass, dims.max_shape_dim)])
+    colors += [_rgb(env.grass_color)] * len(quads[-1])
     if env.road_poly:
-        polys = _road_points(env)
-        screen = _to_screen(polys, rot, zoom, trans)
+        screen = _to_screen(_road_points(env), rot, zoom, trans)
         shown = np.flatnonzero(_visible(screen, dims.max_shape_dim)).tolist()
-        _gfx_polygons(canvas, screen[shown], [_rgb(env.road_poly[i][1]) for i in shown])
+        quads.append(screen[shown])
+        colors += [_rgb(env.road_poly[i][1]) for i in shown]
+    # One call for the field, the grass and the road (drawn in that order): a batch's cost
+    # is mostly per call.
+    _gfx_polygons(canvas, np.concatenate(quads), colors)
 
 
 def _road_points(env: Any) -> np.ndarray:
@@ -244,7 +248,7 @@ def render(env: Any, mode: str, dims: Dims) -> np.ndarray:
     _draw_indicators(canvas, car)
     _draw_score(canvas, env.reward)
     size = dims.state_size if mode == "state_pixels" else dims.video_size
-    return spans.shrink_packed(canvas.compose(), *size)
+    return canvas.shrink(*size)
 
 
 # Seven-segment digits for the score: segments a-g as (x0, y0, x1, y1) boxes in a 20x30 cell.
@@ -265,8 +269,10 @@ def _draw_score(canvas: spans.Canvas, reward: float) -> None:
     cell, gap = 20, 4
     width = len(text) * (cell + gap) - gap
     x0, y0 = 60 - width // 2, 750 - 15
+    boxes = []
     for k, ch in enumerate(text):
+        left = x0 + k * (cell + gap)
         for seg in _DIGITS.get(ch, ""):
             a, b, c, d = _SEGMENTS[seg]
-            left = x0 + k * (cell + gap)
-            canvas.rect(left + a, y0 + b, left + c, y0 + d, (255, 255, 255))
+            boxes.append((left + a, y0 + b, left + c, y0 + d))
+    canvas.rects(boxes, (255, 255, 255))

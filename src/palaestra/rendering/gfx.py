@@ -14,9 +14,11 @@ truncate floats toward zero, as pygame does when it hands them to SDL_gfx).
 
 from __future__ import annotations
 
+import math
 import threading
 from collections.abc import Sequence
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -388,33 +390,148 @@ def _running_buffer(size: int) -> np.ndarray:
     return buf[:size]
 
 
+@lru_cache(maxsize=8)
+def shrink_points(src: int, dst: int) -> np.ndarray:
+    """Where pygame's area-average shrink of ``src`` samples to ``dst`` reads a row's running
+    sum (the sum of the samples before a position): ``[0, hi_0, hi_0 + 1, hi_1, hi_1 + 1,
+    ...]``, ``hi_j`` the sample output ``j`` splits with the next one (2 * reached + 1 points,
+    see :func:`shrink_from_running`)."""
+    _, _, lo, hi, tail_idx, _ = _shrink_plan(src, dst)
+    # The plan's walk: output j's whole samples are [hi_{j-1} + 1, hi_j), its split sample is
+    # hi_j and its carried-over one hi_{j-1} (weight 0 for j = 0).
+    assert np.array_equal(tail_idx, hi) and np.array_equal(lo[1:], hi[:-1] + 1)
+    points = np.empty(2 * len(hi) + 1, dtype=np.int64)
+    points[0] = 0
+    points[1::2], points[2::2] = hi, hi + 1
+    return points
+
+
+_LANES_02 = np.uint64(0x0000FFFF0000FFFF)  # 16-bit lanes 0 and 2 of a packed pixel
+_LOW_BYTES = np.uint64(0x000000FF000000FF)
+_HIGH_BYTES = np.uint64(0x0000FF000000FF00)
+_LOW_BITS = np.uint64(0x0000000100000001)
+
+
+def _workspace(name: str, shape: tuple[int, ...], dtype: Any) -> np.ndarray:
+    """A per-thread scratch array kept between frames: fresh arrays of a few MB each frame
+    cost more in page faults (the allocator hands them back to the system) than the
+    arithmetic on them."""
+    buffers = getattr(_BUFFERS, "scratch", None)
+    if buffers is None:
+        buffers = _BUFFERS.scratch = {}
+    size = math.prod(shape)
+    buf = buffers.get((name, np.dtype(dtype)))
+    if buf is None or len(buf) < size:
+        buf = buffers[name, np.dtype(dtype)] = np.empty(size, dtype=dtype)
+    return buf[:size].reshape(shape)
+
+
+def running_samples(running: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """From rows' running sums at :func:`shrink_points` (``[R, 2 * reached + 1] uint64``,
+    wrapping: only differences are used), each output's whole samples' sum and split sample's
+    pixel, ``([R, reached], [R, reached])`` packed (scratch arrays: use before the next call)."""
+    shape = (running.shape[0], running.shape[1] // 2)
+    whole, tail = _workspace("whole", shape, np.uint64), _workspace("tail", shape, np.uint64)
+    np.subtract(running[:, 1::2], running[:, 0:-1:2], out=whole)
+    np.subtract(running[:, 2::2], running[:, 1::2], out=tail)
+    return whole, tail
+
+
+def shrink_from_running(running: np.ndarray, src: int, dst: int) -> np.ndarray:
+    """pygame's SSE2 area-average shrink of rows of ``src`` packed pixels to ``dst``, from each
+    row's running sums at :func:`shrink_points` (see :func:`running_samples`)."""
+    return shrink_samples(*running_samples(running), src, dst)
+
+
+def shrink_samples(whole: np.ndarray, tail: np.ndarray, src: int, dst: int) -> np.ndarray:
+    """pygame's SSE2 area-average shrink of rows of ``src`` packed pixels to ``dst``, from each
+    output's whole samples' sum and split sample's pixel (``[R, reached]`` packed, each sum of
+    at most 257 pixels per lane): ``[R, dst]`` packed pixels, lanes 0..255.
+
+    The arithmetic runs on two ``uint64`` words per pixel, (R, B) and (G, 0) in 32-bit lanes,
+    where pygame's 16-bit products (a lane times a weight or reciprocal < 2**16) fit."""
+    rows = whole.shape[0]
+    space = _ONE * src // dst
+    recip = np.uint64((0x40000000 // space) & 0xFFFF)
+    _, head_w, _, _, _, tail_w = _shrink_plan(src, dst)
+    reached = len(head_w)
+    tail_w4 = (4 * tail_w).astype(np.uint64)  # <= 2**16: a lane's product < 2**24
+    head_w4 = (4 * head_w[1:]).astype(np.uint64)
+    shape = (rows, reached)
+    out = np.zeros((rows, dst), dtype=np.uint64)  # unreached samples stay zero, as pygame's
+    acc, part = _workspace("acc", shape, np.uint64), _workspace("part", shape, np.uint64)
+    for shift in (0, 16):  # the (R, B) word, then the (G, 0) one
+        np.right_shift(whole, np.uint64(shift), out=acc)
+        acc &= _LANES_02
+        lanes_t = np.right_shift(tail, np.uint64(shift), out=part)
+        lanes_t &= _LANES_02
+        # Output j's carried-over sample is output j - 1's split one (none for j = 0).
+        carried = _workspace("carried", (rows, reached - 1), np.uint64)
+        np.multiply(lanes_t[:, :-1], head_w4, out=carried)
+        carried >>= np.uint64(16)
+        carried &= _LANES_02
+        acc[:, 1:] += carried
+        lanes_t *= tail_w4
+        lanes_t >>= np.uint64(16)
+        lanes_t &= _LANES_02
+        acc += lanes_t
+        acc &= _LANES_02
+        acc *= recip  # < 2**32 per lane: both factors < 2**16
+        acc >>= np.uint64(16)
+        acc &= _LANES_02
+        # Saturate each lane at 255 (pygame packs with unsigned saturation); averages of
+        # pixels seldom reach 256, so first check whether any lane does.
+        np.bitwise_and(acc, _HIGH_BYTES, out=part)
+        if part.any():
+            np.right_shift(acc, np.uint64(8), out=part)
+            part &= _LOW_BYTES
+            part += _LOW_BYTES
+            part >>= np.uint64(8)
+            part &= _LOW_BITS
+            part *= np.uint64(255)
+            acc |= part
+            acc &= _LOW_BYTES
+        if shift:
+            acc <<= np.uint64(16)
+        out[:, :reached] |= acc
+    return out
+
+
 def _shrink_rows(packed: np.ndarray, dst: int) -> np.ndarray:
     """pygame's SSE2 area-average shrink along axis 1 of ``[R, src]`` packed pixels:
-    ``[R, dst, 3]`` uint8."""
+    ``[R, dst]`` packed pixels."""
     rows, src = packed.shape
-    space = _ONE * src // dst
-    recip = (0x40000000 // space) & 0xFFFF
-    head_idx, head_w, lo, hi, tail_idx, tail_w = _shrink_plan(src, dst)
-    reached = len(head_idx)
-    # Whole samples: differences of a running sum over the flat image (uint64 arithmetic
-    # wraps, but every difference is a sum of at most 257 pixels per lane: exact).
+    # Running sums over the flat image (uint64 arithmetic wraps, but every difference used
+    # is a sum of at most 257 pixels per lane: exact).
     running = _running_buffer(rows * src + 1)
     running[0] = 0
     np.cumsum(packed.reshape(-1), out=running[1:])
     base = (np.arange(rows, dtype=np.int64) * src)[:, None]
-    acc = _lanes32(running[base + hi] - running[base + lo])  # [R, reached, 4]
-    for idx, weight in ((head_idx, head_w), (tail_idx, tail_w)):
-        part = _lanes32(packed[:, idx])
-        part *= (4 * weight).astype(np.uint32)[None, :, None]  # < 2**32: 4 * 255 * 2**14
-        part >>= 16
-        acc += part
-    acc &= 0xFFFF
-    acc *= np.uint32(recip)  # < 2**32: both factors < 2**16
-    acc >>= 16
-    out = np.minimum(acc[..., :3], 255).astype(np.uint8)
-    if reached < dst:  # unreached samples stay as the new surface had them (zero)
-        out = np.concatenate([out, np.zeros((rows, dst - reached, 3), np.uint8)], axis=1)
-    return out
+    return shrink_from_running(running[base + shrink_points(src, dst)], src, dst)
+
+
+def shrink_columns(rows: np.ndarray, height: int) -> np.ndarray:
+    """The second (y) pass of :func:`shrink_packed`, on the first pass's ``[H, width]``
+    packed output: ``[height, width, 3] uint8``."""
+    out = _shrink_rows(np.ascontiguousarray(rows.T), height)  # [width, height]
+    return np.ascontiguousarray(lanes(out.T).astype(np.uint8))
+
+
+def shrink_packed(packed: np.ndarray, width: int, height: int) -> np.ndarray:
+    """pygame's ``transform.smoothscale`` (SSE2) of a packed ``[H, W]`` frame to a smaller
+    ``(width, height)``: area averages along x, then along y; ``[height, width, 3] uint8``."""
+    check_shrink(packed.shape[1], packed.shape[0], width, height)
+    return shrink_columns(_shrink_rows(packed, width), height)
+
+
+def check_shrink(src_w: int, src_h: int, width: int, height: int) -> None:
+    """Raise ``ValueError`` unless ``(width, height)`` is a shrink of ``(src_w, src_h)``: the
+    area-average filter here is pygame's for shrinking only."""
+    if not (0 < width <= src_w and 0 < height <= src_h):
+        raise ValueError(
+            f"cannot shrink a {src_w}x{src_h} frame to {width!r}x{height!r}: expected "
+            f"1 <= width <= {src_w} and 1 <= height <= {src_h}"
+        )
 
 
 def pack_lanes(img: np.ndarray) -> np.ndarray:
@@ -422,14 +539,6 @@ def pack_lanes(img: np.ndarray) -> np.ndarray:
     wide = np.zeros((*img.shape[:-1], 4), dtype=np.uint16)
     wide[..., :3] = img
     return wide.view(np.uint64)[..., 0]
-
-
-def shrink_packed(packed: np.ndarray, width: int, height: int) -> np.ndarray:
-    """pygame's ``transform.smoothscale`` (SSE2) of a packed ``[H, W]`` frame to a smaller
-    ``(width, height)``: area averages along x, then along y; ``[height, width, 3] uint8``."""
-    out = _shrink_rows(packed, width)  # [H, width, 3]
-    cols = pack_lanes(out).T.copy()  # [width, H]: y becomes the row axis
-    return np.ascontiguousarray(_shrink_rows(cols, height).transpose(1, 0, 2))
 
 
 def smoothscale_shrink(img: np.ndarray, width: int, height: int) -> np.ndarray:

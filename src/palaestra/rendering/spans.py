@@ -3,25 +3,30 @@
 Drawing polygon by polygon into an image costs a numpy call per row of every polygon, which
 made CarRacing's frame ~50 ms. A :class:`Canvas` instead collects what a frame draws, in
 order, as data: the horizontal spans of every fill (computed for all polygons in one
-vectorised pass) and the pixels of every anti-aliased outline with their weights. ``compose``
-then decides each pixel once: per row, the spans' ends cut the row into pieces, each piece
-takes the colour of the last span covering it, and the row is written with one ``np.repeat``
-for the whole image. An outline pixel is kept only where no later fill covers it, and blended
-in draw order onto what was under it then (the last earlier fill, or an earlier outline).
-The result is the same pixels as drawing one call at a time (tests/envs/box2d/test_gfx.py).
+vectorised pass) and the pixels of every anti-aliased outline with their weights. The frame
+is then resolved once: the spans' ends cut each row into pieces, each piece takes the colour
+of the last span covering it, and an outline pixel is kept only where no later fill covers
+it, blended in draw order onto what was under it then (the last earlier fill, or an earlier
+outline). ``compose`` writes those pieces out as pixels; ``shrink`` goes straight to the
+smaller picture (CarRacing's observation) without the full-size frame: the area-average
+filter only needs each row's running sums at ~2 points per output column, and those are
+sums over the pieces plus the outline pixels' differences. The result is the same pixels as
+drawing one call at a time (tests/envs/box2d/test_spans.py) and then shrinking.
 
-Pixels are packed as ``uint64`` with one 16-bit lane per channel (R, G, B, 0), so that
-:func:`shrink_packed` can sum up to 257 pixels of all three channels in one integer addition
-(pygame's area-averaging ``smoothscale``, exactly: :func:`gfx.shrink_packed`).
+Pixels are packed as ``uint64`` with one 16-bit lane per channel (R, G, B, 0), so that a sum
+of up to 257 pixels of all three channels is one integer addition (pygame's area-averaging
+``smoothscale``, exactly: :func:`gfx.shrink_from_running`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
+from palaestra.rendering import gfx
 from palaestra.rendering.gfx import _BOTTOM, _LEFT, _RIGHT, _TOP, _clip_line, lanes, shrink_packed
 
 Color = tuple[int, int, int]
@@ -231,6 +236,15 @@ def aa_outline_pixels(
     return e // n, x, y, a, (e << 12) + k
 
 
+@lru_cache(maxsize=4)
+def _queries(h: int, w: int, width: int) -> np.ndarray:
+    """The flat positions (row * w + x) where a frame's shrink to ``width`` reads its rows'
+    running sums (:func:`gfx.shrink_points` in every row)."""
+    query = ((np.arange(h, dtype=np.int64) * w)[:, None] + gfx.shrink_points(w, width)).ravel()
+    query.flags.writeable = False
+    return query
+
+
 class Canvas:
     """An ``h x w`` frame drawn as a list of fills and outlines, composed at the end."""
 
@@ -284,12 +298,20 @@ class Canvas:
 
     def rect(self, x0: int, y0: int, x1: int, y1: int, color: Sequence[int]) -> None:
         """Fill ``[x0, x1) x [y0, y1)`` (as ``img[y0:y1, x0:x1] = color``)."""
-        if x1 <= x0 or y1 <= y0:
+        self.rects([(x0, y0, x1, y1)], color)
+
+    def rects(self, boxes: Sequence[Sequence[int]], color: Sequence[int]) -> None:
+        """:meth:`rect` for each ``(x0, y0, x1, y1)`` of ``boxes``, in order, in one colour."""
+        box = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
+        box = box[(box[:, 2] > box[:, 0]) & (box[:, 3] > box[:, 1])]
+        if not len(box):
             return
-        row = np.arange(y0, y1, dtype=np.int64)
-        order = self._orders([color])
-        self._spans.append((np.repeat(order, len(row)), row, np.full_like(row, x0),
-                            np.full_like(row, x1 - 1)))  # fmt: skip
+        order = self._orders([color] * len(box))
+        height = box[:, 3] - box[:, 1]
+        which = np.repeat(np.arange(len(box)), height)
+        row = np.arange(len(which)) - np.repeat(np.cumsum(height) - height, height)
+        self._spans.append((order[which], box[which, 1] + row, box[which, 0],
+                            box[which, 2] - 1))  # fmt: skip
 
     def flip(self) -> None:
         """``pygame.transform.flip(surface, False, True)`` of what is drawn so far."""
@@ -297,8 +319,11 @@ class Canvas:
         self._spans = [(o, self.h - 1 - r, a, b) for o, r, a, b in self._spans]
         self._lines = [(o, x, self.h - 1 - y, a, s) for o, x, y, a, s in self._lines]
 
-    def compose(self) -> np.ndarray:
-        """The frame as packed pixels, ``[h, w] uint64`` (see :func:`pack`)."""
+    def _resolve(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The frame as pieces and outline pixels: ``(starts, colors, pixels, values)``, where
+        the pieces of one fill colour start at the flat positions ``starts`` (row * w + x,
+        ascending from 0, each running to the next) with packed ``colors``, and the outline
+        pixels at the flat positions ``pixels`` (ascending, unique) end up as ``values``."""
         self._flush()
         h, w = self.h, self.w
         palette = np.array([0, *self._palette], dtype=np.uint64)  # order -1: black
@@ -315,42 +340,103 @@ class Canvas:
         np.maximum.at(base, row[whole], order[whole])
         seen = order > base[row]
         order, row, lo, hi = order[seen], row[seen], lo[seen], hi[seen]
-        # Per row, a table of its spans; their ends cut the row into pieces.
-        by_row = np.argsort(row, kind="stable")
-        order, row, lo, hi = order[by_row], row[by_row], lo[by_row], hi[by_row]
-        counts = np.bincount(row, minlength=h)
-        width = max(int(counts.max(initial=0)), 1)
-        slot = np.arange(len(row)) - (np.cumsum(counts) - counts)[row]
-        t_lo = np.full((h, width), w, dtype=np.int64)
-        t_hi = np.full((h, width), w - 1, dtype=np.int64)
-        t_order = np.full((h, width), -1, dtype=np.int64)
-        t_lo[row, slot], t_hi[row, slot], t_order[row, slot] = lo, hi, order
-        cuts = np.concatenate(
-            [np.zeros((h, 1), np.int64), t_lo, t_hi + 1, np.full((h, 1), w, np.int64)], axis=1
-        )
-        cuts.sort(axis=1)
-        start = cuts[:, :-1, None]  # [h, pieces, 1]
-        cover = (t_lo[:, None, :] <= start) & (t_hi[:, None, :] >= start)
-        winner = np.where(cover, t_order[:, None, :], base[:, None, None]).max(axis=2)
-        lengths = np.diff(cuts, axis=1).ravel()
-        canvas = np.repeat(palette[winner.ravel() + 1], lengths)
-        if self._lines:
-            self._blend_lines(canvas, np.repeat(winner.ravel(), lengths), palette)
-        return canvas.reshape(h, w)
+        # The spans' ends cut each row into pieces. Keys number the positions of row r as
+        # r * (w + 1) + x, so that a row's end (x = w) is not the next row's start.
+        stride = w + 1
+        first = np.arange(h, dtype=np.int64) * stride
+        keys = np.concatenate([first, row * stride + lo, row * stride + hi + 1])
+        keys.sort()
+        distinct = np.empty(len(keys), dtype=bool)
+        distinct[0] = True
+        np.not_equal(keys[1:], keys[:-1], out=distinct[1:])
+        keys = keys[distinct & (keys % stride != w)]
+        # Each piece takes the colour of the last span covering it (the row's base if none).
+        piece_row = keys // stride
+        winner = base[piece_row]
+        a = np.searchsorted(keys, row * stride + lo)
+        count = np.searchsorted(keys, row * stride + hi + 1) - a
+        total = int(count.sum())
+        covered = np.arange(total) + np.repeat(a - (np.cumsum(count) - count), count)
+        np.maximum.at(winner, covered, np.repeat(order, count))
+        starts = keys - piece_row  # row * w + x
+        colors = palette[winner + 1]
+        if not self._lines:
+            return starts, colors, empty, np.zeros(0, dtype=np.uint64)
+        pixels, values = self._blend_lines(starts, winner, palette)
+        return starts, colors, pixels, values
 
-    def _blend_lines(self, canvas: np.ndarray, owner: np.ndarray, palette: np.ndarray) -> None:
-        """Outline pixels onto the composed fills: each kept where no later fill covers it,
-        blended in draw order onto the last fill under it (SDL_gfx's ``d + ((c-d)*a >> 8)``)."""
+    def compose(self) -> np.ndarray:
+        """The frame as packed pixels, ``[h, w] uint64`` (see :func:`pack`)."""
+        starts, colors, pixels, values = self._resolve()
+        lengths = np.diff(starts, append=self.h * self.w)
+        canvas = np.repeat(colors, lengths)
+        canvas[pixels] = values
+        return canvas.reshape(self.h, self.w)
+
+    def shrink(self, width: int, height: int) -> np.ndarray:
+        """``shrink_packed(self.compose(), width, height)`` without the full-size frame: the
+        first pass's running sums come from the pieces (a piece adds its colour once per pixel)
+        and the outline pixels (each adds its value less the fill under it)."""
+        h, w = self.h, self.w
+        gfx.check_shrink(w, h, width, height)
+        starts, colors, pixels, values = self._resolve()
+        lengths = np.diff(starts, append=h * w)
+        # Sums of the pieces before each piece (uint64 wraps: only differences are used).
+        before = np.cumsum(colors * lengths.astype(np.uint64)) - colors * lengths.astype(np.uint64)
+        points = gfx.shrink_points(w, width)
+        n = len(points)
+        query = _queries(h, w, width)
+        m = len(query)
+        # Scratch arrays kept between frames (see gfx._workspace).
+        count = gfx._workspace("count", (m + n,), np.int64)
+        index = gfx._workspace("index", (m,), np.int64)
+        running = gfx._workspace("running", (m,), np.uint64)
+        tmp = gfx._workspace("tmp", (m,), np.uint64)
+        # The piece under each query: the pieces starting at or before it, counted by where
+        # each piece's start falls among its row's points (no binary search per query).
+        count[:] = 0
+        row = starts // w
+        np.add.at(count, row * n + np.searchsorted(points, starts - row * w), 1)
+        np.cumsum(count[:m], out=index)
+        index -= 1
+        # before + (query - start) * colour, as offset + query * colour per piece.
+        offset = before - starts.astype(np.uint64) * colors
+        np.take(colors, index, out=running, mode="clip")  # in range: no checks
+        running *= query.view(np.uint64)
+        running += np.take(offset, index, out=tmp, mode="clip")
+        whole, tail = gfx.running_samples(running.reshape(h, n))
+        if len(pixels):
+            # An outline pixel changes one output's whole samples or its split sample.
+            delta = values - colors[np.searchsorted(starts, pixels, side="right") - 1]
+            row = pixels // w
+            x = pixels - row * w
+            split = points[1::2]
+            col = np.searchsorted(split, x)
+            reached = col < len(split)  # beyond the last split sample: read by no output
+            row, x, col, delta = row[reached], x[reached], col[reached], delta[reached]
+            is_split = split[col] == x
+            np.add.at(tail, (row[is_split], col[is_split]), delta[is_split])
+            np.add.at(whole, (row[~is_split], col[~is_split]), delta[~is_split])
+        rows = gfx.shrink_samples(whole, tail, w, width)
+        return gfx.shrink_columns(rows, height)
+
+    def _blend_lines(
+        self, starts: np.ndarray, winner: np.ndarray, palette: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Outline pixels onto the composed fills (pieces at ``starts`` won by the fills
+        ``winner``): each kept where no later fill covers it, blended in draw order onto the
+        last fill under it (SDL_gfx's ``d + ((c-d)*a >> 8)``); ``(pixels, values)``."""
         order, x, y, alpha, seq = (np.concatenate([p[i] for p in self._lines]) for i in range(5))
         pix = y * self.w + x
-        kept = order > owner[pix]
-        order, pix, alpha, seq = order[kept], pix[kept], alpha[kept], seq[kept]
+        owner = winner[np.searchsorted(starts, pix, side="right") - 1]
+        kept = order > owner
+        order, pix, alpha, seq, owner = order[kept], pix[kept], alpha[kept], seq[kept], owner[kept]
         if not len(pix):
-            return
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.uint64)
         by_pixel = np.argsort((pix << _SEQ_BITS + 12) + seq)
-        order, pix, alpha = order[by_pixel], pix[by_pixel], alpha[by_pixel]
+        order, pix, alpha, owner = order[by_pixel], pix[by_pixel], alpha[by_pixel], owner[by_pixel]
         blended = np.empty((len(pix), 3), dtype=np.int64)
-        color, under = lanes(palette[order + 1]), lanes(canvas[pix])
+        color, under = lanes(palette[order + 1]), lanes(palette[owner + 1])
         first = np.ones(len(pix), dtype=bool)
         first[1:] = pix[1:] != pix[:-1]
         # Pixels drawn over by several outlines: each blend starts from the previous one.
@@ -363,7 +449,7 @@ class Canvas:
         last = np.ones(len(pix), dtype=bool)
         last[:-1] = pix[1:] != pix[:-1]
         out = blended[last].astype(np.uint64)
-        canvas[pix[last]] = out[:, 0] | out[:, 1] << np.uint64(16) | out[:, 2] << np.uint64(32)
+        return pix[last], out[:, 0] | out[:, 1] << np.uint64(16) | out[:, 2] << np.uint64(32)
 
 
 __all__ = [

@@ -79,3 +79,16 @@ def test_smoothscale_shrink_equals_pygame(src: tuple[int, int], dst: tuple[int, 
     surface = pygame.surfarray.make_surface(img.transpose(1, 0, 2))
     ref = pygame.surfarray.array3d(pygame.transform.smoothscale(surface, dst))
     assert np.array_equal(gfx.smoothscale_shrink(img, *dst), ref.transpose(1, 0, 2))
+
+
+@pytest.mark.parametrize("dst", [(96, 96), (600, 400), (7, 5)])
+def test_smoothscale_shrink_of_extremes_equals_pygame(dst: tuple[int, int]) -> None:
+    """White areas (every lane's sum at its largest: the saturating pack), black, and stripes
+    of single pixels, whose sums lean on the split samples' weights."""
+    img = np.zeros((800, 1000, 3), dtype=np.uint8)
+    img[:300] = 255
+    img[300:500, ::2] = (255, 0, 255)
+    img[500:, :, 1] = np.arange(1000, dtype=np.uint8)[None, :] * 37
+    surface = pygame.surfarray.make_surface(img.transpose(1, 0, 2))
+    ref = pygame.surfarray.array3d(pygame.transform.smoothscale(surface, dst))
+    assert np.array_equal(gfx.smoothscale_shrink(img, *dst), ref.transpose(1, 0, 2))

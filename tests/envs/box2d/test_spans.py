@@ -69,3 +69,66 @@ def test_packed_pixels_round_trip() -> None:
     assert packed.dtype == np.uint64 and packed.shape == (8, 10)
     assert np.array_equal(_unpack(packed), img)
     assert int(packed[0, 0]) == spans.pack(img[0, 0])
+
+
+def _scene(seed: int) -> spans.Canvas:
+    """A frame drawn as CarRacing draws one: outlined fills in two batches, pygame fills, a
+    flip and rectangles on top."""
+    rng = np.random.default_rng(seed)
+    canvas = spans.Canvas(H, W)
+    canvas.gfx_polygons([[0, W - 1, W - 1, 0]], [[0, 0, H - 1, H - 1]], [(102, 204, 102)])
+    for _ in range(2):
+        quads = _quads(rng, 30)
+        colors = [tuple(int(v) for v in rng.integers(0, 256, 3)) for _ in quads]
+        canvas.gfx_polygons(quads[..., 0], quads[..., 1], colors)
+    for q in _quads(rng, 3):
+        inside = np.clip(q, 0, [W - 1, H - 1])
+        canvas.pg_polygon(inside[:, 0], inside[:, 1], (255, 255, 255))
+    canvas.flip()
+    canvas.rect(0, H - 10, W, H, (0, 0, 0))
+    canvas.rect(30, 5, 44, 17, (255, 255, 255))
+    return canvas
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("size", [(12, 9), (96, 80), (W, H), (1, 1), (W, 7)])
+def test_shrink_from_pieces_equals_shrinking_the_composed_frame(
+    seed: int, size: tuple[int, int]
+) -> None:
+    canvas = _scene(seed)
+    want = spans.shrink_packed(canvas.compose(), *size)
+    got = canvas.shrink(*size)
+    assert got.shape == (size[1], size[0], 3) and got.dtype == np.uint8
+    assert np.array_equal(got, want), np.argwhere((got != want).any(axis=-1))[:10].tolist()
+
+
+def test_shrink_without_outlines_or_spans() -> None:
+    canvas = spans.Canvas(H, W)
+    assert np.array_equal(canvas.shrink(12, 9), np.zeros((9, 12, 3), np.uint8))
+    canvas.rect(0, 0, W, H, (255, 255, 255))  # pygame's fixed point: white shrinks to 253
+    assert np.array_equal(canvas.shrink(12, 9), np.full((9, 12, 3), 253, np.uint8))
+    canvas.rect(10, 20, 50, 30, (7, 8, 9))
+    assert np.array_equal(canvas.shrink(96, 80), spans.shrink_packed(canvas.compose(), 96, 80))
+
+
+@pytest.mark.parametrize("size", [(W + 1, H), (W, H + 1), (0, 9), (12, -1)])
+def test_shrink_rejects_sizes_that_are_not_smaller(size: tuple[int, int]) -> None:
+    canvas = _scene(0)
+    match = rf"cannot shrink a {W}x{H} frame to {size[0]}x{size[1]}: expected 1 <= width"
+    with pytest.raises(ValueError, match=match):
+        canvas.shrink(*size)
+    with pytest.raises(ValueError, match=match):
+        spans.shrink_packed(canvas.compose(), *size)
+
+
+def test_rects_fill_like_slices_and_skip_empty_boxes() -> None:
+    boxes = [(0, 0, 5, 5), (3, 2, 10, 4), (7, 7, 7, 9), (12, 1, 10, 3), (W - 4, H - 3, W, H)]
+    canvas = spans.Canvas(H, W)
+    canvas.rects([], (1, 2, 3))
+    canvas.rects(boxes, (200, 100, 50))
+    canvas.rect(4, 3, 6, 8, (9, 9, 9))
+    ref = np.zeros((H, W, 3), dtype=np.uint8)
+    for x0, y0, x1, y1 in boxes:
+        ref[y0:y1, x0:x1] = (200, 100, 50)
+    ref[3:8, 4:6] = (9, 9, 9)
+    assert np.array_equal(_unpack(canvas.compose()), ref)
