@@ -113,10 +113,11 @@ class BatchStep:
     threshold: page-faulted anew). Here each RK4 stage's input, derivative and the terms
     that share an operation sit as rows of stacked buffers, so one call covers several
     terms (``[c1, c2] * cos2`` is one broadcast product; the four components' ``y + h*k``
-    one add), and every call writes into preallocated arrays (``out=``): ~190 calls, no
-    allocations of ``[N]`` arrays. The final state's ``cos/sin(theta2)`` (the observation's)
-    are kept and reused by the next step's first stage for the rows whose ``theta2`` is
-    bit for bit unchanged, which saves 2 of 21 trig evaluations per row and step.
+    one add), and every call writes into preallocated arrays (``out=``): ~210 calls and no
+    temporaries besides the torque, reward and terminated arrays. The final state's
+    ``cos/sin(theta2)`` (the observation's) are kept and reused by the next step's first
+    stage for the rows whose ``theta2`` is bit for bit unchanged, and the terminal test
+    reuses the observation's ``cos(theta1)``: 19 trig evaluations per row and step, not 22.
     """
 
     def __init__(self, p: AcrobotParams, n: int) -> None:
