@@ -220,3 +220,48 @@ def test_step_with_reset_mask_equals_reset_with_mask_on_many_rows(env_id: str) -
             ref_obs = twin.reset(mask=mask)
         assert obs.tobytes() == ref_obs.tobytes(), t
         mask = rng.random(256) < 0.8
+
+
+def test_acrobot_batch_follows_state_writes_params_and_copies() -> None:
+    """The Acrobot batch keeps the last step's cos/sin(theta2) for the next one: a state
+    written from outside (``-0.0`` for ``0.0`` too, whose sin differs), new params and a
+    pickled copy must each still step exactly as single envs in that state do."""
+    import dataclasses
+    import pickle
+
+    from palaestra.envs.classic_control.acrobot import AcrobotEnv
+
+    batch = CLASSES["Acrobot-v1"][1](4)
+    batch.reset(seed=3)
+    singles = [AcrobotEnv() for _ in range(4)]
+    for i, env in enumerate(singles):
+        env.reset(seed=3 + i)
+    rng = np.random.default_rng(8)
+
+    def step_both(b: object, envs: list[AcrobotEnv], t: int) -> None:
+        actions = rng.integers(0, 3, 4)
+        obs, reward, terminated = b.step(actions)  # type: ignore[attr-defined]
+        results = [env.step(int(a)) for env, a in zip(envs, actions)]
+        assert obs.tobytes() == np.stack([r[0] for r in results]).tobytes(), t
+        np.testing.assert_array_equal(reward, [r[1] for r in results])
+        np.testing.assert_array_equal(terminated, [r[2] for r in results])
+
+    for t in range(3):
+        step_both(batch, singles, t)
+    written = np.array([[0.3, 0.0, 1.0, -2.0], [0.3, -0.0, 1.0, -2.0], [3.0, -3.1, 12.5, 28.0]])
+    batch.state[:3] = written
+    for env, row in zip(singles, written):
+        env.state = row
+    for t in range(3, 6):
+        step_both(batch, singles, t)
+    # New constants: a heavier second link (m2 != 1 takes the product the default skips).
+    heavy = dataclasses.replace(batch.params, LINK_MASS_2=1.5, LINK_LENGTH_1=1.25)
+    batch.params = heavy
+    for env in singles:
+        env.LINK_MASS_2, env.LINK_LENGTH_1 = 1.5, 1.25  # type: ignore[attr-defined]
+    for t in range(6, 9):
+        step_both(batch, singles, t)
+    copied = pickle.loads(pickle.dumps(batch))
+    twins = [pickle.loads(pickle.dumps(env)) for env in singles]
+    for t in range(9, 12):
+        step_both(copied, twins, t)
