@@ -223,9 +223,8 @@ def test_step_with_reset_mask_equals_reset_with_mask_on_many_rows(env_id: str) -
 
 
 def test_acrobot_batch_follows_state_writes_params_and_copies() -> None:
-    """The Acrobot batch keeps the last step's cos/sin(theta2) for the next one: a state
-    written from outside (``-0.0`` for ``0.0`` too, whose sin differs), new params and a
-    pickled copy must each still step exactly as single envs in that state do."""
+    """A state written from outside (``-0.0`` for ``0.0`` too, whose sin differs), new params
+    and a pickled copy: the Acrobot batch still steps exactly as single envs in that state."""
     import dataclasses
     import pickle
 

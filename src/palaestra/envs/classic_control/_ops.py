@@ -261,66 +261,11 @@ class ArrayOps:
         return f.astype(np.float64)
 
 
-class SquareKernel:
-    """:meth:`ArrayOps.pow2` into preallocated buffers, for one contiguous shape.
-
-    The batched Acrobot squares three ``[N]`` arrays per RK4 stage: a fresh ``[3, N]``
-    temporary per numpy call costs an allocation each (and at 16,384 rows, 384 KiB arrays
-    sit past glibc malloc's mmap threshold, so each is page-faulted anew); here every call
-    writes into the same scratch arrays. The arithmetic is :func:`_near_midpoint`'s.
-    """
-
-    def __init__(self, shape: tuple[int, ...]) -> None:
-        self.shape = shape
-        self._hi = np.empty(shape)
-        self._err = np.empty(shape)
-        self._tmp = np.empty(shape)
-        self._near = np.empty(shape, dtype=bool)
-
-    def __call__(self, x: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """Write libm ``pow(x, 2)`` of each element of ``x`` into ``out`` (both C-contiguous
-        of this kernel's shape; ``x`` is not changed) and return ``out``."""
-        hi, err, tmp, near = self._hi, self._err, self._tmp, self._near
-        np.multiply(x, x, out=out)
-        np.bitwise_and(x.view(np.uint64), _HI_BITS, out=hi.view(np.uint64))
-        np.multiply(hi, hi, out=err)
-        err -= out
-        np.add(x, hi, out=tmp)
-        np.subtract(x, hi, out=hi)  # lo
-        tmp *= hi
-        err += tmp  # x**2 - out, to ~1e-7 ulp
-        np.abs(err, out=err)
-        ulp = np.bitwise_and(out.view(np.uint64), _EXP_BITS, out=tmp.view(np.uint64)).view(
-            np.float64
-        )
-        if ulp.min() < _TINY:  # rare: squares that underflow Dekker's error
-            np.greater(err, ulp * _POW_ULPS, out=near)
-            near |= (ulp < _TINY) & (x != 0)
-        else:
-            ulp *= _POW_ULPS
-            np.greater(err, ulp, out=near)
-        hard = near.ravel().nonzero()[0]
-        if hard.size:
-            out.ravel()[hard] = _libm_square(x.ravel()[hard])
-        return out
-
-
-_TWOS: dict[Any, np.ndarray] = {}
-
-
-def _twos(size: int, dtype: Any) -> np.ndarray:
-    """``size`` 2.0s (exponents for numpy's power loop): a slice of one array kept per dtype."""
-    twos = _TWOS.get(dtype)
-    if twos is None or twos.size < size:
-        twos = _TWOS[dtype] = np.full(max(2 * size, 4096), 2.0, dtype=dtype)
-    return twos[:size]
-
-
 def _libm_square(x: np.ndarray) -> np.ndarray:
     """libm ``pow(x, 2)`` (``powf`` for float32) of each element of a 1-d array."""
     if numpy_power_is_libm():
         # An exponent *array*: numpy squares with x*x when the exponent is a scalar 2.
-        return np.power(x, _twos(x.size, x.dtype))
+        return np.power(x, np.full_like(x, 2.0))
     return np.array([v**2 for v in x.tolist()] if x.dtype == np.float64 else [v**2 for v in x])
 
 
