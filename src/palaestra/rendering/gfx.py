@@ -373,12 +373,6 @@ def lanes(packed: np.ndarray) -> np.ndarray:
     return packed.view(np.uint16).reshape(*packed.shape, 4)[..., :3].astype(np.int64)
 
 
-def _lanes32(packed: np.ndarray) -> np.ndarray:
-    """All four 16-bit lanes of packed pixels as ``[..., 4] uint32`` (one contiguous cast)."""
-    packed = np.ascontiguousarray(packed)
-    return packed.view(np.uint16).astype(np.uint32).reshape(*packed.shape, 4)
-
-
 _BUFFERS = threading.local()  # a running-sum buffer per thread: a fresh 6 MB costs ~1 ms
 
 

@@ -382,7 +382,8 @@ class Canvas:
         starts, colors, pixels, values = self._resolve()
         lengths = np.diff(starts, append=h * w)
         # Sums of the pieces before each piece (uint64 wraps: only differences are used).
-        before = np.cumsum(colors * lengths.astype(np.uint64)) - colors * lengths.astype(np.uint64)
+        piece_sums = colors * lengths.astype(np.uint64)
+        before = np.cumsum(piece_sums) - piece_sums
         points = gfx.shrink_points(w, width)
         n = len(points)
         query = _queries(h, w, width)
