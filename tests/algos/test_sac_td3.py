@@ -199,6 +199,155 @@ def test_sac_critic_target_by_hand() -> None:
     assert loss == pytest.approx(expected, rel=1e-6)
 
 
+class _Spaces(gym.Env):  # type: ignore[type-arg]
+    """Only spaces (the update tests never step it): ``obs_dim`` float64s, ``act_dim`` in
+    [-1, 1]."""
+
+    def __init__(self, obs_dim: int, act_dim: int) -> None:
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, (obs_dim,), np.float64)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (act_dim,), np.float32)
+
+
+class _QueuedNoise:
+    """Stands in for the model's generator in ``SAC.train``: hands out queued noise."""
+
+    def __init__(self, queue: list[np.ndarray]) -> None:
+        self.queue = queue
+
+    def standard_normal(self, shape: tuple[int, ...], dtype: Any = None) -> np.ndarray:
+        noise = self.queue.pop(0)
+        assert noise.shape == tuple(shape)
+        return noise
+
+
+@pytest.mark.parametrize("backend", ["numpy", "torch"])
+def test_sac_updates_equal_sb3s_train_on_the_same_batches_and_noise(
+    backend: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """SB3's own ``SAC.train`` and ours, from the same weights, batches and Gaussian noise,
+    move the actor, the critics, their targets and the temperature alike over 30 updates
+    (SB3's default 256-256 nets; observation and action sizes of HalfCheetah)."""
+    import gymnasium
+    import stable_baselines3 as sb3
+    from stable_baselines3.common.logger import Logger
+    from stable_baselines3.common.type_aliases import ReplayBufferSamples
+
+    obs_dim, act_dim, n_updates, batch_size = 17, 6, 30, 64
+    obs_space = (-np.inf, np.inf, (obs_dim,), np.float64)
+    ours = SAC("MlpPolicy", _Spaces(obs_dim, act_dim), seed=0, policy_kwargs={"backend": backend})
+    assert ours.learner.backend == backend
+
+    class GymSpaces(gymnasium.Env):  # type: ignore[type-arg]
+        observation_space = gymnasium.spaces.Box(*obs_space)
+        action_space = gymnasium.spaces.Box(-1.0, 1.0, (act_dim,), np.float32)
+
+    theirs = sb3.SAC("MlpPolicy", GymSpaces(), seed=0)
+    theirs._logger = Logger(folder=None, output_formats=[])
+    theirs._current_progress_remaining = ours._current_progress_remaining = 1.0
+    ours.learner.to_torch()
+    for part in ("actor", "critic", "critic_target"):
+        getattr(ours.policy, part).load_state_dict(getattr(theirs.policy, part).state_dict())
+    with torch.no_grad():
+        theirs.log_ent_coef.fill_(math.log(0.5))  # a temperature that moves the losses
+        ours.policy.ent_coef.log_ent_coef.copy_(theirs.log_ent_coef)
+    ours.learner._torch_changed = True  # the weights were set on the torch objects
+
+    rng = np.random.default_rng(0)
+    batches = [
+        {
+            "observations": rng.normal(size=(batch_size, obs_dim)).astype(np.float32),
+            "actions": rng.uniform(-1, 1, (batch_size, act_dim)).astype(np.float32),
+            "next_observations": rng.normal(size=(batch_size, obs_dim)).astype(np.float32),
+            "rewards": rng.normal(size=batch_size).astype(np.float32),
+            "terminated": (rng.uniform(size=batch_size) < 0.2).astype(np.float32),
+        }
+        for _ in range(n_updates)
+    ]
+    # per update: the actor's actions' noise, then the next actions' (both libraries' order)
+    noise = [
+        rng.standard_normal((batch_size, act_dim)).astype(np.float32) for _ in range(2 * n_updates)
+    ]
+
+    ours_batches = list(batches)
+    monkeypatch.setattr(ours, "_sample_batch", lambda size: dict(ours_batches.pop(0)))
+    ours._rng = _QueuedNoise(list(noise))
+    ours.train(n_updates, batch_size)
+
+    theirs_batches, theirs_noise = list(batches), list(noise)
+
+    def sample(size: int, env: Any = None) -> ReplayBufferSamples:
+        b = theirs_batches.pop(0)
+        return ReplayBufferSamples(
+            *(torch.as_tensor(b[k]) for k in ("observations", "actions", "next_observations")),
+            torch.as_tensor(b["terminated"][:, None]),
+            torch.as_tensor(b["rewards"][:, None]),
+        )
+
+    monkeypatch.setattr(theirs.replay_buffer, "sample", sample)
+    monkeypatch.setattr(
+        torch.distributions.Normal,
+        "rsample",
+        lambda self, shape=(): self.loc + self.scale * torch.as_tensor(theirs_noise.pop(0)),
+    )
+    theirs.train(n_updates, batch_size)
+    assert not ours_batches and not theirs_batches and not theirs_noise
+
+    ours.learner.to_torch()
+    for part in ("actor", "critic", "critic_target"):
+        mine, other = (
+            getattr(ours.policy, part).state_dict(),
+            getattr(theirs.policy, part).state_dict(),
+        )
+        for key, value in mine.items():
+            torch.testing.assert_close(value, other[key], atol=2e-5, rtol=1e-4, msg=f"{part} {key}")
+    assert ours.policy.ent_coef.log_ent_coef.item() == pytest.approx(
+        theirs.log_ent_coef.item(), abs=1e-6
+    )
+    for key in ("train/actor_loss", "train/critic_loss", "train/ent_coef", "train/ent_coef_loss"):
+        assert ours.logger.name_to_value[key] == pytest.approx(
+            theirs.logger.name_to_value[key], rel=1e-4, abs=1e-6
+        ), key
+
+
+class _Transcript(gym.Wrapper):  # type: ignore[type-arg]
+    """Writes down every reset observation and every step as the env saw it."""
+
+    def __init__(self, env: Any) -> None:
+        super().__init__(env)
+        self.steps: list[tuple[Any, ...]] = []
+        self.obs: Any = None
+
+    def reset(self, **kwargs: Any) -> Any:
+        self.obs, info = self.env.reset(**kwargs)
+        return self.obs, info
+
+    def step(self, action: Any) -> Any:
+        out = self.env.step(action)
+        self.steps.append((self.obs, np.array(action), *out[:4]))
+        self.obs = out[0]
+        return out
+
+
+@pytest.mark.parametrize("cls", ALGOS)
+def test_replay_buffer_holds_what_the_env_did_across_truncations(cls: Any) -> None:
+    """Every stored transition is the env's own step: observation, action, next observation
+    (the terminal one at a truncation, not the reset's), reward; truncations stored as not
+    terminated so targets bootstrap (SB3's handle_timeout_termination)."""
+    env = _Transcript(gym.make("Pendulum-v1"))
+    model = _model(cls, env)
+    model.learn(450)
+    ring = model.replay_buffer
+    assert ring.size() == len(env.steps) == 450
+    for t, (obs, action, next_obs, reward, terminated, truncated) in enumerate(env.steps):
+        np.testing.assert_array_equal(ring.observations[t, 0], obs, err_msg=str(t))
+        # stored rescaled to [-1, 1] as SB3 stores them; Pendulum's torque bound is 2
+        np.testing.assert_allclose(2.0 * ring.actions[t, 0], action, atol=1e-6, err_msg=str(t))
+        np.testing.assert_array_equal(ring.next_observations[t, 0], next_obs, err_msg=str(t))
+        assert ring.rewards[t, 0] == np.float32(reward)
+        assert ring.terminated[t, 0] == float(terminated and not truncated)
+    assert [t for t, step in enumerate(env.steps) if step[5]] == [199, 399]
+
+
 def test_td3_target_smoothing_by_hand() -> None:
     """Target actions: clip(mu'(s') + clipped noise, -1, 1); the target is the smaller Q'."""
     seen: dict[str, Any] = {}
