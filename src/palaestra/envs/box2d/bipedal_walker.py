@@ -399,11 +399,13 @@ class BipedalWalker(ReplayCopies, ClassicControlEnv):
 
         pos, vel = hull.position, hull.linearVelocity
         px, py = pos.x, pos.y
+        # The start as a tuple of the same floats: a b2Vec2 argument costs a Python __len__.
+        p1, ray_cast = (px, py), self.world.RayCast
         for ray, dx, dy in zip(self.lidar, _LIDAR_DX, _LIDAR_DY):
             ray.fraction = 1.0
-            ray.p1 = pos
-            ray.p2 = (px + dx, py - dy)
-            self.world.RayCast(ray, ray.p1, ray.p2)
+            ray.p1 = p1
+            ray.p2 = p2 = (px + dx, py - dy)
+            ray_cast(ray, p1, p2)
 
         j0, j1, j2, j3 = self.joints
         contact = self.leg_contact
