@@ -10,8 +10,8 @@ Run from the repository root::
 
 Both libraries step the same 4,000 ``action_space.sample()`` actions (resetting at episode
 ends); each figure is the minimum of 3 runs (the plain CPU per step from untimed runs, the
-shares from runs with the clocks around the calls). Needs ``box2d`` and ``gymnasium`` (a benchmark
-only: palaestra never imports gymnasium).
+shares from runs with the clocks around the calls), the two libraries' runs alternating.
+Needs ``box2d`` and ``gymnasium`` (a benchmark only: palaestra never imports gymnasium).
 """
 
 from __future__ import annotations
@@ -97,11 +97,16 @@ def main() -> None:
         space = palaestra.make(env_id).action_space
         space.seed(0)
         actions = [space.sample() for _ in range(args.steps)]
-        rows = {}
-        for lib in (palaestra, gymnasium):
-            plain = min(run(lib, env_id, actions, False)[0] for _ in range(args.repeats))
-            timed = [run(lib, env_id, actions, True, pair_ns) for _ in range(args.repeats)]
-            rows[lib.__name__] = (plain, min(t[1] for t in timed), min(t[2] for t in timed))
+        plain: dict[str, list[float]] = {"palaestra": [], "gymnasium": []}
+        timed: dict[str, list[tuple[float, float, float]]] = {"palaestra": [], "gymnasium": []}
+        for _ in range(args.repeats):  # the libraries alternate, so a change of load hits both
+            for lib in (palaestra, gymnasium):
+                plain[lib.__name__].append(run(lib, env_id, actions, False)[0])
+                timed[lib.__name__].append(run(lib, env_id, actions, True, pair_ns))
+        rows = {
+            name: (min(plain[name]), min(t[1] for t in timed[name]), min(t[2] for t in timed[name]))
+            for name in plain
+        }
         (ours, step, ray), (theirs, their_step, their_ray) = rows["palaestra"], rows["gymnasium"]
         print(f"| `{env_id}` | {ours:.1f} | {step:.1f} | {step / ours:.0%} | {ray / ours:.0%} "
               f"| {theirs:.1f} | {their_step / theirs:.0%} | {their_ray / theirs:.0%} "
