@@ -60,7 +60,7 @@ def run_once(tree: Path, ids: list[str], steps: int, repeats: int) -> dict[str, 
         text=True,
         cwd=BENCHMARKS.parent,
     )
-    return json.loads(out.stdout.strip().splitlines()[-1])  # type: ignore[no-any-return]
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def main() -> None:
