@@ -67,6 +67,7 @@ def test_reward_is_computed_in_the_actions_float_type() -> None:
         (np.zeros(2, dtype=np.float32), r"expected shape \(4,\), got \(2,\)"),
         (np.zeros((4, 1), dtype=np.float32), r"expected shape \(4,\), got \(4, 1\)"),
         (np.array([0.0, np.nan, 0.0, 0.0]), "must be finite"),
+        (np.array([0.0, 0.0, 0.0, -np.inf], dtype=np.float32), "must be finite"),
         (["a", "b", "c", "d"], "expected real numeric values, got dtype <U1"),
     ],
 )

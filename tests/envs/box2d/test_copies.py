@@ -80,6 +80,50 @@ def test_draws_made_between_steps_by_a_wrapper_are_replayed() -> None:
     assert _run(clone, later) == _run(env, later)
 
 
+def test_a_generator_handed_out_and_drawn_from_later_is_replayed() -> None:
+    # Steps skip recording the generator's state while only the env holds it; reading
+    # np_random hands it out, and the caller may draw from its reference at any time after.
+    env = palaestra.make("LunarLander-v3")
+    env.reset(seed=4)
+    _run(env, [2, 2, 1])
+    assert [start for kind, start, _ in env.unwrapped._calls if kind == "step"] == [None] * 3
+    rng = env.np_random
+    for action in [3, 2, 0, 1, 2]:
+        rng.random(int(rng.integers(1, 4)))  # draws the env does not make
+        env.step(action)
+    assert all(start is not None for _, start, _ in env.unwrapped._calls[4:])
+    clone = copy.deepcopy(env)
+    rng.random(3)
+    later = [2, 3, 1, 0] * 3
+    want = _run(env, later)
+    assert _run(clone, later) != want  # the copy's generator did not see the last draws
+    clone = copy.deepcopy(env)
+    assert _run(clone, later) == _run(env, later)
+
+
+def test_a_generator_assigned_from_outside_is_recorded_and_a_seeded_reset_is_private() -> None:
+    env = palaestra.make("BipedalWalker-v3")
+    env.reset(seed=0)
+    env.unwrapped.np_random = np.random.default_rng(7)
+    env.step(np.zeros(4, dtype=np.float32))
+    assert env.unwrapped._calls[-1][1] == np.random.default_rng(7).bit_generator.state
+    env.reset(seed=1)  # a fresh generator that no one else holds
+    env.step(np.zeros(4, dtype=np.float32))
+    assert env.unwrapped._calls[-1][1] is None
+
+
+def test_copies_get_their_own_generator_and_keep_it_private() -> None:
+    env = palaestra.make("LunarLander-v3").unwrapped
+    env.reset(seed=2)
+    _run(env, [2, 1, 3])
+    for clone in (copy.copy(env), copy.deepcopy(env), pickle.loads(pickle.dumps(env))):
+        assert clone._rng is not env._rng
+        assert clone._rng.bit_generator.state == env._rng.bit_generator.state
+        clone.step(2)
+        assert clone._calls[-1][1] is None  # private: only the copy holds it
+        assert env._rng.bit_generator.state != clone._rng.bit_generator.state
+
+
 def test_past_the_limit_the_env_keeps_its_world_and_a_copy_warns(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

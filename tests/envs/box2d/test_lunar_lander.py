@@ -128,6 +128,7 @@ def test_discrete_env_refuses(action: Any, match: str) -> None:
         (np.zeros((1, 2), dtype=np.float32), r"expected shape \(2,\), got \(1, 2\)"),
         (np.array([np.nan, 0.0]), "must be finite"),
         (np.array([0.0, np.inf]), "must be finite"),
+        (np.array([np.nan, 0.0], dtype=np.float32), "must be finite"),
         (np.array(["a", "b"]), "expected real numeric values, got dtype <U1"),
         (np.array([1j, 0]), "expected real numeric values, got dtype complex128"),
     ],

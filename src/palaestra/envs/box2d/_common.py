@@ -12,6 +12,7 @@ import numpy as np
 
 from palaestra import error
 from palaestra.envs.action_checks import invalid_action
+from palaestra.utils import seeding
 
 _REAL_KINDS = "biuf"
 
@@ -52,8 +53,17 @@ def box_action(action: Any, space: Any, keep_float_dtype: bool = False) -> np.nd
     array keeps its dtype (for envs whose Gymnasium arithmetic runs in the action's own type)
     and integers still become float64. Out-of-bound finite values are
     accepted and clipped by the env, as in Gymnasium; NaN, inf, strings, complex numbers and
-    wrong shapes are refused with the action and the space in the message.
+    wrong shapes are refused with the action and the space in the message. A float array that
+    needs no conversion is returned as is (callers only read it).
     """
+    if (
+        type(action) is np.ndarray
+        and action.ndim == 1
+        and action.shape == space.shape
+        and (action.dtype == np.float64 or (keep_float_dtype and action.dtype.kind == "f"))
+        and _all_finite(action.tolist())
+    ):
+        return action  # the common case, without the numpy calls below (~2 us a step)
     try:
         raw = np.asarray(action)
     except (TypeError, ValueError) as e:
@@ -70,6 +80,27 @@ def box_action(action: Any, space: Any, keep_float_dtype: bool = False) -> np.nd
     if not np.isfinite(arr).all():
         raise invalid_action(action, space, "actions must be finite (no NaN or inf)")
     return arr
+
+
+def _all_finite(values: list[float]) -> bool:
+    for value in values:
+        if not math.isfinite(value):
+            return False
+    return True
+
+
+def box_action_values(action: Any, space: Any) -> list[float]:
+    """``box_action(action, space).tolist()`` for a 1-D space: the values as Python floats.
+
+    A float array of the space's shape with finite values (what ``action_space.sample()`` and
+    policies give: float32 values are exact in a float) is read directly, without the checks'
+    ~2 us of numpy calls; anything else goes through :func:`box_action`, with its errors.
+    """
+    if type(action) is np.ndarray and action.shape == space.shape and action.dtype.kind == "f":
+        values: list[float] = action.tolist()
+        if _all_finite(values):
+            return values
+    return box_action(action, space).tolist()
 
 
 def discrete_action(action: Any, space: Any) -> int:
@@ -119,6 +150,14 @@ class ReplayCopies:
     replays the calls since the cut in a fresh world, which follows the original only
     approximately (contact order may differ); copying such an env warns.
 
+    Reading the generator's state costs ~2 us, a tenth of a LunarLander step, so a step records
+    it only when something besides the env may have drawn from the generator since the last
+    call: when code outside the env was handed it (``np_random`` or ``_np_random`` read or
+    assigned) since it was created by a seeded ``reset`` or on the env's first use. Otherwise
+    the step records ``None`` and the replay simply goes on with the generator the previous
+    call left, which is then in the same state. The env's own draws use :meth:`_own_random`,
+    which hands the generator out to no one.
+
     Subclasses call :meth:`_record_init` in ``__init__``, :meth:`_start_reset` right after
     seeding in ``reset`` (True: build a fresh world now), :meth:`_record_reset` when ``reset``
     ends, :meth:`_start_step` and :meth:`_record_step` around ``step``.
@@ -126,14 +165,38 @@ class ReplayCopies:
 
     _FRESH_WORLD_EACH_RESET = False
     _init_kwargs: dict[str, Any]
-    _calls: list[tuple[str, Mapping[str, Any], Any]]  # ("reset" | "step", rng state, argument)
+    # ("reset" | "step", the generator's state as the call began or None: as the last call left it,
+    # argument)
+    _calls: list[tuple[str, Mapping[str, Any] | None, Any]]
     _replaying = False
     _history_cut = False  # the recorded calls no longer start from a fresh world
-    _np_random: np.random.Generator | None
+    _rng: np.random.Generator | None = None  # what ``np_random`` returns
+    _rng_private: np.random.Generator | None = None  # ``_rng`` while no one else was handed it
     _np_random_seed: int | None
     render_mode: str | None
     spec: Any
     np_random: np.random.Generator
+
+    @property
+    def _np_random(self) -> np.random.Generator | None:
+        """The generator (LazyRandom's ``np_random`` reads it here): whoever reads it may draw
+        from it between calls, so from now on each step records its state."""
+        self._rng_private = None
+        return self._rng
+
+    @_np_random.setter
+    def _np_random(self, value: np.random.Generator | None) -> None:
+        self._rng = value
+        self._rng_private = None  # the assigner may keep it (a seeded reset clears this)
+
+    def _own_random(self) -> np.random.Generator:
+        """The generator for the env's own draws, created on first use as ``np_random`` would;
+        unlike ``np_random`` it leaves the generator private."""
+        rng = self._rng
+        if rng is None:
+            rng, self._np_random_seed = seeding.np_random()
+            self._rng = self._rng_private = rng
+        return rng
 
     def _record_init(self, **kwargs: Any) -> None:
         self._init_kwargs = kwargs
@@ -141,14 +204,17 @@ class ReplayCopies:
         self._reset_start: tuple[Mapping[str, Any], int] | None = None
         self._step_start: Mapping[str, Any] | None = None
 
-    def _start_reset(self) -> bool:
-        """Note the generator's state as ``reset`` begins; True if the history restarts here
-        with a fresh world (which the env must then build)."""
+    def _start_reset(self, seed: int | None) -> bool:
+        """Note the generator's state as ``reset`` begins (after ``super().reset(seed=seed)``,
+        whose ``seed`` made a generator that no one else holds); True if the history restarts
+        here with a fresh world (which the env must then build)."""
         fresh = self._FRESH_WORLD_EACH_RESET
         if fresh or len(self._calls) >= MAX_REPLAYED_CALLS:
             self._history_cut = not fresh
             self._calls = []
-        self._reset_start = (self.np_random.bit_generator.state, len(self._calls))
+        if seed is not None:
+            self._rng_private = self._rng
+        self._reset_start = (self._own_random().bit_generator.state, len(self._calls))
         return fresh
 
     def _record_reset(self, options: Any) -> None:
@@ -159,10 +225,10 @@ class ReplayCopies:
         self._reset_start = None
 
     def _start_step(self) -> None:
-        self._step_start = self.np_random.bit_generator.state
+        rng = self._rng
+        self._step_start = None if rng is self._rng_private else rng.bit_generator.state  # type: ignore[union-attr]
 
     def _record_step(self, action: Any) -> None:
-        assert self._step_start is not None, "_start_step must run first"
         kept: Any
         if isinstance(action, np.ndarray):
             kept = action.copy()
@@ -181,10 +247,15 @@ class ReplayCopies:
                 "the original only approximately",
                 stacklevel=2,
             )
+        rng, private = self._rng, self._rng is self._rng_private
         return {
             "kwargs": self._init_kwargs,
             "calls": self._calls,
-            "np_random": self._np_random,
+            # A private generator goes as a copy (so that even a shallow copy of the env has its
+            # own, still private); one held elsewhere goes as itself (deepcopy's memo then maps
+            # it to the same copy for the env and the holder).
+            "np_random": deepcopy(rng) if private else rng,
+            "np_random_private": private,
             "np_random_seed": self._np_random_seed,
             "spec": self.spec,
         }
@@ -197,7 +268,8 @@ class ReplayCopies:
         self._replaying = True
         try:
             for kind, start, argument in state["calls"]:
-                self._np_random = _generator_at(start)
+                if start is not None:  # else the replay's generator is where the call began
+                    self._np_random = _generator_at(start)
                 if kind == "reset":
                     self.reset(options=argument)  # type: ignore[attr-defined]
                 else:
@@ -206,6 +278,8 @@ class ReplayCopies:
             self._replaying = False
             self.render_mode = render_mode
         self._np_random = state["np_random"]
+        if state.get("np_random_private"):  # only the original held it: only the copy does
+            self._rng_private = self._rng
         self._np_random_seed = state["np_random_seed"]
         self.spec = state["spec"]
         self._after_replay()

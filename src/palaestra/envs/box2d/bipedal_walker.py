@@ -55,6 +55,7 @@ _TORQUE_COST = 0.00035 * MOTORS_TORQUE  # Gymnasium's product, folded in the sam
 _LIDAR_DX = [math.sin(1.5 * i / 10.0) * LIDAR_RANGE for i in range(10)]
 _LIDAR_DY = [math.cos(1.5 * i / 10.0) * LIDAR_RANGE for i in range(10)]
 _HULL, _CONTACT_LEGS = "hull", (0, 1)  # userData tags (the lower legs report ground contact)
+_WALKER = "walker"  # the userData of the walker's fixtures (the terrain's have none)
 
 # Colours (fill, outline), as Gymnasium draws them.
 HULL_COLOR = ((127, 51, 229), (76, 76, 127))
@@ -76,11 +77,13 @@ def _box2d_helpers() -> tuple[Any, type, type]:
             categoryBits=0x0020,
             maskBits=0x001,  # bodies collide with the ground only
             restitution=0.0,
+            userData=_WALKER,
         ),
         "leg": b2.fixtureDef(
             shape=b2.polygonShape(box=(LEG_W / 2, LEG_H / 2)),
             density=1.0,
             restitution=0.0,
+            userData=_WALKER,
             categoryBits=0x0020,
             maskBits=0x001,
         ),
@@ -88,6 +91,7 @@ def _box2d_helpers() -> tuple[Any, type, type]:
             shape=b2.polygonShape(box=(0.8 * LEG_W / 2, LEG_H / 2)),
             density=1.0,
             restitution=0.0,
+            userData=_WALKER,
             categoryBits=0x0020,
             maskBits=0x001,
         ),
@@ -118,7 +122,10 @@ def _box2d_helpers() -> tuple[Any, type, type]:
         p2: Any = None
 
         def ReportFixture(self, fixture: Any, point: Any, normal: Any, fraction: float) -> float:
-            if (fixture.filterData.categoryBits & 1) == 0:
+            # Gymnasium ignores fixtures without the ground's category bit: in this world
+            # those are the walker's own, the only ones with userData (a read 6x cheaper than
+            # filterData's, and this runs ~20 times a step).
+            if fixture.userData is not None:
                 return -1  # not ground: ignore and go on
             self.p2 = point
             self.fraction = fraction
@@ -161,6 +168,7 @@ class BipedalWalker(ReplayCopies, ClassicControlEnv):
             shape=b2.polygonShape(vertices=[(0, 0), (1, 0), (1, -1), (0, -1)]),
             friction=FRICTION,
         )
+        self._static_body = b2.bodyDef(type=b2.staticBody)
         self._fd_edge = b2.fixtureDef(
             shape=b2.edgeShape(vertices=[(0, 0), (1, 1)]), friction=FRICTION, categoryBits=0x0001
         )
@@ -191,16 +199,18 @@ class BipedalWalker(ReplayCopies, ClassicControlEnv):
         self.legs = []
         self.joints = []
 
-    def _static(self, fixture_def: Any, vertices: list[tuple[float, float]]) -> Any:
-        fixture_def.shape.vertices = vertices
-        body = self.world.CreateStaticBody(fixtures=fixture_def)
+    def _static(self, fixture_def: Any) -> None:
+        """A static body with one fixture: what Gymnasium's ``CreateStaticBody(fixtures=...)``
+        makes, without building its body definition in Python each time (~7 us, 200 times
+        a reset)."""
+        body = self.world.CreateBody(self._static_body)
+        body.CreateFixture(fixture_def)
         self.terrain.append(body)
-        return body
 
     def _generate_terrain(self) -> None:
         """Gymnasium's terrain walk: grass drifting around TERRAIN_HEIGHT, and in hardcore mode
         stumps, stairs and pits after each stretch of grass."""
-        rng, ts = self.np_random, TERRAIN_STEP
+        rng, ts = self._own_random(), TERRAIN_STEP
         state, velocity, y = GRASS, 0.0, TERRAIN_HEIGHT
         counter: Any = TERRAIN_STARTPAD
         oneshot = False
@@ -258,21 +268,24 @@ class BipedalWalker(ReplayCopies, ClassicControlEnv):
                     state = GRASS
                 oneshot = True
 
+        # An edge's two vertices set directly: its vertices setter (Python, ~2 us) would also
+        # clear hasVertex0/hasVertex3, which stay False on this shape.
+        edge = self._fd_edge.shape
+        xs, ys = self.terrain_x, self.terrain_y
         for i in range(TERRAIN_LENGTH - 1):
-            edge = [
-                (self.terrain_x[i], self.terrain_y[i]),
-                (self.terrain_x[i + 1], self.terrain_y[i + 1]),
-            ]
-            self._static(self._fd_edge, edge)
+            edge.vertex1 = (xs[i], ys[i])
+            edge.vertex2 = (xs[i + 1], ys[i + 1])
+            self._static(self._fd_edge)
         self.terrain.reverse()  # Gymnasium's order, which _destroy follows
 
     def _obstacle(self, poly: list[tuple[float, float]]) -> None:
-        self._static(self._fd_polygon, poly)
+        self._fd_polygon.shape.vertices = poly
+        self._static(self._fd_polygon)
         self.obstacles.append(poly)
 
     def _generate_clouds(self) -> None:
         """Ten five-sided clouds (decoration, but they draw from np_random: kept for parity)."""
-        rng, ts = self.np_random, TERRAIN_STEP
+        rng, ts = self._own_random(), TERRAIN_STEP
         self.cloud_poly = []
         for _ in range(TERRAIN_LENGTH // 20):
             x = rng.uniform(0, TERRAIN_LENGTH) * ts
@@ -290,7 +303,7 @@ class BipedalWalker(ReplayCopies, ClassicControlEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """New terrain and walker; the first observation is that of a zero-torque step."""
         super().reset(seed=seed)
-        fresh_world = self._start_reset()
+        fresh_world = self._start_reset(seed)
         b2, fixtures = self._b2, self._fixtures
         self._destroy()
         if fresh_world:  # the history a copy replays restarts here (ReplayCopies)
@@ -314,7 +327,8 @@ class BipedalWalker(ReplayCopies, ClassicControlEnv):
             position=(init_x, init_y), fixtures=fixtures["hull"]
         )
         hull.userData = _HULL
-        hull.ApplyForceToCenter((self.np_random.uniform(-INITIAL_RANDOM, INITIAL_RANDOM), 0), True)
+        push = self._own_random().uniform(-INITIAL_RANDOM, INITIAL_RANDOM)
+        hull.ApplyForceToCenter((push, 0), True)
 
         self.legs, self.joints = [], []
         for i in (-1, +1):
@@ -374,7 +388,8 @@ class BipedalWalker(ReplayCopies, ClassicControlEnv):
         self._start_step()
         a = box_action(action, self.action_space, keep_float_dtype=True)
         # Each motor turns at full speed towards the action's sign with torque |a| (clipped).
-        effort = np.clip(np.abs(a), 0, 1)  # [4], in the action's float type
+        # np.minimum(|a|, 1) is np.clip(|a|, 0, 1) for finite |a|, at a fifth of its cost.
+        effort = np.minimum(np.abs(a), 1.0)  # [4], in the action's float type
         speeds = (SPEED_HIP, SPEED_KNEE, SPEED_HIP, SPEED_KNEE)
         for joint, speed, ai, ei in zip(self.joints, speeds, a.tolist(), effort.tolist()):
             joint.motorSpeed = float(speed * _sign(ai))
@@ -384,11 +399,13 @@ class BipedalWalker(ReplayCopies, ClassicControlEnv):
 
         pos, vel = hull.position, hull.linearVelocity
         px, py = pos.x, pos.y
+        # The start as a tuple of the same floats: a b2Vec2 argument costs a Python __len__.
+        p1, ray_cast = (px, py), self.world.RayCast
         for ray, dx, dy in zip(self.lidar, _LIDAR_DX, _LIDAR_DY):
             ray.fraction = 1.0
-            ray.p1 = pos
-            ray.p2 = (px + dx, py - dy)
-            self.world.RayCast(ray, ray.p1, ray.p2)
+            ray.p1 = p1
+            ray.p2 = p2 = (px + dx, py - dy)
+            ray_cast(ray, p1, p2)
 
         j0, j1, j2, j3 = self.joints
         contact = self.leg_contact

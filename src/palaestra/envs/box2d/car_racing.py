@@ -204,17 +204,18 @@ class CarRacing(ReplayCopies, ClassicControlEnv):
 
     def _random_colors(self) -> None:
         """Gymnasium's draws: road, background, then which channel of the grass is +20."""
-        self.road_color = self.np_random.uniform(0, 210, size=3)
-        self.bg_color = self.np_random.uniform(0, 210, size=3)
+        rng = self._own_random()
+        self.road_color = rng.uniform(0, 210, size=3)
+        self.bg_color = rng.uniform(0, 210, size=3)
         self.grass_color = np.copy(self.bg_color)
-        idx = self.np_random.integers(3)
+        idx = rng.integers(3)
         self.grass_color[idx] += 20
 
     # -- track ------------------------------------------------------------------------------
 
     def _create_track(self) -> bool:
         """One attempt at Gymnasium's track; False (after the same draws) if it fails."""
-        rng = self.np_random
+        rng = self._own_random()
         checkpoints = []
         for c in range(CHECKPOINTS):
             noise = rng.uniform(0, 2 * math.pi * 1 / CHECKPOINTS)
@@ -377,7 +378,7 @@ class CarRacing(ReplayCopies, ClassicControlEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """A new track (``options={"randomize": False}`` keeps the colours when randomizing)."""
         super().reset(seed=seed)
-        fresh_world = self._start_reset()
+        fresh_world = self._start_reset(seed)
         self._destroy()
         self._listener = _friction_detector_class()(self, self.lap_complete_percent)
         if fresh_world:  # the history a copy replays restarts here (ReplayCopies)

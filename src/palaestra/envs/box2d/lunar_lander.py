@@ -25,7 +25,7 @@ import numpy as np
 from palaestra import error, logger
 from palaestra.envs.box2d._common import (
     ReplayCopies,
-    box_action,
+    box_action_values,
     check_bool,
     check_real,
     discrete_action,
@@ -118,6 +118,76 @@ def _contact_listener_class() -> type:
     return ContactDetector
 
 
+@lru_cache(maxsize=1)
+def _definitions() -> dict[str, Any]:
+    """The Box2D definitions every episode builds from, made once (needs Box2D).
+
+    ``reset`` makes the same ``CreateBody``/``CreateFixture`` calls with them as Gymnasium's
+    keyword forms (``CreateStaticBody(shapes=...)``, ``CreateEdgeFixture(...)``,
+    ``CreateDynamicBody(...)``), which build these definitions field by field in Python at
+    every reset (a third of a LunarLander reset). Only the terrain's edge changes between
+    uses: its vertices are set right before each ``CreateFixture``.
+    """
+    b2 = import_box2d().b2
+    initial_x, initial_y = VIEWPORT_W / SCALE / 2, VIEWPORT_H / SCALE
+    legs = [
+        b2.bodyDef(
+            type=b2.dynamicBody,
+            position=(initial_x - i * LEG_AWAY / SCALE, initial_y),
+            angle=(i * 0.05),
+            fixtures=b2.fixtureDef(
+                shape=b2.polygonShape(box=(LEG_W / SCALE, LEG_H / SCALE)),
+                density=1.0,
+                restitution=0.0,
+                categoryBits=_LEG_BITS,
+                maskBits=_GROUND_MASK,
+            ),
+        )
+        for i in (-1, +1)
+    ]
+    return {
+        "moon": b2.bodyDef(type=b2.staticBody),
+        # CreateStaticBody(shapes=...) puts the shape on a default fixture definition.
+        "floor": b2.fixtureDef(shape=b2.edgeShape(vertices=[(0, 0), (W, 0)])),
+        "terrain": b2.fixtureDef(
+            shape=b2.edgeShape(vertices=[(0, 0), (1, 1)]), density=0, friction=0.1
+        ),
+        "lander": b2.bodyDef(
+            type=b2.dynamicBody,
+            position=(initial_x, initial_y),
+            angle=0.0,
+            fixtures=b2.fixtureDef(
+                shape=b2.polygonShape(vertices=[(x / SCALE, y / SCALE) for x, y in LANDER_POLY]),
+                density=5.0,
+                friction=0.1,
+                categoryBits=_LANDER_BITS,
+                maskBits=_GROUND_MASK,
+                restitution=0.0,
+            ),
+        ),
+        "legs": legs,
+    }
+
+
+def _leg_joint(box2d: Any, i: int) -> Any:
+    """The revolute joint definition of leg ``i`` (-1, +1), without its two bodies (nor the
+    reference angle, which ``reset`` computes from them)."""
+    joint = box2d.b2.revoluteJointDef(
+        localAnchorA=(0, 0),
+        localAnchorB=(i * LEG_AWAY / SCALE, LEG_DOWN / SCALE),
+        enableMotor=True,
+        enableLimit=True,
+        maxMotorTorque=LEG_SPRING_TORQUE,
+        motorSpeed=+0.3 * i,  # slow: the spring never throws the lander back up
+    )
+    # The legs swing within 0.5 rad of their splayed rest angle (Gymnasium's numbers).
+    if i == -1:
+        joint.lowerAngle, joint.upperAngle = +0.9 - 0.5, +0.9
+    else:
+        joint.lowerAngle, joint.upperAngle = -0.9, -0.9 + 0.5
+    return joint
+
+
 def _wind(index: int, power: float) -> float:
     """Gymnasium's non-periodic wind profile ``tanh(sin(2kx) + sin(pi kx)) * power``, k=0.01."""
     return math.tanh(math.sin(0.02 * index) + math.sin(math.pi * 0.01 * index)) * power
@@ -156,6 +226,8 @@ class LunarLander(ReplayCopies, ClassicControlEnv):
         )
         self._init_render(render_mode)
         self._box2d = import_box2d()  # after the argument checks: they need no Box2D
+        # Per env, since reset sets the bodies (of this env's world) on them.
+        self._joints = [_leg_joint(self._box2d, i) for i in (-1, +1)]
         low = np.array([-2.5, -2.5, -10.0, -10.0, -2 * math.pi, -10.0, -0.0, -0.0], np.float32)
         high = np.array([2.5, 2.5, 10.0, 10.0, 2 * math.pi, 10.0, 1.0, 1.0], np.float32)
         self.observation_space = Box(low, high)
@@ -179,7 +251,8 @@ class LunarLander(ReplayCopies, ClassicControlEnv):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """New terrain and lander; the first observation is that of a no-op step."""
         super().reset(seed=seed)
-        self._start_reset()
+        self._start_reset(seed)
+        rng = self._own_random()
         b2 = self._box2d.b2
         if self.world is not None:
             self.world.contactListener = None  # break the env <-> listener cycle
@@ -193,72 +266,43 @@ class LunarLander(ReplayCopies, ClassicControlEnv):
         self.prev_shaping = None
         self.leg_contact = [False, False]
 
-        height = self.np_random.uniform(0, H / 2, size=(CHUNKS + 1,))  # [12]
+        height = rng.uniform(0, H / 2, size=(CHUNKS + 1,))  # [12]
         chunk_x = [W / (CHUNKS - 1) * i for i in range(CHUNKS)]
         self.helipad_x1 = chunk_x[CHUNKS // 2 - 1]
         self.helipad_x2 = chunk_x[CHUNKS // 2 + 1]
         self.helipad_y = HELIPAD_Y
         height[CHUNKS // 2 - 2 : CHUNKS // 2 + 3] = HELIPAD_Y  # the flat pad, 5 heights
-        # Each height averaged with its neighbours; the first wraps to height[-1], as Gymnasium.
-        smooth_y = (0.33 * (np.roll(height, 1)[:CHUNKS] + height[:CHUNKS] + height[1:])).tolist()
+        h = height.tolist()
+        # Each height averaged with its neighbours; the first wraps to h[-1], as Gymnasium.
+        smooth_y = [0.33 * (h[i - 1] + h[i] + h[i + 1]) for i in range(CHUNKS)]
 
-        self.moon = world.CreateStaticBody(shapes=b2.edgeShape(vertices=[(0, 0), (W, 0)]))
+        defs = _definitions()
+        self.moon = moon = world.CreateBody(defs["moon"])
+        moon.CreateFixture(defs["floor"])
+        terrain = defs["terrain"]
         self.sky_polys = []
         for i in range(CHUNKS - 1):
             p1, p2 = (chunk_x[i], smooth_y[i]), (chunk_x[i + 1], smooth_y[i + 1])
-            self.moon.CreateEdgeFixture(vertices=[p1, p2], density=0, friction=0.1)
+            terrain.shape.vertices = [p1, p2]
+            moon.CreateFixture(terrain)
             self.sky_polys.append([p1, p2, (p2[0], H), (p1[0], H)])
 
-        initial_x, initial_y = VIEWPORT_W / SCALE / 2, VIEWPORT_H / SCALE
-        self.lander = lander = world.CreateDynamicBody(
-            position=(initial_x, initial_y),
-            angle=0.0,
-            fixtures=b2.fixtureDef(
-                shape=b2.polygonShape(vertices=[(x / SCALE, y / SCALE) for x, y in LANDER_POLY]),
-                density=5.0,
-                friction=0.1,
-                categoryBits=_LANDER_BITS,
-                maskBits=_GROUND_MASK,
-                restitution=0.0,
-            ),
-        )
+        self.lander = lander = world.CreateBody(defs["lander"])
         lander.userData = _LANDER
-        push = self.np_random.uniform(-INITIAL_RANDOM, INITIAL_RANDOM, size=2).tolist()
+        push = rng.uniform(-INITIAL_RANDOM, INITIAL_RANDOM, size=2).tolist()
         lander.ApplyForceToCenter(tuple(push), True)
         if self.enable_wind:
             # Two scalar draws: integers(size=2) would consume the stream differently.
-            self.wind_idx = int(self.np_random.integers(-9999, 9999))
-            self.torque_idx = int(self.np_random.integers(-9999, 9999))
+            self.wind_idx = int(rng.integers(-9999, 9999))
+            self.torque_idx = int(rng.integers(-9999, 9999))
 
         self.legs = []
-        for i in (-1, +1):
-            leg = world.CreateDynamicBody(
-                position=(initial_x - i * LEG_AWAY / SCALE, initial_y),
-                angle=(i * 0.05),
-                fixtures=b2.fixtureDef(
-                    shape=b2.polygonShape(box=(LEG_W / SCALE, LEG_H / SCALE)),
-                    density=1.0,
-                    restitution=0.0,
-                    categoryBits=_LEG_BITS,
-                    maskBits=_GROUND_MASK,
-                ),
-            )
+        for leg_def, joint in zip(defs["legs"], self._joints):
+            leg = world.CreateBody(leg_def)
             leg.userData = len(self.legs)
-            joint = b2.revoluteJointDef(
-                bodyA=lander,
-                bodyB=leg,
-                localAnchorA=(0, 0),
-                localAnchorB=(i * LEG_AWAY / SCALE, LEG_DOWN / SCALE),
-                enableMotor=True,
-                enableLimit=True,
-                maxMotorTorque=LEG_SPRING_TORQUE,
-                motorSpeed=+0.3 * i,  # slow: the spring never throws the lander back up
-            )
-            # The legs swing within 0.5 rad of their splayed rest angle (Gymnasium's numbers).
-            if i == -1:
-                joint.lowerAngle, joint.upperAngle = +0.9 - 0.5, +0.9
-            else:
-                joint.lowerAngle, joint.upperAngle = -0.9, -0.9 + 0.5
+            joint.bodyA, joint.bodyB = lander, leg
+            # What the box2d package's revoluteJointDef(bodyA=..., bodyB=...) computes.
+            joint.referenceAngle = leg.angle - lander.angle
             leg.joint = world.CreateJoint(joint)
             self.legs.append(leg)
         self.drawlist = [lander, *self.legs]
@@ -278,13 +322,17 @@ class LunarLander(ReplayCopies, ClassicControlEnv):
         if lander is None:
             raise error.ResetNeeded("Call reset before using step method.")
         self._start_step()
-        if self.continuous:
-            a = box_action(action, self.action_space)
-            throttle = min(max(float(a[0]), -1.0), 1.0)
-            lateral = min(max(float(a[1]), -1.0), 1.0)
+        continuous = self.continuous
+        if continuous:
+            throttle, lateral = box_action_values(action, self.action_space)
+            throttle = min(max(throttle, -1.0), 1.0)
+            lateral = min(max(lateral, -1.0), 1.0)
             fire_main, fire_side = throttle > 0.0, abs(lateral) > 0.5
         else:
-            act = discrete_action(action, self.action_space)
+            if (type(action) is int or type(action) is np.int64) and 0 <= action < 4:
+                act = int(action)  # the common case, without discrete_action's call
+            else:
+                act = discrete_action(action, self.action_space)
             fire_main, fire_side = act == 2, act == 1 or act == 3
         contact = self.leg_contact
 
@@ -294,16 +342,20 @@ class LunarLander(ReplayCopies, ClassicControlEnv):
             lander.ApplyTorque(_wind(self.torque_idx, self.turbulence_power), True)
             self.torque_idx += 1
 
-        angle = lander.angle
-        tip0, tip1 = math.sin(angle), math.cos(angle)  # the lander's up axis
-        side0, side1 = -tip1, tip0
-        d0, d1 = (self.np_random.uniform(-1.0, +1.0, size=2) / SCALE).tolist()  # dispersion
-        pos = lander.position
-        px, py = pos.x, pos.y  # not tuple(pos): b2Vec2.__iter__ is a Python lambda
+        # Gymnasium's dispersion, uniform(-1, 1, size=2) / SCALE: numpy computes each uniform
+        # draw as -1.0 + 2.0 * random() (the same two doubles), and random(2) costs a third.
+        r0, r1 = self._rng.random(2).tolist()  # type: ignore[union-attr]
+        d0, d1 = (-1.0 + 2.0 * r0) / SCALE, (-1.0 + 2.0 * r1) / SCALE
+        m_power = s_power = 0.0
+        if fire_main or fire_side:
+            angle = lander.angle
+            tip0, tip1 = math.sin(angle), math.cos(angle)  # the lander's up axis
+            side0, side1 = -tip1, tip0
+            pos = lander.position
+            px, py = pos.x, pos.y  # not tuple(pos): b2Vec2.__iter__ is a Python lambda
 
-        m_power = 0.0
         if fire_main:
-            m_power = (throttle + 1.0) * 0.5 if self.continuous else 1.0  # 0.5..1.0
+            m_power = (throttle + 1.0) * 0.5 if continuous else 1.0  # 0.5..1.0
             k = _MAIN_OFFSET + 2 * d0  # engine 4 px below the centre, +-2 px of jitter
             ox = tip0 * k + side0 * d1
             oy = -tip1 * k - side1 * d1
@@ -317,9 +369,8 @@ class LunarLander(ReplayCopies, ClassicControlEnv):
                 (-ox * MAIN_ENGINE_POWER * m_power, -oy * MAIN_ENGINE_POWER * m_power), at, True
             )
 
-        s_power = 0.0
         if fire_side:
-            if self.continuous:
+            if continuous:
                 direction, s_power = (1.0 if lateral > 0 else -1.0), abs(lateral)
             else:
                 direction, s_power = act - 2, 1.0  # 1 fires the left engine, 3 the right
