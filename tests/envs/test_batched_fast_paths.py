@@ -118,3 +118,44 @@ def test_reward_of_a_pole_back_within_bounds_after_termination(sutton_barto: boo
         assert (reward[0], terminated[0]) == (ref_reward, ref_terminated)
         rewards.append(ref_reward)
     assert rewards == ([-1.0, -1.0, 0.0] if sutton_barto else [1.0, 0.0, 1.0])
+
+
+def _cartpole_trace(batch_cls: type, rows: int, integrator: str, states: np.ndarray) -> list:
+    """Observations, rewards, terminations and states of ``rows`` CartPoles over 500 steps
+    from ``states`` (re-set every 50 steps), resetting rows that ended."""
+    batch = batch_cls(rows, sutton_barto_reward=integrator != "euler")
+    batch.params = type(batch.params)(kinematics_integrator=integrator)
+    batch.reset(seed=3)
+    rng = np.random.default_rng(9)
+    trace = []
+    with np.errstate(all="ignore"):  # the NaN and inf rows
+        for t in range(500):
+            if t % 50 == 0:
+                batch.state[...] = states[t // 50]
+            obs, reward, terminated = batch.step(rng.integers(0, 2, rows))
+            trace.append((obs.tobytes(), reward.tobytes(), terminated.tobytes()))
+            trace.append(batch.state.tobytes())
+            done = terminated & (rng.random(rows) < 0.5)
+            if done.any():
+                batch.reset(mask=done)
+    return trace
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+@pytest.mark.parametrize("rows", [1, 8, 16])
+@pytest.mark.parametrize("integrator", ["euler", "semi-implicit euler"])
+def test_cartpole_row_by_row_step_equals_the_array_step(
+    monkeypatch: pytest.MonkeyPatch, rows: int, integrator: str
+) -> None:
+    """Up to ``SCALAR_ROWS`` rows step on Python floats; the array step gives the same bits,
+    also for states far outside the episode's range, infinities and NaN."""
+    from palaestra.envs.classic_control import cartpole
+
+    assert rows <= cartpole.SCALAR_ROWS
+    rng = np.random.default_rng(1)
+    states = rng.normal(0.0, 1.0, (10, rows, 4)) * rng.choice([1e-3, 1.0, 1e3], (10, rows, 4))
+    states[9, 0] = [np.nan, np.inf, -np.inf, 0.5]
+    _, batch_cls = CLASSES["CartPole-v1"]
+    row_by_row = _cartpole_trace(batch_cls, rows, integrator, states)
+    monkeypatch.setattr(cartpole, "SCALAR_ROWS", 0)  # every batch takes the array step
+    assert _cartpole_trace(batch_cls, rows, integrator, states) == row_by_row

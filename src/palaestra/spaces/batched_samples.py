@@ -107,7 +107,9 @@ def concatenate(space: Space[Any], items: Iterable[Any], out: Any) -> Any:
 @concatenate.register(Discrete)
 @concatenate.register(MultiDiscrete)
 @concatenate.register(MultiBinary)
-def _concatenate_array(space: Space[Any], items: Iterable[Any], out: np.ndarray) -> np.ndarray:
+def concatenate_array(space: Space[Any], items: Iterable[Any], out: np.ndarray) -> np.ndarray:
+    """``concatenate`` for the spaces whose batch is one array (Box, Discrete, MultiDiscrete,
+    MultiBinary), callable without the dispatch (engines that step every row per call)."""
     items = list(items)
     if (
         len(items) == 1

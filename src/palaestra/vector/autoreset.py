@@ -168,7 +168,7 @@ class Autoresetter:
             return Transition(engine.obs, rewards, terminated, truncated, infos, None, None, None)
 
         done = np.logical_or(terminated, truncated, out=self._done)
-        if not done.any():
+        if not np.count_nonzero(done):  # ndarray.any() costs ~0.5 us more per step
             return Transition(engine.obs, rewards, terminated, truncated, infos, None, None, None)
         final_rows = np.flatnonzero(done)
         # The env's own objects where the engine kept them (as Gymnasium hands on what the

@@ -77,6 +77,8 @@ def step_state(
 
 
 RESET_DRAWS = 4
+# Batches of at most this many rows step row by row on Python floats (CartPoleBatch._step_rows).
+SCALAR_ROWS = 16
 
 
 def reset_state(uniforms: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -215,11 +217,13 @@ class CartPoleBatch(BatchedEnv):
         self._live[rows] = True
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        # The one step_state on [N] arrays: an in-place copy of it ran ~25 µs faster per 1024
-        # rows but was a second CartPole physics; see BENCHMARKS.md (vector section).
-        x, x_dot, theta, theta_dot = self._cols  # views: written in place below
-        new = step_state(ARRAY, self._array_params(), x, x_dot, theta, theta_dot, actions)
-        x[...], x_dot[...], theta[...], theta_dot[...], terminated = new
+        terminated = self._step_rows(actions) if self.num_envs <= SCALAR_ROWS else None
+        if terminated is None:
+            # The one step_state on [N] arrays: an in-place copy of it ran ~25 µs faster per
+            # 1024 rows but was a second CartPole physics; see BENCHMARKS.md (vector section).
+            x, x_dot, theta, theta_dot = self._cols  # views: written in place below
+            new = step_state(ARRAY, self._array_params(), x, x_dot, theta, theta_dot, actions)
+            x[...], x_dot[...], theta[...], theta_dot[...], terminated = new
         # The single env's rule: a terminating step pays -1 (Sutton-Barto) or, the first time
         # only, 1; a non-terminating step pays 0 or 1, even after an earlier termination.
         if self.sutton_barto_reward:
@@ -228,6 +232,27 @@ class CartPoleBatch(BatchedEnv):
             np.less_equal(terminated, self._live, out=self._reward)  # not (terminated and done)
         np.greater(self._live, terminated, out=self._live)  # live and not terminated
         return self._reward, terminated
+
+    def _step_rows(self, actions: np.ndarray) -> np.ndarray | None:
+        """A few rows: the single env's float path of :func:`step_state`, row by row.
+
+        On [N] arrays each of its ~25 numpy calls costs ~1 µs whatever N is, so below
+        ``SCALAR_ROWS`` rows the Python floats are cheaper (an 8-env PPO or A2C steps 8 rows).
+        The same function and the same IEEE operations: bit for bit the array step, as the
+        single env is (``tests/envs/test_batched_fast_paths.py`` compares the two). None,
+        with the state untouched, where an angle is infinite: ``math.cos`` raises there,
+        ``np.cos`` gives NaN, and the array step decides.
+        """
+        p = self.params
+        try:
+            rows = [
+                step_state(SCALAR, p, x, x_dot, theta, theta_dot, a)
+                for (x, x_dot, theta, theta_dot), a in zip(self._state.tolist(), actions.tolist())
+            ]
+        except ValueError:  # math domain error
+            return None
+        self._state[...] = [row[:4] for row in rows]
+        return np.array([row[4] for row in rows])
 
     def _observe(self, rows: np.ndarray | None) -> None:
         if rows is None:
