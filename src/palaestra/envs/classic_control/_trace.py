@@ -279,7 +279,6 @@ class Program:
         consts = {i: np.array(v) for i, v in trace.consts.items()}
         bufs: dict[int, np.ndarray] = {}
         self._blocks: dict[str, np.ndarray] = {}
-        self._value_of: dict[int, int] = {}  # id(buffer) -> value id, for blocks' own rows
         for name, values in blocks.items():
             dtypes = {trace.dtypes[v.id] for v in values}
             if len(dtypes) != 1:
