@@ -196,15 +196,23 @@ class TraceOps:
 
 class _Squares:
     """libm ``pow(x, 2)`` of ``k`` ``[n]`` arrays into buffers: :meth:`ArrayOps.pow2`'s test
-    (the exact square, near-midpoint rows from libm) on one stacked ``[k, n]`` block."""
+    (the exact square, near-midpoint rows from libm) on one stacked ``[k, n]`` block.
 
-    def __init__(self, k: int, n: int) -> None:
+    ``scratch`` (four ``[k, n]`` arrays, the last boolean) may be shared by kernels that
+    never run at the same time: fewer buffers stay in the cache.
+    """
+
+    def __init__(self, k: int, n: int, scratch: tuple[np.ndarray, ...] | None = None) -> None:
         self.x = np.empty((k, n))
         self.p = np.empty((k, n))
-        self._hi = np.empty((k, n))
-        self._err = np.empty((k, n))
-        self._tmp = np.empty((k, n))
-        self._near = np.empty((k, n), dtype=bool)
+        if scratch is None:
+            scratch = _Squares.scratch(k, n)
+        self._hi, self._err, self._tmp, self._near = scratch
+
+    @staticmethod
+    def scratch(k: int, n: int) -> tuple[np.ndarray, ...]:
+        """Scratch arrays for kernels of ``k`` rows of ``n``."""
+        return np.empty((k, n)), np.empty((k, n)), np.empty((k, n)), np.empty((k, n), dtype=bool)
 
     def __call__(self, *xs: np.ndarray) -> None:
         """Square ``xs`` (``k`` arrays of ``n``) into the rows of ``self.p``."""
@@ -297,9 +305,11 @@ class Program:
         free: dict[str, list[np.ndarray]] = {_F64: [], _BOOL: []}
         self.n_buffers = 0
         squares: dict[int, _Squares] = {}
+        scratch: dict[int, tuple[np.ndarray, ...]] = {}  # one per row count, shared
         for i, (op, args, _, _) in enumerate(nodes):
             if op == "pow2s":
-                squares[i] = _Squares(len(args), n)
+                k = len(args)
+                squares[i] = _Squares(k, n, scratch.setdefault(k, _Squares.scratch(k, n)))
                 for a, row in zip(args, squares[i].x):
                     only_here = pow2_args[a] == [i] and args.count(a) == 1
                     if only_here and a not in kept and trace.kinds[a] == "node":

@@ -212,7 +212,9 @@ class AcrobotBatch(BatchedEnv):
     state_dim = 4
     reset_draws = RESET_DRAWS
     obs_of_state = False  # fresh rows hold float32 states and get float32 cos/sin
-    chunk = 2048  # rows per replay: the ~40 live [chunk] buffers stay in the L2 cache
+    chunk = (
+        8192  # rows per replay (measured: 2048 and 4096 lose more to per-call cost than they save)
+    )
 
     def __init__(self, num_envs: int) -> None:
         self.params = AcrobotParams()
