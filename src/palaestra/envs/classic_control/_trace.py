@@ -6,16 +6,16 @@ each operator allocates a fresh temporary and numpy's per-call cost repeats for 
 :class:`TraceOps` instead runs the same function once on placeholder values and records each
 operation it meets -- the function's own code, so the recorded program is the physics as
 written, not a second copy of it. :class:`Program` then replays that record with numpy ufuncs
-writing into buffers allocated once, over chunks of rows small enough to stay in the CPU's
-caches.
+writing into buffers allocated once (a pool reused as values die), chunk by chunk of rows.
 
 Why the replay is bit-for-bit the array path: every recorded operation is the same IEEE
 operation on the same operands in the same order (Python evaluates the expressions, so the
 association is the source's; operations on constants alone are folded by Python itself, as on
 the other paths). Two rewrites are made, both exact: an operation met twice with the same
 operands is computed once (IEEE operations are deterministic), and ``x * 1.0``/``x / 1.0`` are
-``x``. Values the caller already has -- e.g. ``cos(theta2)`` from the last observation -- can be
-given as inputs (``known``), which is the same reuse.
+``x`` (``clip`` replays as numpy's clip ufunc computes it: max, then min). Values the caller
+already has -- e.g. ``cos(theta2)`` from the last observation -- can be given as inputs
+(``known``), which is the same reuse.
 """
 
 from __future__ import annotations
