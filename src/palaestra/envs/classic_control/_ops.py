@@ -171,6 +171,16 @@ class ScalarOps:
         return bool(cond)
 
     @staticmethod
+    def wrap(x: float, lo: float, hi: float) -> float:
+        """Shift ``x`` by whole periods ``hi - lo`` into [lo, hi], one period at a time."""
+        diff = hi - lo
+        while x > hi:
+            x = x - diff
+        while x < lo:
+            x = x + diff
+        return x
+
+    @staticmethod
     def pow2(x: float) -> float:
         """``x**2`` as numpy computes it on a float64 scalar (libm ``pow``)."""
         return x**2
@@ -210,6 +220,17 @@ class ArrayOps:
     where = staticmethod(np.where)
     mod = staticmethod(np.remainder)
     any = staticmethod(np.any)
+
+    @staticmethod
+    def wrap(x: np.ndarray, lo: float, hi: float) -> np.ndarray:
+        """:meth:`ScalarOps.wrap` of each element: rows above ``hi`` lose a period while any
+        is, then rows below ``lo`` gain one (the same subtractions per element)."""
+        diff = hi - lo
+        while np.any(x > hi):
+            x = np.where(x > hi, x - diff, x)
+        while np.any(x < lo):
+            x = np.where(x < lo, x + diff, x)
+        return x
 
     @staticmethod
     def pick(index: np.ndarray, *values: Any) -> np.ndarray:
