@@ -244,13 +244,12 @@ def test_sac_updates_equal_sb3s_train_on_the_same_batches_and_noise(
     theirs = sb3.SAC("MlpPolicy", GymSpaces(), seed=0)
     theirs._logger = Logger(folder=None, output_formats=[])
     theirs._current_progress_remaining = ours._current_progress_remaining = 1.0
-    ours.learner.to_torch()
+    ours.learner.to_torch()  # hands the torch objects out: it reads them back before training
     for part in ("actor", "critic", "critic_target"):
         getattr(ours.policy, part).load_state_dict(getattr(theirs.policy, part).state_dict())
     with torch.no_grad():
         theirs.log_ent_coef.fill_(math.log(0.5))  # a temperature that moves the losses
         ours.policy.ent_coef.log_ent_coef.copy_(theirs.log_ent_coef)
-    ours.learner._torch_changed = True  # the weights were set on the torch objects
 
     rng = np.random.default_rng(0)
     batches = [
