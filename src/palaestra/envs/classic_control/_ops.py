@@ -70,26 +70,38 @@ def numpy_power_is_libm() -> bool:
     return got.tolist() == [v**2 for v in x.tolist()] and got32.tolist() == [float(v**2) for v in u]
 
 
-def _near_midpoint(x: np.ndarray) -> np.ndarray:
+def _near_midpoint(
+    x: np.ndarray, p: np.ndarray | None = None, scratch: tuple[np.ndarray, ...] | None = None
+) -> np.ndarray:
     """Rows whose exact square lies near a rounding midpoint of ``x*x``, as a boolean mask.
 
     The rounding error of ``p = x*x`` from Dekker's product: ``x = hi + lo`` with ``hi`` its
     top 26 bits (a bit mask; ``lo`` takes the other 27), so ``hi*hi`` is exact and
     ``x**2 - p = (hi*hi - p) + lo*(x + hi)`` to ~1e-7 ulp. Squares below ``_TINY`` (where
-    that error underflows) count as near.
+    that error underflows) count as near. ``p``: ``x*x`` when the caller has it; ``scratch``:
+    three float64 arrays and one boolean array shaped like ``x``, written over (the mask is
+    the last), for callers that keep buffers (``_trace``); else fresh ones.
     """
-    p = x * x
-    hi = (x.view(np.uint64) & _HI_BITS).view(np.float64)
-    hh = hi * hi
-    hh -= p
-    x_hi = x + hi
-    x_hi *= x - hi
-    hh += x_hi  # x**2 - p
-    np.abs(hh, out=hh)
-    ulp = (p.view(np.uint64) & _EXP_BITS).view(np.float64)
-    near = hh > ulp * _POW_ULPS
+    if p is None:
+        p = x * x
+    if scratch is None:
+        scratch = (*(np.empty_like(x) for _ in range(3)), np.empty(x.shape, dtype=bool))
+    hi, err, tmp, near = scratch
+    np.bitwise_and(x.view(np.uint64), _HI_BITS, out=hi.view(np.uint64))
+    np.multiply(hi, hi, out=err)
+    err -= p
+    np.add(x, hi, out=tmp)
+    np.subtract(x, hi, out=hi)  # lo
+    tmp *= hi
+    err += tmp  # x**2 - p
+    np.abs(err, out=err)
+    ulp = np.bitwise_and(p.view(np.uint64), _EXP_BITS, out=tmp.view(np.uint64)).view(np.float64)
     if ulp.min() < _TINY:  # rare: squares that underflow Dekker's error (x = 0 is exact)
+        np.greater(err, ulp * _POW_ULPS, out=near)
         near |= (ulp < _TINY) & (x != 0)
+    else:
+        ulp *= _POW_ULPS
+        np.greater(err, ulp, out=near)
     return near
 
 
@@ -223,14 +235,10 @@ class ArrayOps:
 
     @staticmethod
     def wrap(x: np.ndarray, lo: float, hi: float) -> np.ndarray:
-        """:meth:`ScalarOps.wrap` of each element: rows above ``hi`` lose a period while any
-        is, then rows below ``lo`` gain one (the same subtractions per element)."""
-        diff = hi - lo
-        while np.any(x > hi):
-            x = np.where(x > hi, x - diff, x)
-        while np.any(x < lo):
-            x = np.where(x < lo, x + diff, x)
-        return x
+        """:meth:`ScalarOps.wrap` of each element (see :func:`wrap_into`)."""
+        out = np.empty_like(x)
+        wrap_into(x, lo, hi, out, np.empty(x.shape, dtype=bool))
+        return out
 
     @staticmethod
     def pick(index: np.ndarray, *values: Any) -> np.ndarray:
@@ -255,7 +263,7 @@ class ArrayOps:
     def pow2(x: np.ndarray) -> np.ndarray:
         """Elementwise libm ``pow(x, 2)``: the exact square, near-midpoint rows from libm."""
         p = x * x
-        hard = np.flatnonzero(_near_midpoint(x))
+        hard = np.flatnonzero(_near_midpoint(x, p))
         if hard.size:
             p[hard] = _libm_square(x[hard])
         return p
@@ -280,6 +288,23 @@ class ArrayOps:
         if hard.size:
             f[hard] = _libm_square(x[hard].astype(np.float32))
         return f.astype(np.float64)
+
+
+def wrap_into(x: np.ndarray, lo: float, hi: float, out: np.ndarray, mask: np.ndarray) -> None:
+    """:meth:`ScalarOps.wrap` of each element of ``x`` into ``out`` (``mask``: a boolean
+    scratch array): rows above ``hi`` lose a period while any is, then rows below ``lo``
+    gain one, the same subtractions per element."""
+    diff = hi - lo
+    if out is not x:
+        np.positive(x, out=out)
+    np.greater(out, hi, out=mask)
+    while mask.any():
+        np.subtract(out, diff, out=out, where=mask)
+        np.greater(out, hi, out=mask)
+    np.less(out, lo, out=mask)
+    while mask.any():
+        np.add(out, diff, out=out, where=mask)
+        np.less(out, lo, out=mask)
 
 
 def _libm_square(x: np.ndarray) -> np.ndarray:

@@ -26,13 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.envs.classic_control._ops import (
-    _EXP_BITS,
-    _HI_BITS,
-    _POW_ULPS,
-    _TINY,
-    _libm_square,
-)
+from palaestra.envs.classic_control._ops import _libm_square, _near_midpoint, wrap_into
 
 _F64, _BOOL = "f8", "?"
 
@@ -205,9 +199,7 @@ class _Squares:
     def __init__(self, k: int, n: int, scratch: tuple[np.ndarray, ...] | None = None) -> None:
         self.x = np.empty((k, n))
         self.p = np.empty((k, n))
-        if scratch is None:
-            scratch = _Squares.scratch(k, n)
-        self._hi, self._err, self._tmp, self._near = scratch
+        self._scratch = _Squares.scratch(k, n) if scratch is None else scratch
 
     @staticmethod
     def scratch(k: int, n: int) -> tuple[np.ndarray, ...]:
@@ -216,26 +208,12 @@ class _Squares:
 
     def __call__(self, *xs: np.ndarray) -> None:
         """Square ``xs`` (``k`` arrays of ``n``) into the rows of ``self.p``."""
-        x, p, hi, err, tmp, near = self.x, self.p, self._hi, self._err, self._tmp, self._near
+        x, p = self.x, self.p
         for row, v in zip(x, xs):
             if v is not row:
                 np.positive(v, out=row)
         np.multiply(x, x, out=p)
-        np.bitwise_and(x.view(np.uint64), _HI_BITS, out=hi.view(np.uint64))
-        np.multiply(hi, hi, out=err)
-        err -= p
-        np.add(x, hi, out=tmp)
-        np.subtract(x, hi, out=hi)  # lo
-        tmp *= hi
-        err += tmp  # x**2 - p, to ~1e-7 ulp
-        np.abs(err, out=err)
-        ulp = np.bitwise_and(p.view(np.uint64), _EXP_BITS, out=tmp.view(np.uint64)).view(np.float64)
-        if ulp.min() < _TINY:  # rare: squares that underflow Dekker's error (as _near_midpoint)
-            np.greater(err, ulp * _POW_ULPS, out=near)
-            near |= (ulp < _TINY) & (x != 0)
-        else:
-            ulp *= _POW_ULPS
-            np.greater(err, ulp, out=near)
+        near = _near_midpoint(x, p, self._scratch)
         hard = near.ravel().nonzero()[0]
         if hard.size:
             p.ravel()[hard] = _libm_square(x.ravel()[hard])
@@ -245,21 +223,6 @@ def _clip(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, out: np.ndarray) -> Non
     # np.clip's ufunc for float64 is max-then-min with NaN passed through: the same bits.
     np.maximum(x, lo, out=out)
     np.minimum(out, hi, out=out)
-
-
-def _wrap(x: np.ndarray, lo: float, hi: float, out: np.ndarray, mask: np.ndarray) -> None:
-    # ArrayOps.wrap: whole periods one at a time, rows above hi first, then rows below lo.
-    diff = hi - lo
-    if out is not x:
-        np.positive(x, out=out)
-    np.greater(out, hi, out=mask)
-    while mask.any():
-        np.subtract(out, diff, out=out, where=mask)
-        np.greater(out, hi, out=mask)
-    np.less(out, lo, out=mask)
-    while mask.any():
-        np.add(out, diff, out=out, where=mask)
-        np.less(out, lo, out=mask)
 
 
 class Program:
@@ -350,7 +313,7 @@ class Program:
                 lo, hi = (np.array(v) for v in extra)
                 steps.append((_clip, (val(args[0]), lo, hi, out)))
             elif op == "wrap":
-                steps.append((_wrap, (val(args[0]), *extra, out, np.empty(n, dtype=bool))))
+                steps.append((wrap_into, (val(args[0]), *extra, out, np.empty(n, dtype=bool))))
             else:  # pragma: no cover - TraceOps records nothing else
                 raise AssertionError(op)
             if o not in last_use and o not in kept:  # computed for nothing: free at once
