@@ -125,8 +125,8 @@ def _definitions() -> dict[str, Any]:
     ``reset`` makes the same ``CreateBody``/``CreateFixture`` calls with them as Gymnasium's
     keyword forms (``CreateStaticBody(shapes=...)``, ``CreateEdgeFixture(...)``,
     ``CreateDynamicBody(...)``), which build these definitions field by field in Python at
-    every reset (a third of a LunarLander reset). Only the terrain's edge changes between
-    uses: its vertices are set right before each ``CreateFixture``.
+    every reset (a third of a LunarLander reset). They are never changed after this: the
+    definitions ``reset`` changes (the terrain's edge, the leg joints) are each env's own.
     """
     b2 = import_box2d().b2
     initial_x, initial_y = VIEWPORT_W / SCALE / 2, VIEWPORT_H / SCALE
@@ -149,9 +149,6 @@ def _definitions() -> dict[str, Any]:
         "moon": b2.bodyDef(type=b2.staticBody),
         # CreateStaticBody(shapes=...) puts the shape on a default fixture definition.
         "floor": b2.fixtureDef(shape=b2.edgeShape(vertices=[(0, 0), (W, 0)])),
-        "terrain": b2.fixtureDef(
-            shape=b2.edgeShape(vertices=[(0, 0), (1, 1)]), density=0, friction=0.1
-        ),
         "lander": b2.bodyDef(
             type=b2.dynamicBody,
             position=(initial_x, initial_y),
@@ -228,6 +225,10 @@ class LunarLander(ReplayCopies, ClassicControlEnv):
         self._box2d = import_box2d()  # after the argument checks: they need no Box2D
         # Per env, since reset sets the bodies (of this env's world) on them.
         self._joints = [_leg_joint(self._box2d, i) for i in (-1, +1)]
+        # The terrain's edge: its vertices are set before each CreateFixture in reset.
+        self._terrain_edge = self._box2d.b2.fixtureDef(
+            shape=self._box2d.b2.edgeShape(vertices=[(0, 0), (1, 1)]), density=0, friction=0.1
+        )
         low = np.array([-2.5, -2.5, -10.0, -10.0, -2 * math.pi, -10.0, -0.0, -0.0], np.float32)
         high = np.array([2.5, 2.5, 10.0, 10.0, 2 * math.pi, 10.0, 1.0, 1.0], np.float32)
         self.observation_space = Box(low, high)
@@ -279,7 +280,7 @@ class LunarLander(ReplayCopies, ClassicControlEnv):
         defs = _definitions()
         self.moon = moon = world.CreateBody(defs["moon"])
         moon.CreateFixture(defs["floor"])
-        terrain = defs["terrain"]
+        terrain = self._terrain_edge
         self.sky_polys = []
         for i in range(CHUNKS - 1):
             p1, p2 = (chunk_x[i], smooth_y[i]), (chunk_x[i + 1], smooth_y[i + 1])
