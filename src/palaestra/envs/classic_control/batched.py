@@ -36,9 +36,9 @@ class BatchedEnv:
     is_native_batch: ClassVar[bool] = True
     state_dim: ClassVar[int]
     reset_draws: ClassVar[int]  # uniform doubles one reset consumes
-    # Whether an observation is a function of the float64 state alone, so one pass over all
-    # rows is also right for rows just reset (Acrobot's fresh rows use float32 trig instead).
-    obs_of_state: ClassVar[bool] = True
+    # Whether ``_step`` writes every row's observation itself (from values the step computed
+    # anyway): then ``_observe`` runs only for rows reset after a step, never for all rows.
+    step_writes_obs: ClassVar[bool] = False
     single_observation_space: Space[Any]
     single_action_space: Space[Any]
     params: Any  # the env's frozen params dataclass (Gymnasium's constants)
@@ -184,14 +184,14 @@ class BatchedEnv:
         act = self.check_actions(actions)
         reward, terminated = self._step(act)
         if reset_mask is None:
-            self._observe(None)
+            if not self.step_writes_obs:
+                self._observe(None)
             return self._obs, reward, terminated
         mask = row_mask(reset_mask, self.num_envs, "reset_mask")
         rows = mask.nonzero()[0]
         self._reset_rows(rows, None, self._parse_options(None))
-        self._observe(None)
-        if not self.obs_of_state:
-            self._observe(rows)
+        # One pass over all rows also observes the reset ones, unless the step wrote the rest.
+        self._observe(rows if self.step_writes_obs else None)
         return self._obs, reward, terminated
 
     def check_actions(self, actions: Any) -> np.ndarray:
