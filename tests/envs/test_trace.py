@@ -136,3 +136,42 @@ def test_wrap_scalar_and_array_agree_one_period_at_a_time() -> None:
     assert got.tobytes() == np.array(expected).tobytes()
     d = 2 * math.pi
     assert SCALAR.wrap(25.0, -math.pi, math.pi) == 25.0 - d - d - d - d
+
+
+def test_replayed_pendulum_step_equals_the_array_path_and_single_env() -> None:
+    """``mod``, ``f32`` and ``powf2`` replay as the array path computes them: angles many
+    periods out, squares at libm's near-midpoint cases (``pow`` and ``powf``), torques past
+    the bounds, zeros of both signs."""
+    from palaestra.envs.classic_control.pendulum import PendulumParams
+    from palaestra.envs.classic_control.pendulum import step_state as pendulum_step
+
+    n, rng = 6000, np.random.default_rng(21)
+    th = rng.uniform(-40.0, 40.0, n)
+    thdot = rng.uniform(-8.0, 8.0, n)
+    u = rng.uniform(-3.0, 3.0, n).astype(np.float32)
+    x = rng.uniform(-8, 8, 200_000)
+    hard = x[np.array([v**2 for v in x.tolist()]) != x * x]
+    thdot[: n // 4] = np.resize(hard, n // 4)
+    f = rng.uniform(-2.0, 2.0, 60_000).astype(np.float32)
+    powf = np.array([v**2 for v in f])  # numpy float32 scalars: libm powf
+    hard32 = f[powf != (f.astype(np.float64) ** 2).astype(np.float32)]  # powf != rounded x*x
+    assert hard32.size > 10
+    u[n // 4 : n // 2] = np.resize(hard32, n // 2 - n // 4)
+    th[-3:], thdot[-3:], u[-3:] = [0.0, -0.0, 1e-300], [-0.0, 0.0, 8.0], [0.0, -0.0, -2.0]
+    u64 = u.astype(np.float64)
+    for params in (PendulumParams(), PendulumParams(m=1.5, l=0.75, g=9.81)):
+        expected = pendulum_step(ARRAY, params, th, thdot, u64)
+
+        def fn(ops: TraceOps, a: object, b: object, c: object) -> object:
+            return (a, b, c), pendulum_step(ops, params, a, b, c)  # noqa: B023
+
+        ops, _, (ins, outs) = trace(fn, 3)
+        assert {"mod", "f32", "powf2", "pow2s"} <= {node[0] for node in ops.nodes}
+        prog = Program(ops, n, {"in": ins, "out": outs})
+        prog.block("in")[:] = [th, thdot, u64]
+        prog.run()
+        for j in range(4):
+            assert prog.block("out")[j].tobytes() == expected[j].tobytes(), j
+        for i in range(0, n, 293):
+            row = pendulum_step(SCALAR, params, float(th[i]), float(thdot[i]), float(u[i]))
+            assert list(row) == [float(e[i]) for e in expected], i

@@ -105,13 +105,22 @@ def _near_midpoint(
     return near
 
 
-def _near_midpoint32(d: np.ndarray, f: np.ndarray) -> np.ndarray:
+def _near_midpoint32(
+    d: np.ndarray, f: np.ndarray, scratch: tuple[np.ndarray, ...] | None = None
+) -> np.ndarray:
     """Rows whose exact square ``d`` (float64) lies near a midpoint of its float32 rounding
-    ``f``, as a boolean mask (``d - f`` is exact: both are multiples of d's last bit)."""
-    err = d - f
+    ``f``, as a boolean mask (``d - f`` is exact: both are multiples of d's last bit).
+    ``scratch``: two float64 arrays and one boolean array shaped like ``d``, written over
+    (the mask is the last), for callers that keep buffers (``_trace``); else fresh ones."""
+    if scratch is None:
+        scratch = (np.empty_like(d), np.empty_like(d), np.empty(d.shape, dtype=bool))
+    err, ulp, near = scratch
+    np.subtract(d, f, out=err)
     np.abs(err, out=err)
-    ulp = (d.view(np.uint64) & _EXP_BITS).view(np.float64)  # d's binade: where it rounds
-    return err > ulp * _POWF_ULPS
+    # d's binade (where it rounds), by a bit mask
+    np.bitwise_and(d.view(np.uint64), _EXP_BITS, out=ulp.view(np.uint64))
+    ulp *= _POWF_ULPS
+    return np.greater(err, ulp, out=near)
 
 
 class ScalarOps:

@@ -26,7 +26,13 @@ from typing import Any
 
 import numpy as np
 
-from palaestra.envs.classic_control._ops import _libm_square, _near_midpoint, wrap_into
+from palaestra.envs.classic_control._ops import (
+    SCALAR,
+    _libm_square,
+    _near_midpoint,
+    _near_midpoint32,
+    wrap_into,
+)
 
 _F64, _BOOL = "f8", "?"
 
@@ -83,6 +89,7 @@ _UFUNCS: dict[str, Callable[..., Any]] = {
     "sub": np.subtract,
     "mul": np.multiply,
     "div": np.divide,
+    "mod": np.remainder,
     "gt": np.greater,
     "lt": np.less,
     "neg": np.negative,
@@ -95,8 +102,9 @@ class TraceOps:
     """An ``ops`` namespace that records operations (see the module docstring).
 
     Supports what the array path of a ``step_state`` uses: ``+ - * /``, unary ``-``, ``< >``,
-    ``cos``, ``sin``, ``clip``, ``wrap`` and ``pow2s``; anything else raises, so a new operation
-    in the physics fails loudly here instead of being replayed wrongly.
+    ``cos``, ``sin``, ``clip``, ``wrap``, ``mod``, ``f32``, ``pow2s`` and ``powf2``; anything
+    else raises, so a new operation in the physics fails loudly here instead of being
+    replayed wrongly.
     """
 
     def __init__(self) -> None:
@@ -183,9 +191,24 @@ class TraceOps:
         """Recorded :meth:`~._ops.ArrayOps.wrap`."""
         return self.emit("wrap", (self._arg(x),), extra=(float(lo), float(hi)))[0]
 
+    def mod(self, x: Var, m: float) -> Var:
+        """Recorded ``np.remainder`` (Python's ``%``)."""
+        return self.binary("mod", x, m)
+
+    def f32(self, x: Any) -> Any:
+        """Recorded rounding to float32 (kept as float64); a constant is rounded now, as
+        Python folds the other operations on constants."""
+        if not isinstance(x, Var):
+            return SCALAR.f32(float(x))
+        return self.emit("f32", (x.id,))[0]
+
     def pow2s(self, *xs: Var) -> list[Var]:
         """Recorded :meth:`~._ops.ArrayOps.pow2s` (libm ``pow(x, 2)`` of each)."""
         return self.emit("pow2s", tuple(self._arg(x) for x in xs), n_out=len(xs))
+
+    def powf2(self, x: Var) -> Var:
+        """Recorded :meth:`~._ops.ArrayOps.powf2` (libm ``powf(u, 2)`` of float32 values)."""
+        return self.emit("powf2", (self._arg(x),))[0]
 
 
 class _Squares:
@@ -219,6 +242,46 @@ class _Squares:
             p.ravel()[hard] = _libm_square(x.ravel()[hard])
 
 
+class _Squares32:
+    """libm ``powf(u, 2)`` of ``k`` ``[n]`` arrays of float32 values held as float64, into
+    buffers: :meth:`ArrayOps.powf2`'s test (the exact square rounded to float32, near-midpoint
+    rows from libm) on one ``[k, n]`` block; ``scratch`` as for :class:`_Squares`."""
+
+    def __init__(self, k: int, n: int, scratch: tuple[np.ndarray, ...] | None = None) -> None:
+        self.x = np.empty((k, n))
+        self.p = np.empty((k, n))
+        self._f = np.empty((k, n), dtype=np.float32)
+        self._scratch = _Squares32.scratch(k, n) if scratch is None else scratch
+
+    @staticmethod
+    def scratch(k: int, n: int) -> tuple[np.ndarray, ...]:
+        """Scratch arrays for kernels of ``k`` rows of ``n``."""
+        return np.empty((k, n)), np.empty((k, n)), np.empty((k, n), dtype=bool)
+
+    def __call__(self, *xs: np.ndarray) -> None:
+        """Square ``xs`` (``k`` arrays of ``n``) into the rows of ``self.p``."""
+        x, d, f = self.x, self.p, self._f
+        for row, v in zip(x, xs):
+            if v is not row:
+                np.positive(v, out=row)
+        np.multiply(x, x, out=d)  # exact: a float32 squared needs 48 bits
+        np.positive(d, out=f)  # rounded to float32 (the cast of ``astype``)
+        near = _near_midpoint32(d, f, self._scratch)
+        hard = near.ravel().nonzero()[0]
+        if hard.size:
+            f.ravel()[hard] = _libm_square(x.ravel()[hard].astype(np.float32))
+        np.positive(f, out=d)
+
+
+_KERNELS: dict[str, type[_Squares] | type[_Squares32]] = {"pow2s": _Squares, "powf2": _Squares32}
+
+
+def _f32_into(x: np.ndarray, tmp: np.ndarray, out: np.ndarray) -> None:
+    # float32's rounding of each element (astype's cast), back to float64 (exact).
+    np.positive(x, out=tmp)
+    np.positive(tmp, out=out)
+
+
 def _clip(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, out: np.ndarray) -> None:
     # np.clip's ufunc for float64 is max-then-min with NaN passed through: the same bits.
     np.maximum(x, lo, out=out)
@@ -232,7 +295,7 @@ class Program:
     ``[k, n]`` array, :meth:`block`: the caller fills input blocks before :meth:`run` and reads
     result blocks after it (one copy for a whole group, e.g. ``state[rows] = block.T``).
     Every other value lives in a pool of buffers, each reused once its value is dead; an
-    argument of one ``pow2s`` only is written straight into that kernel's input rows.
+    argument of one ``pow2s``/``powf2`` only is written straight into that kernel's input rows.
     :meth:`steps` gives the replay with some buffers swapped for the caller's own arrays
     (chunks of its state), so those need no copy at all.
     """
@@ -241,12 +304,12 @@ class Program:
         self.n = n
         nodes = trace.nodes
         last_use: dict[int, int] = {}
-        pow2_args: dict[int, list[int]] = {}
+        kernel_args: dict[int, list[int]] = {}
         for i, (op, args, _, _) in enumerate(nodes):
             for a in args:
                 last_use[a] = i
-                if op == "pow2s":
-                    pow2_args.setdefault(a, []).append(i)
+                if op in _KERNELS:
+                    kernel_args.setdefault(a, []).append(i)
         consts = {i: np.array(v) for i, v in trace.consts.items()}
         bufs: dict[int, np.ndarray] = {}
         self._blocks: dict[str, np.ndarray] = {}
@@ -267,14 +330,14 @@ class Program:
             kept.add(ident)
         free: dict[str, list[np.ndarray]] = {_F64: [], _BOOL: []}
         self.n_buffers = 0
-        squares: dict[int, _Squares] = {}
-        scratch: dict[int, tuple[np.ndarray, ...]] = {}  # one per row count, shared
+        squares: dict[int, _Squares | _Squares32] = {}
+        scratch: dict[tuple[str, int], tuple[np.ndarray, ...]] = {}  # per kind and rows, shared
         for i, (op, args, _, _) in enumerate(nodes):
-            if op == "pow2s":
-                k = len(args)
-                squares[i] = _Squares(k, n, scratch.setdefault(k, _Squares.scratch(k, n)))
+            if op in _KERNELS:
+                k, kind = len(args), _KERNELS[op]
+                squares[i] = kind(k, n, scratch.setdefault((op, k), kind.scratch(k, n)))
                 for a, row in zip(args, squares[i].x):
-                    only_here = pow2_args[a] == [i] and args.count(a) == 1
+                    only_here = kernel_args[a] == [i] and args.count(a) == 1
                     if only_here and a not in kept and trace.kinds[a] == "node":
                         bufs[a] = row  # the producer writes the kernel's input directly
                         kept.add(a)
@@ -295,7 +358,7 @@ class Program:
             for a in set(args):
                 if a in bufs and a not in kept and last_use[a] == i:
                     free[trace.dtypes[a]].append(bufs[a])
-            if op == "pow2s":
+            if op in _KERNELS:
                 kernel = squares[i]
                 steps.append((kernel, tuple(val(a) for a in args)))
                 for row, o in zip(kernel.p, outs):
@@ -312,6 +375,9 @@ class Program:
             elif op == "clip":
                 lo, hi = (np.array(v) for v in extra)
                 steps.append((_clip, (val(args[0]), lo, hi, out)))
+            elif op == "f32":
+                tmp = np.empty(n, dtype=np.float32)
+                steps.append((_f32_into, (val(args[0]), tmp, out)))
             elif op == "wrap":
                 steps.append((wrap_into, (val(args[0]), *extra, out, np.empty(n, dtype=bool))))
             else:  # pragma: no cover - TraceOps records nothing else
