@@ -222,42 +222,58 @@ def test_step_with_reset_mask_equals_reset_with_mask_on_many_rows(env_id: str) -
         mask = rng.random(256) < 0.8
 
 
-def test_acrobot_batch_follows_state_writes_params_and_copies() -> None:
-    """A state written from outside (``-0.0`` for ``0.0`` too, whose sin differs), new params
-    and a pickled copy: the Acrobot batch still steps exactly as single envs in that state."""
+# Per replayed env: an action draw, states to write (``-0.0`` for ``0.0`` too, whose sin
+# differs; angles several periods out) and new constants that take other products.
+_REPLAYED = {
+    "Acrobot-v1": (
+        lambda rng: rng.integers(0, 3, 4),
+        [[0.3, 0.0, 1.0, -2.0], [0.3, -0.0, 1.0, -2.0], [3.0, -3.1, 12.5, 28.0]],
+        {"LINK_MASS_2": 1.5, "LINK_LENGTH_1": 1.25},  # m2 != 1: the product the default skips
+    ),
+    "Pendulum-v1": (
+        lambda rng: rng.uniform(-2.5, 2.5, (4, 1)).astype(np.float32),
+        [[0.0, 1.0], [-0.0, -1.0], [20.5, 7.9]],
+        {"m": 1.5, "l": 0.75, "max_speed": 6.0},
+    ),
+}
+
+
+@pytest.mark.parametrize("env_id", list(_REPLAYED))
+def test_replayed_batch_follows_state_writes_params_and_copies(env_id: str) -> None:
+    """A state written from outside, new params and a pickled copy: the replayed batch
+    (recorded ``step_state``, trig kept from the last observation) still steps exactly as
+    single envs in that state."""
     import dataclasses
     import pickle
 
-    from palaestra.envs.classic_control.acrobot import AcrobotEnv
-
-    batch = CLASSES["Acrobot-v1"][1](4)
+    draw, written, changes = _REPLAYED[env_id]
+    single_cls, batch_cls = CLASSES[env_id]
+    batch = batch_cls(4)
     batch.reset(seed=3)
-    singles = [AcrobotEnv() for _ in range(4)]
+    singles = [single_cls() for _ in range(4)]
     for i, env in enumerate(singles):
         env.reset(seed=3 + i)
     rng = np.random.default_rng(8)
 
-    def step_both(b: object, envs: list[AcrobotEnv], t: int) -> None:
-        actions = rng.integers(0, 3, 4)
+    def step_both(b: object, envs: list, t: int) -> None:
+        actions = draw(rng)
         obs, reward, terminated = b.step(actions)  # type: ignore[attr-defined]
-        results = [env.step(int(a)) for env, a in zip(envs, actions)]
+        results = [env.step(_single_action(a)) for env, a in zip(envs, actions)]
         assert obs.tobytes() == np.stack([r[0] for r in results]).tobytes(), t
         np.testing.assert_array_equal(reward, [r[1] for r in results])
         np.testing.assert_array_equal(terminated, [r[2] for r in results])
 
     for t in range(3):
         step_both(batch, singles, t)
-    written = np.array([[0.3, 0.0, 1.0, -2.0], [0.3, -0.0, 1.0, -2.0], [3.0, -3.1, 12.5, 28.0]])
     batch.state[:3] = written
     for env, row in zip(singles, written):
-        env.state = row
+        env.state = np.array(row)
     for t in range(3, 6):
         step_both(batch, singles, t)
-    # New constants: a heavier second link (m2 != 1 takes the product the default skips).
-    heavy = dataclasses.replace(batch.params, LINK_MASS_2=1.5, LINK_LENGTH_1=1.25)
-    batch.params = heavy
+    batch.params = dataclasses.replace(batch.params, **changes)
     for env in singles:
-        env.LINK_MASS_2, env.LINK_LENGTH_1 = 1.5, 1.25  # type: ignore[attr-defined]
+        for name, value in changes.items():
+            setattr(env, name, value)
     for t in range(6, 9):
         step_both(batch, singles, t)
     copied = pickle.loads(pickle.dumps(batch))

@@ -26,6 +26,7 @@ from palaestra.envs.classic_control._common import (
     state_array,
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
+from palaestra.envs.classic_control._trace import Program, trace
 from palaestra.envs.classic_control.batched import BatchedEnv
 from palaestra.rendering.scenes import render_pendulum
 from palaestra.spaces import Box
@@ -62,6 +63,12 @@ def step_state(ops: Any, p: PendulumParams, th: Any, thdot: Any, u: Any) -> Any:
     newthdot = ops.clip(newthdot, -p.max_speed, p.max_speed)
     newth = th + newthdot * p.dt
     return newth, newthdot, -costs, u
+
+
+def observation(ops: Any, th: Any) -> tuple[Any, Any]:
+    """The observation's ``cos``/``sin`` of ``theta`` (float64: the caller casts them to
+    float32 beside ``theta_dot``)."""
+    return ops.cos(th), ops.sin(th)
 
 
 def parse_options(options: dict[str, Any] | None) -> tuple[float, float]:
@@ -124,7 +131,7 @@ class PendulumEnv(ClassicControlEnv):
     def _get_obs(self) -> np.ndarray:
         assert self._s is not None
         th, thdot = self._s
-        return np.array((math.cos(th), math.sin(th), thdot), dtype=np.float32)
+        return np.array((*observation(SCALAR, th), thdot), dtype=np.float32)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Advance one step; a wrongly shaped or non-finite action raises InvalidAction."""
@@ -160,15 +167,34 @@ expose_params(PendulumEnv, ["max_speed", "max_torque", "dt", "g", "m", "l"])
 
 
 class PendulumBatch(BatchedEnv):
-    """N Pendulums stepped by :func:`step_state` on ``[N]`` arrays."""
+    """N Pendulums stepped by :func:`step_state`, recorded once and replayed on buffers.
+
+    As :class:`~.acrobot.AcrobotBatch`: :func:`step_state` and the observation's cos/sin run on
+    :class:`~._trace.TraceOps` (re-recorded when ``params`` change) and are replayed over chunks
+    of :attr:`chunk` rows, the same float operations per row as the single env. The new
+    observation's ``sin(theta)`` is the next step's ``sin(theta)`` for the rows whose ``theta``
+    still has the same bits (others are recomputed).
+    """
 
     state_dim = 2
     reset_draws = RESET_DRAWS
+    step_writes_obs = True
+    chunk = 8192  # rows per replay, as Acrobot's
 
     def __init__(self, num_envs: int, g: float = 10.0) -> None:
         self.params = PendulumParams(g=g)
         self.single_observation_space, self.single_action_space = spaces(self.params)
         super().__init__(num_envs)
+        # sin of the theta whose bits _sin_of holds: of 0.0 at first, exactly.
+        self._sin_of = np.zeros(self.num_envs)
+        self._sin = np.zeros(self.num_envs)
+        self._reward = np.zeros(self.num_envs)
+        self._compiled: Any = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = super().__getstate__()
+        state["_compiled"] = None  # rebuilt on the next step
+        return state
 
     def frame(self, row: int, action: Any = None) -> np.ndarray:
         """Row ``row``'s ``rgb_array`` picture (see :meth:`BatchedEnv.frame`)."""
@@ -185,14 +211,58 @@ class PendulumBatch(BatchedEnv):
     def _reset_state(self, uniforms: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
         return reset_state(uniforms, *bounds)
 
+    def _compile(self) -> Any:
+        """``(params, state, obs, [(rows, program, steps)])``: one replay per chunk of rows."""
+
+        def batch_step(ops: Any, th: Any, thdot: Any, u: Any) -> Any:
+            known = ops.known("sin", th)  # the last observation's
+            newth, newthdot, reward, _ = step_state(ops, self.params, th, thdot, u)
+            return (th, thdot), (u, known), (newth, newthdot), reward, observation(ops, newth)
+
+        ops, _, (state, given, new, reward, trig) = trace(batch_step, 3)
+        blocks = {"state": state, "given": given, "new": new, "trig": trig, "reward": [reward]}
+        n, c = self.num_envs, self.chunk
+        programs: dict[int, Program] = {}
+        chunks = []
+        for c0 in range(0, n, c):
+            c1 = min(c0 + c, n)
+            prog = programs.get(c1 - c0) or programs.setdefault(
+                c1 - c0, Program(ops, c1 - c0, blocks)
+            )
+            swap = {"given.1": self._sin[c0:c1], "reward.0": self._reward[c0:c1]}
+            chunks.append((slice(c0, c1), prog, prog.steps(swap)))
+        return self.params, self._state, self._obs, chunks
+
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        th, thdot = self._cols  # views: written in place below
-        th[...], thdot[...], reward, _ = step_state(ARRAY, self.params, th, thdot, actions)
-        return reward, np.zeros(self.num_envs, dtype=bool)
+        compiled = self._compiled
+        if (
+            compiled is None
+            or compiled[0] is not self.params
+            or compiled[1] is not self._state
+            or compiled[2] is not self._obs
+        ):
+            compiled = self._compiled = self._compile()
+        th = self._state[:, 0]
+        stale = th.view(np.uint64) != self._sin_of.view(np.uint64)
+        if stale.any():  # rows reset or written since the last step
+            rows = stale.nonzero()[0]
+            self._sin[rows] = np.sin(th[rows])
+        torques = actions.reshape(self.num_envs)  # float32 values, exact in float64
+        state, obs, pos = self._state, self._obs, np.positive
+        for rows, prog, steps in compiled[3]:
+            pos(state[rows].T, out=prog.block("state"))
+            pos(torques[rows], out=prog.block("given")[0])
+            prog.run(steps)
+            new, cs = prog.block("new"), prog.block("trig")
+            pos(new.T, out=state[rows])
+            pos(cs.T, out=obs[rows, :2])
+            pos(new[1], out=obs[rows, 2])
+            pos(cs[1], out=self._sin[rows])
+            pos(new[0], out=self._sin_of[rows])
+        return self._reward.copy(), np.zeros(self.num_envs, dtype=bool)
 
     def _observe(self, rows: np.ndarray | None) -> None:
+        # Rows just reset (step_writes_obs): one formula with the single env's.
         sel = slice(None) if rows is None else rows
-        th = self._state[sel, 0]
-        self._obs[sel, 0] = np.cos(th)
-        self._obs[sel, 1] = np.sin(th)
+        self._obs[sel, 0], self._obs[sel, 1] = observation(ARRAY, self._state[sel, 0])
         self._obs[sel, 2] = self._state[sel, 1]
