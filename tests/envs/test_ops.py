@@ -169,6 +169,37 @@ def test_hard_squares_come_from_numpy_power_loop_not_python(monkeypatch: Any) ->
     np.testing.assert_array_equal(ARRAY.powf2(u.astype(np.float64)), [float(v**2) for v in u])
 
 
+def test_near_midpoint_mask_is_the_exact_squares_distance_from_a_midpoint() -> None:
+    """The integer test flags exactly the rows whose exact square (Python's big integers) lies
+    within ``0.5 - _POW_HARD`` ulp of the rounding midpoint, for 105- and 106-bit squares,
+    the fraction where one turns into the other, wide exponents and subnormals."""
+    import struct
+
+    from palaestra.envs.classic_control import _ops
+
+    rng = np.random.default_rng(31)
+    x = rng.uniform(1.0, 2.0, 30_000) * 2.0 ** rng.integers(-400, 400, 30_000)
+    x[::2] *= -1
+    edge = int(_ops._SQ_105)
+    frac = np.array([edge - 2, edge - 1, edge, edge + 1, 0, 2**52 - 1], dtype=np.uint64)
+    x[:6] = (frac | np.uint64(1023 << 52)).view(np.float64)
+    x[6:12] = [0.0, -0.0, 5e-324, -1e-310, 1e-160, 2.0**-520]
+    near = _ops._near_midpoint(x)
+    tol = _ops._NEAR_ULPS  # (0.5 - _POW_HARD) ulp, in the last of 53 dropped bits
+    assert abs(tol - (0.5 - _ops._POW_HARD) * 2**53) < 1
+    for i, v in enumerate(x.tolist()):
+        if v == 0.0 or abs(v) < 2.0**-511:  # zeros exact; tiny squares always flagged
+            assert near[i] == (v != 0.0), v
+            continue
+        bits = struct.unpack("<Q", struct.pack("<d", v))[0]
+        m = (bits & (2**52 - 1)) | 2**52
+        sq = m * m
+        dropped = 53 if sq >= 2**105 else 52
+        rest = (sq % 2**dropped) << (53 - dropped)  # as a 53-bit remainder
+        assert near[i] == (2**52 - tol <= rest < 2**52 + tol), (v, rest)
+    assert 0.03 < near.mean() < 0.05
+
+
 def test_pow2s_equals_pow2_of_each() -> None:
     a, b, c = np.random.default_rng(9).uniform(-30, 30, (3, 20_000))
     for got, x in zip(ARRAY.pow2s(a, b[::-1], c), (a, b[::-1], c)):

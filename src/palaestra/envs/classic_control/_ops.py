@@ -23,7 +23,8 @@ element -- on AVX-512 machines it is SVML's vector pow instead, which differs fr
 So :meth:`ArrayOps.pow2` takes the exact square ``x*x``, finds the rows whose exact square
 lies within 0.02 ulp of a rounding midpoint -- the only ones where a pow with glibc's
 documented < 0.52 ulp error can round the other way (measured: none beyond 0.007 ulp) -- from
-the square's exact rounding error (a Dekker two-product), and gives just those rows libm's own
+the bits the square's rounding drops (integer arithmetic on the significand), and gives just
+those rows libm's own
 answer through numpy's general power loop: a few percent of rows, in C. Whether that loop is
 libm here is checked once per process on points where pow and ``x*x`` differ
 (:func:`numpy_power_is_libm`); where it is not, those rows take Python's ``**`` (the same libm
@@ -44,9 +45,13 @@ _f32 = np.float32
 _pack_f32, _unpack_f32 = struct.Struct("f").pack, struct.Struct("f").unpack
 _POW_HARD = 0.48  # ulps from the exact square beyond which libm pow may round differently
 _POWF_HARD = 0.45  # the same for powf (measured mismatches all beyond 0.498)
-_HI_BITS = np.uint64(0xFFFF_FFFF_F800_0000)  # a double's sign, exponent and top 26 bits
-_EXP_BITS = np.uint64(0x7FF0_0000_0000_0000)  # its exponent: 2**floor(log2|x|) by a bit mask
-_POW_ULPS = _POW_HARD * 2.0**-52  # _POW_HARD ulps of a double in [1, 2)
+_EXP_BITS = np.uint64(0x7FF0_0000_0000_0000)  # a double's exponent: 2**floor(log2|x|)
+_FRACTION = np.uint64(2**52 - 1)  # its 52 stored fraction bits
+_LOW_53 = np.uint64(2**53 - 1)
+_SQ_105 = np.uint64(math.isqrt(2**105 - 1) + 1 - 2**52)  # fractions whose m*m has 106 bits
+_NEAR_ULPS = int((0.5 - _POW_HARD) * 2**53)  # the tolerance, in the last of 53 dropped bits
+_NEAR_FROM = np.uint64((_NEAR_ULPS - 2**52) % 2**64)
+_NEAR_WIDTH = np.uint64(2 * _NEAR_ULPS)
 _POWF_ULPS = _POWF_HARD * 2.0**-23  # _POWF_HARD ulps of a float32 in [1, 2)
 _TINY = 2.0**-900  # below this the square's error underflows: libm decides those rows
 
@@ -75,33 +80,31 @@ def _near_midpoint(
 ) -> np.ndarray:
     """Rows whose exact square lies near a rounding midpoint of ``x*x``, as a boolean mask.
 
-    The rounding error of ``p = x*x`` from Dekker's product: ``x = hi + lo`` with ``hi`` its
-    top 26 bits (a bit mask; ``lo`` takes the other 27), so ``hi*hi`` is exact and
-    ``x**2 - p = (hi*hi - p) + lo*(x + hi)`` to ~1e-7 ulp. Squares below ``_TINY`` (where
-    that error underflows) count as near. ``p``: ``x*x`` when the caller has it; ``scratch``:
-    three float64 arrays and one boolean array shaped like ``x``, written over (the mask is
-    the last), for callers that keep buffers (``_trace``); else fresh ones.
+    In integers: a normal ``x`` has the significand ``m = 2**52 + f`` (``f``: its 52 stored
+    fraction bits), and ``m*m = 2**104 + 2**53*f + f*f``, so the low 53 bits of the exact
+    square are those of ``f*f`` -- which uint64 arithmetic gives, wrapping past 64 bits. A
+    square of 106 bits rounds its low 53 bits away (the midpoint is 2**52); one of 105 bits
+    (``f`` below ``_SQ_105``) its low 52, so those are shifted left once to be compared the
+    same way. "Near" is within ``0.5 - _POW_HARD`` ulp of the midpoint. Squares below
+    ``_TINY`` (subnormal ``x`` or an underflowing square, where this does not hold) count as
+    near unless ``x`` is zero. ``p``: ``x*x`` when the caller has it; ``scratch``: two float64
+    arrays and one boolean array shaped like ``x``, written over (the mask is the last), for
+    callers that keep buffers (``_trace``); else fresh ones.
     """
     if p is None:
         p = x * x
     if scratch is None:
-        scratch = (*(np.empty_like(x) for _ in range(3)), np.empty(x.shape, dtype=bool))
-    hi, err, tmp, near = scratch
-    np.bitwise_and(x.view(np.uint64), _HI_BITS, out=hi.view(np.uint64))
-    np.multiply(hi, hi, out=err)
-    err -= p
-    np.add(x, hi, out=tmp)
-    np.subtract(x, hi, out=hi)  # lo
-    tmp *= hi
-    err += tmp  # x**2 - p
-    np.abs(err, out=err)
-    ulp = np.bitwise_and(p.view(np.uint64), _EXP_BITS, out=tmp.view(np.uint64)).view(np.float64)
-    if ulp.min() < _TINY:  # rare: squares that underflow Dekker's error (x = 0 is exact)
-        np.greater(err, ulp * _POW_ULPS, out=near)
-        near |= (ulp < _TINY) & (x != 0)
-    else:
-        ulp *= _POW_ULPS
-        np.greater(err, ulp, out=near)
+        scratch = (np.empty_like(x), np.empty_like(x), np.empty(x.shape, dtype=bool))
+    f, low, near = scratch[0].view(np.uint64), scratch[1].view(np.uint64), scratch[-1]
+    np.bitwise_and(x.view(np.uint64), _FRACTION, out=f)
+    np.less(f, _SQ_105, out=near)  # 105-bit squares: shift by one
+    np.multiply(f, f, out=low)  # the low 64 bits of f*f
+    np.left_shift(low, near, out=low, casting="unsafe")
+    np.add(low, _NEAR_FROM, out=low)  # midpoint - tolerance -> 0 (mod 2**64)
+    np.bitwise_and(low, _LOW_53, out=low)
+    np.less(low, _NEAR_WIDTH, out=near)
+    if p.min() < _TINY:  # rare: subnormal x or squares that underflow (x = 0 is exact)
+        near |= (p < _TINY) & (x != 0)
     return near
 
 

@@ -215,7 +215,7 @@ class _Squares:
     """libm ``pow(x, 2)`` of ``k`` ``[n]`` arrays into buffers: :meth:`ArrayOps.pow2`'s test
     (the exact square, near-midpoint rows from libm) on one stacked ``[k, n]`` block.
 
-    ``scratch`` (four ``[k, n]`` arrays, the last boolean) may be shared by kernels that
+    ``scratch`` (three ``[k, n]`` arrays, the last boolean) may be shared by kernels that
     never run at the same time: fewer buffers stay in the cache.
     """
 
@@ -227,7 +227,7 @@ class _Squares:
     @staticmethod
     def scratch(k: int, n: int) -> tuple[np.ndarray, ...]:
         """Scratch arrays for kernels of ``k`` rows of ``n``."""
-        return np.empty((k, n)), np.empty((k, n)), np.empty((k, n)), np.empty((k, n), dtype=bool)
+        return np.empty((k, n)), np.empty((k, n)), np.empty((k, n), dtype=bool)
 
     def __call__(self, *xs: np.ndarray) -> None:
         """Square ``xs`` (``k`` arrays of ``n``) into the rows of ``self.p``."""
