@@ -238,17 +238,22 @@ _REPLAYED = {
 }
 
 
+@pytest.mark.parametrize("chunk", [None, 3])
 @pytest.mark.parametrize("env_id", list(_REPLAYED))
-def test_replayed_batch_follows_state_writes_params_and_copies(env_id: str) -> None:
+def test_replayed_batch_follows_state_writes_params_and_copies(
+    env_id: str, chunk: int | None
+) -> None:
     """A state written from outside, new params and a pickled copy: the replayed batch
     (recorded ``step_state``, trig kept from the last observation) still steps exactly as
-    single envs in that state."""
+    single envs in that state, in one replay or in chunks of 3 and 1 rows."""
     import dataclasses
     import pickle
 
     draw, written, changes = _REPLAYED[env_id]
     single_cls, batch_cls = CLASSES[env_id]
     batch = batch_cls(4)
+    if chunk is not None:
+        batch.chunk = chunk
     batch.reset(seed=3)
     singles = [single_cls() for _ in range(4)]
     for i, env in enumerate(singles):

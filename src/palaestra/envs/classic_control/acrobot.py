@@ -26,7 +26,7 @@ from palaestra.envs.classic_control._common import (
 )
 from palaestra.envs.classic_control._ops import SCALAR
 from palaestra.envs.classic_control._trace import Program, trace
-from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.envs.classic_control.batched import BatchedEnv, copy_to_columns
 from palaestra.rendering.scenes import render_acrobot
 from palaestra.spaces import Box, Discrete
 
@@ -289,12 +289,12 @@ class AcrobotBatch(BatchedEnv):
         np.subtract(actions, 1.0, out=self._torque)  # AVAIL_TORQUE[a] for a in {0, 1, 2}
         state, obs, pos = self._state, self._obs, np.positive
         for rows, prog, steps in compiled[3]:
-            pos(state[rows].T, out=prog.block("state"))
+            copy_to_columns(state[rows].T, prog.block("state").T)
             prog.run(steps)
             new, cs = prog.block("new"), prog.block("trig")
-            pos(new.T, out=state[rows])
-            pos(cs.T, out=obs[rows, :4])
-            pos(new[2:].T, out=obs[rows, 4:])
+            copy_to_columns(new, state[rows])
+            copy_to_columns(cs, obs[rows, :4])
+            copy_to_columns(new[2:], obs[rows, 4:])
             pos(cs[2:], out=trig[:, rows])
             pos(new[1], out=self._trig_of[rows])
         terminated = self._terminated.copy()

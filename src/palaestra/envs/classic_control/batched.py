@@ -29,6 +29,14 @@ from palaestra.spaces import Box, Discrete, Space
 from palaestra.utils.seeding import np_random
 
 
+def copy_to_columns(rows: np.ndarray, out: np.ndarray) -> None:
+    """Row ``j`` of ``rows`` (``[k, n]``) into column ``j`` of ``out`` (``[n, k]``, any
+    dtype it casts to): one strided copy per column, ~3x cheaper at 8192 rows than one
+    transposed copy, whose inner loop would run over only ``k`` elements."""
+    for j, row in enumerate(rows):
+        np.positive(row, out=out[:, j])
+
+
 class BatchedEnv:
     """``num_envs`` envs of one kind, as arrays. Subclasses fill in the class variables."""
 

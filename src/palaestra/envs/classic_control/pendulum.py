@@ -27,7 +27,7 @@ from palaestra.envs.classic_control._common import (
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
 from palaestra.envs.classic_control._trace import Program, trace
-from palaestra.envs.classic_control.batched import BatchedEnv
+from palaestra.envs.classic_control.batched import BatchedEnv, copy_to_columns
 from palaestra.rendering.scenes import render_pendulum
 from palaestra.spaces import Box
 
@@ -250,12 +250,12 @@ class PendulumBatch(BatchedEnv):
         torques = actions.reshape(self.num_envs)  # float32 values, exact in float64
         state, obs, pos = self._state, self._obs, np.positive
         for rows, prog, steps in compiled[3]:
-            pos(state[rows].T, out=prog.block("state"))
+            copy_to_columns(state[rows].T, prog.block("state").T)
             pos(torques[rows], out=prog.block("given")[0])
             prog.run(steps)
             new, cs = prog.block("new"), prog.block("trig")
-            pos(new.T, out=state[rows])
-            pos(cs.T, out=obs[rows, :2])
+            copy_to_columns(new, state[rows])
+            copy_to_columns(cs, obs[rows, :2])
             pos(new[1], out=obs[rows, 2])
             pos(cs[1], out=self._sin[rows])
             pos(new[0], out=self._sin_of[rows])
