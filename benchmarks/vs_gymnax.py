@@ -6,6 +6,7 @@ Run from the repository root (jax and gymnax: ``pip install -r requirements/benc
     .venv/bin/python benchmarks/vs_gymnax.py                            # this tree vs gymnax
     .venv/bin/python benchmarks/vs_gymnax.py --before /tmp/before       # plus an older tree
     .venv/bin/python benchmarks/vs_gymnax.py --profile Acrobot-v1 --sizes 16384
+    .venv/bin/python benchmarks/vs_gymnax.py --profile Acrobot-v1 --replay  # per operation
 
 Each contender runs in its own fresh interpreter, in turn, ``--rounds`` times (the figure is
 the median): palaestra's ``make_vec(id, n)`` (the native batch with autoreset, Gymnasium API)
@@ -125,6 +126,57 @@ def profile(env_id: str, n: int, steps: int) -> None:
     pstats.Stats(prof).sort_stats("tottime").print_stats(18)
 
 
+def replay_profile(env_id: str, n: int, steps: int) -> None:
+    """Time each replayed operation of the batch step (``_trace.Program``), grouped by kind.
+
+    Each call is timed with ``perf_counter`` (which adds ~0.3 us a call: small calls read
+    high), after ``steps`` warm-up steps; the rest of ``_step`` (copies in and out, the trig
+    cache's check) is the batch step minus the replay.
+    """
+    import collections
+    import time
+
+    import numpy as np
+
+    import palaestra
+
+    env = palaestra.make_vec(env_id, n)
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    if env_id == "Pendulum-v1":
+        actions = [rng.uniform(-2, 2, (n, 1)).astype(np.float32) for _ in range(16)]
+    else:
+        actions = [rng.integers(0, 3, n) for _ in range(16)]
+    for t in range(steps):
+        env.step(actions[t % 16])
+    batch = env
+    while not hasattr(batch, "_compiled"):  # wrappers, then the engine, then the batch
+        batch = getattr(batch, "env", None) or getattr(batch, "batch", None) or batch.engine
+    chunks = batch._compiled[3]
+    spent: collections.Counter[str] = collections.Counter()
+    calls: collections.Counter[str] = collections.Counter()
+    clock = time.perf_counter
+    start = time.process_time()
+    for t in range(steps):
+        env.step(actions[t % 16])
+    whole = (time.process_time() - start) / steps
+    for _ in range(steps):
+        for _rows, _prog, replay in chunks:
+            for fn, fn_args in replay:
+                name = getattr(fn, "__name__", type(fn).__name__.strip("_"))
+                t0 = clock()
+                fn(*fn_args)
+                spent[name] += clock() - t0
+                calls[name] += 1
+    total = sum(spent.values()) / steps
+    print(f"whole vector step {whole * 1e3:.3f} ms; replay {total * 1e3:.3f} ms (timed calls)")
+    print("| operation | calls/step | ms/step | share of the step |")
+    print("|---|---:|---:|---:|")
+    for name, sec in spent.most_common():
+        ms = sec / steps * 1e3
+        print(f"| {name} | {calls[name] // steps} | {ms:.3f} | {ms / (whole * 1e3):.0%} |")
+
+
 def _fmt(rate: float) -> str:
     return f"{rate / 1e6:.2f}M"
 
@@ -138,12 +190,15 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3, help="runs per contender (median)")
     parser.add_argument("--profile", choices=IDS, help="profile this id's batch step instead")
     parser.add_argument("--steps", type=int, default=300, help="steps profiled")
+    parser.add_argument(
+        "--replay", action="store_true", help="with --profile: time each replayed operation"
+    )
     args = parser.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")] if args.sizes else SIZES
     if args.profile:
         for n in sizes:
             print(f"## {args.profile}, {n} envs, {args.steps} steps")
-            profile(args.profile, n, args.steps)
+            (replay_profile if args.replay else profile)(args.profile, n, args.steps)
         return
     here = Path(__file__).resolve().parents[1]
     kinds = [("after", here)] + ([("before", args.before.resolve())] if args.before else [])
