@@ -25,8 +25,8 @@ from palaestra.envs.classic_control._common import (
     state_array,
 )
 from palaestra.envs.classic_control._ops import SCALAR
-from palaestra.envs.classic_control._trace import Program, trace
-from palaestra.envs.classic_control.batched import BatchedEnv, copy_to_columns
+from palaestra.envs.classic_control._trace import trace
+from palaestra.envs.classic_control.batched import ReplayedBatch, copy_to_columns
 from palaestra.rendering.scenes import render_acrobot
 from palaestra.spaces import Box, Discrete
 
@@ -199,21 +199,18 @@ expose_params(
 )
 
 
-class AcrobotBatch(BatchedEnv):
+class AcrobotBatch(ReplayedBatch):
     """N Acrobots stepped by :func:`step_state`, recorded once and replayed on buffers.
 
     The step is :func:`step_state` and :func:`observation` run on :class:`~._trace.TraceOps`
-    (re-recorded when ``params`` change) and replayed over chunks of :attr:`chunk` rows: the
-    same float operations per row as the single env, without per-step temporaries. The new
-    state's ``cos/sin(theta2)`` (the observation's) are kept for the next step's first RK4
-    stage, for the rows whose ``theta2`` still has the same bits (others are recomputed).
+    and replayed (:class:`~.batched.ReplayedBatch`): the same float operations per row as the
+    single env, without per-step temporaries. The new state's ``cos/sin(theta2)`` (the
+    observation's) are kept for the next step's first RK4 stage, for the rows whose ``theta2``
+    still has the same bits (others are recomputed).
     """
 
     state_dim = 4
     reset_draws = RESET_DRAWS
-    step_writes_obs = True  # the new state's cos/sin; fresh rows (float32 trig) apart
-    # Rows per replay: 2048 and 4096 measured slower at 16384 envs (per-call cost over cache).
-    chunk = 8192
 
     def __init__(self, num_envs: int) -> None:
         self.params = AcrobotParams()
@@ -226,12 +223,6 @@ class AcrobotBatch(BatchedEnv):
         self._trig = np.stack([np.ones(n), np.zeros(n)])  # [2, N]: cos, sin
         self._torque = np.zeros(n)
         self._terminated = np.zeros(n, dtype=bool)
-        self._compiled: Any = None
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = super().__getstate__()
-        state["_compiled"] = None  # rebuilt on the next step
-        return state
 
     def frame(self, row: int, action: Any = None) -> np.ndarray:
         """Row ``row``'s ``rgb_array`` picture (see :meth:`BatchedEnv.frame`)."""
@@ -243,9 +234,7 @@ class AcrobotBatch(BatchedEnv):
     def _reset_state(self, uniforms: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
         return reset_state(uniforms, *bounds)
 
-    def _compile(self) -> Any:
-        """``(params, state, obs, [(rows, program, steps)])``: one replay per chunk of rows."""
-
+    def _record(self) -> Any:
         def batch_step(ops: Any, s0: Any, s1: Any, s2: Any, s3: Any, torque: Any) -> Any:
             known = ops.known("cos", s1), ops.known("sin", s1)  # the last observation's
             *new, terminated = step_state(ops, self.params, s0, s1, s2, s3, torque)
@@ -253,42 +242,23 @@ class AcrobotBatch(BatchedEnv):
 
         ops, _, (state, torque, known, new, terminated, trig) = trace(batch_step, 5)
         blocks = {"state": state, "new": new, "trig": trig, "known": [*known, torque]}
-        blocks["terminated"] = [terminated]
-        n, c = self.num_envs, self.chunk
-        programs: dict[int, Program] = {}
-        chunks = []
-        for c0 in range(0, n, c):
-            c1 = min(c0 + c, n)
-            prog = programs.get(c1 - c0) or programs.setdefault(
-                c1 - c0, Program(ops, c1 - c0, blocks)
-            )
-            swap = {
-                "known.0": self._trig[0, c0:c1],
-                "known.1": self._trig[1, c0:c1],
-                "known.2": self._torque[c0:c1],
-                "terminated.0": self._terminated[c0:c1],
-            }
-            chunks.append((slice(c0, c1), prog, prog.steps(swap)))
-        return self.params, self._state, self._obs, chunks
+        return ops, {**blocks, "terminated": [terminated]}
+
+    def _swaps(self, rows: slice) -> dict[str, np.ndarray]:
+        return {
+            "known.0": self._trig[0, rows],
+            "known.1": self._trig[1, rows],
+            "known.2": self._torque[rows],
+            "terminated.0": self._terminated[rows],
+        }
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        compiled = self._compiled
-        if (
-            compiled is None
-            or compiled[0] is not self.params
-            or compiled[1] is not self._state
-            or compiled[2] is not self._obs
-        ):
-            compiled = self._compiled = self._compile()
-        theta2, trig = self._state[:, 1], self._trig
-        stale = theta2.view(np.uint64) != self._trig_of.view(np.uint64)
-        if stale.any():  # rows reset or written since the last step
-            rows = stale.nonzero()[0]
-            th = theta2[rows]
-            trig[0, rows], trig[1, rows] = np.cos(th), np.sin(th)
+        replays = self._replays()
+        trig = self._trig
+        self.refresh_kept(self._state[:, 1], self._trig_of, (trig[0], trig[1]), (np.cos, np.sin))
         np.subtract(actions, 1.0, out=self._torque)  # AVAIL_TORQUE[a] for a in {0, 1, 2}
         state, obs, pos = self._state, self._obs, np.positive
-        for rows, prog, steps in compiled[3]:
+        for rows, prog, steps in replays:
             copy_to_columns(state[rows].T, prog.block("state").T)
             prog.run(steps)
             new, cs = prog.block("new"), prog.block("trig")

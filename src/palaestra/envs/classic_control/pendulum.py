@@ -26,8 +26,8 @@ from palaestra.envs.classic_control._common import (
     state_array,
 )
 from palaestra.envs.classic_control._ops import ARRAY, SCALAR
-from palaestra.envs.classic_control._trace import Program, trace
-from palaestra.envs.classic_control.batched import BatchedEnv, copy_to_columns
+from palaestra.envs.classic_control._trace import trace
+from palaestra.envs.classic_control.batched import ReplayedBatch, copy_to_columns
 from palaestra.rendering.scenes import render_pendulum
 from palaestra.spaces import Box
 
@@ -166,20 +166,18 @@ class PendulumEnv(ClassicControlEnv):
 expose_params(PendulumEnv, ["max_speed", "max_torque", "dt", "g", "m", "l"])
 
 
-class PendulumBatch(BatchedEnv):
+class PendulumBatch(ReplayedBatch):
     """N Pendulums stepped by :func:`step_state`, recorded once and replayed on buffers.
 
     As :class:`~.acrobot.AcrobotBatch`: :func:`step_state` and the observation's cos/sin run on
-    :class:`~._trace.TraceOps` (re-recorded when ``params`` change) and are replayed over chunks
-    of :attr:`chunk` rows, the same float operations per row as the single env. The new
-    observation's ``sin(theta)`` is the next step's ``sin(theta)`` for the rows whose ``theta``
-    still has the same bits (others are recomputed).
+    :class:`~._trace.TraceOps` and are replayed (:class:`~.batched.ReplayedBatch`), the same
+    float operations per row as the single env. The new observation's ``sin(theta)`` is the
+    next step's ``sin(theta)`` for the rows whose ``theta`` still has the same bits (others
+    are recomputed).
     """
 
     state_dim = 2
     reset_draws = RESET_DRAWS
-    step_writes_obs = True
-    chunk = 8192  # rows per replay, as Acrobot's
 
     def __init__(self, num_envs: int, g: float = 10.0) -> None:
         self.params = PendulumParams(g=g)
@@ -189,12 +187,6 @@ class PendulumBatch(BatchedEnv):
         self._sin_of = np.zeros(self.num_envs)
         self._sin = np.zeros(self.num_envs)
         self._reward = np.zeros(self.num_envs)
-        self._compiled: Any = None
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = super().__getstate__()
-        state["_compiled"] = None  # rebuilt on the next step
-        return state
 
     def frame(self, row: int, action: Any = None) -> np.ndarray:
         """Row ``row``'s ``rgb_array`` picture (see :meth:`BatchedEnv.frame`)."""
@@ -211,45 +203,24 @@ class PendulumBatch(BatchedEnv):
     def _reset_state(self, uniforms: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
         return reset_state(uniforms, *bounds)
 
-    def _compile(self) -> Any:
-        """``(params, state, obs, [(rows, program, steps)])``: one replay per chunk of rows."""
-
+    def _record(self) -> Any:
         def batch_step(ops: Any, th: Any, thdot: Any, u: Any) -> Any:
             known = ops.known("sin", th)  # the last observation's
             newth, newthdot, reward, _ = step_state(ops, self.params, th, thdot, u)
             return (th, thdot), (u, known), (newth, newthdot), reward, observation(ops, newth)
 
         ops, _, (state, given, new, reward, trig) = trace(batch_step, 3)
-        blocks = {"state": state, "given": given, "new": new, "trig": trig, "reward": [reward]}
-        n, c = self.num_envs, self.chunk
-        programs: dict[int, Program] = {}
-        chunks = []
-        for c0 in range(0, n, c):
-            c1 = min(c0 + c, n)
-            prog = programs.get(c1 - c0) or programs.setdefault(
-                c1 - c0, Program(ops, c1 - c0, blocks)
-            )
-            swap = {"given.1": self._sin[c0:c1], "reward.0": self._reward[c0:c1]}
-            chunks.append((slice(c0, c1), prog, prog.steps(swap)))
-        return self.params, self._state, self._obs, chunks
+        return ops, {"state": state, "given": given, "new": new, "trig": trig, "reward": [reward]}
+
+    def _swaps(self, rows: slice) -> dict[str, np.ndarray]:
+        return {"given.1": self._sin[rows], "reward.0": self._reward[rows]}
 
     def _step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        compiled = self._compiled
-        if (
-            compiled is None
-            or compiled[0] is not self.params
-            or compiled[1] is not self._state
-            or compiled[2] is not self._obs
-        ):
-            compiled = self._compiled = self._compile()
-        th = self._state[:, 0]
-        stale = th.view(np.uint64) != self._sin_of.view(np.uint64)
-        if stale.any():  # rows reset or written since the last step
-            rows = stale.nonzero()[0]
-            self._sin[rows] = np.sin(th[rows])
+        replays = self._replays()
+        self.refresh_kept(self._state[:, 0], self._sin_of, (self._sin,), (np.sin,))
         torques = actions.reshape(self.num_envs)  # float32 values, exact in float64
         state, obs, pos = self._state, self._obs, np.positive
-        for rows, prog, steps in compiled[3]:
+        for rows, prog, steps in replays:
             copy_to_columns(state[rows].T, prog.block("state").T)
             pos(torques[rows], out=prog.block("given")[0])
             prog.run(steps)
