@@ -28,38 +28,11 @@ import sys
 import tempfile
 from pathlib import Path
 
+from before_after import _CHILD as _TRAIN  # benchmarks/ is on sys.path when run as a script
+from vs_gymnax import _PALAESTRA as _BATCH
+
 ROOT = Path(__file__).resolve().parents[1]
 BENCHMARKS = ROOT / "benchmarks"
-
-_BATCH = """
-import json, sys, time
-import numpy as np
-import palaestra
-env_id, n, seconds = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
-env = palaestra.make_vec(env_id, n)
-env.reset(seed=0)
-rng = np.random.default_rng(0)
-if env_id == "Pendulum-v1":
-    actions = [rng.uniform(-2, 2, (n, 1)).astype(np.float32) for _ in range(16)]
-else:
-    actions = [rng.integers(0, 3, n) for _ in range(16)]
-for a in actions:
-    env.step(a)
-steps, start = 0, time.process_time()
-while time.process_time() - start < seconds:
-    for a in actions:
-        env.step(a)
-    steps += len(actions)
-print(json.dumps(steps * n / (time.process_time() - start)))
-"""
-
-_TRAIN = """
-import json, sys, torch
-import train_speed
-torch.set_num_threads(1)
-case = next(c for c in train_speed.CASES if c.name == sys.argv[1])
-print(json.dumps(train_speed.measure("palaestra", case)[0]))
-"""
 
 _ABSENT = """
 import importlib.util, json
@@ -126,7 +99,7 @@ def main() -> None:
                 (f"{e} x {n}", _BATCH, (e, str(n), str(args.seconds))) for e, n in BATCH_CASES
             ]
         if args.only != "batch":
-            cases += [(name, _TRAIN, (name,)) for name in TRAIN_CASES]
+            cases += [(name, _TRAIN, (name, "palaestra", "1")) for name in TRAIN_CASES]
         for name, code, case_args in cases:
             rates: dict[str, list[float]] = {"user": [], "dev": []}
             for r in range(args.rounds):

@@ -31,6 +31,7 @@ import statistics
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 IDS = ["Pendulum-v1", "Acrobot-v1"]
 SIZES = [1024, 16384]
@@ -102,11 +103,8 @@ def measure(kind: str, tree: Path, env_id: str, n: int, seconds: float) -> float
     return float(json.loads(out.stdout.strip().splitlines()[-1]))
 
 
-def profile(env_id: str, n: int, steps: int) -> None:
-    """cProfile's top functions (by own time) of ``steps`` batch steps of this tree."""
-    import cProfile
-    import pstats
-
+def _env_and_actions(env_id: str, n: int) -> tuple[Any, list[Any]]:
+    """This tree's ``make_vec(env_id, n)``, reset, and the 16 action batches the runs cycle."""
     import numpy as np
 
     import palaestra
@@ -115,9 +113,16 @@ def profile(env_id: str, n: int, steps: int) -> None:
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     if env_id == "Pendulum-v1":
-        actions = [rng.uniform(-2, 2, (n, 1)).astype(np.float32) for _ in range(16)]
-    else:
-        actions = [rng.integers(0, 3, n) for _ in range(16)]
+        return env, [rng.uniform(-2, 2, (n, 1)).astype(np.float32) for _ in range(16)]
+    return env, [rng.integers(0, 3, n) for _ in range(16)]
+
+
+def profile(env_id: str, n: int, steps: int) -> None:
+    """cProfile's top functions (by own time) of ``steps`` batch steps of this tree."""
+    import cProfile
+    import pstats
+
+    env, actions = _env_and_actions(env_id, n)
     prof = cProfile.Profile()
     prof.enable()
     for t in range(steps):
@@ -136,23 +141,13 @@ def replay_profile(env_id: str, n: int, steps: int) -> None:
     import collections
     import time
 
-    import numpy as np
-
-    import palaestra
-
-    env = palaestra.make_vec(env_id, n)
-    env.reset(seed=0)
-    rng = np.random.default_rng(0)
-    if env_id == "Pendulum-v1":
-        actions = [rng.uniform(-2, 2, (n, 1)).astype(np.float32) for _ in range(16)]
-    else:
-        actions = [rng.integers(0, 3, n) for _ in range(16)]
+    env, actions = _env_and_actions(env_id, n)
     for t in range(steps):
         env.step(actions[t % 16])
     batch = env
-    while not hasattr(batch, "_compiled"):  # wrappers, then the engine, then the batch
+    while not hasattr(batch, "_replays"):  # wrappers, then the engine, then the batch
         batch = getattr(batch, "env", None) or getattr(batch, "batch", None) or batch.engine
-    chunks = batch._compiled[3]
+    chunks = batch._replays()
     spent: collections.Counter[str] = collections.Counter()
     calls: collections.Counter[str] = collections.Counter()
     clock = time.perf_counter
