@@ -278,6 +278,23 @@ class LoopEngine:
     def step_recv(self, timeout: float | None = None) -> StepResult:
         """Step each row (or reset it, where the mask says)."""
         actions, reset_mask = self._sent
+        if (
+            self.num_envs == 1
+            and reset_mask is None
+            and self._array_actions
+            and type(actions) is np.ndarray
+            and actions.ndim
+            and len(actions) == 1
+        ):  # one env stepped (DQN, SAC): the loop below for its one row, without the loop
+            (
+                self._env_obs[0],
+                self._rewards[0],
+                self._terminated[0],
+                self._truncated[0],
+                info,
+            ) = self.envs[0].step(actions[0])
+            self._stack_obs()
+            return self._rewards, self._terminated, self._truncated, [info]
         infos: list[dict[str, Any]] = [{}] * self.num_envs
         rows = (
             iter(actions)  # what iterate does for these spaces (a 0-d array raises TypeError)
