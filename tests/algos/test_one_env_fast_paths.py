@@ -157,3 +157,14 @@ def test_ring_terminated_without_timeouts_is_the_general_formula(handle: bool) -
         got = np.zeros(2, np.float32)
         got[:] = expected
         assert ring.terminated[row].tolist() == got.tolist()
+
+
+def test_numpy_ops_clip_equals_np_clip_for_the_huber_vjp() -> None:
+    """DQN's loss VJP clips with ``numpy_ops.clip``: np.clip's values, every kind of float32."""
+    from palaestra.algos.learners.xp import numpy_ops
+
+    rng = np.random.default_rng(1)
+    x = rng.integers(0, 2**32, size=100_000, dtype=np.uint64).astype(np.uint32).view(np.float32)
+    x[: SPECIALS.size] = SPECIALS
+    with np.errstate(invalid="ignore"):
+        assert _bits(numpy_ops.clip(x, -1.0, 1.0)) == _bits(np.clip(x, -1.0, 1.0))
