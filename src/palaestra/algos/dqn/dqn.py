@@ -157,9 +157,11 @@ class DQN(OffPolicyAlgorithm):
         if self.num_timesteps < self.learning_starts:
             return self._random_actions(self.n_envs)
         if self.n_envs == 1:  # scalar draws, the same numbers as the [1] arrays below
-            explore_one = self._rng.random() < self.exploration_rate
-            random_action = self._random_actions(1)  # drawn either way, as below
-            return random_action if explore_one else self._greedy(self._last_obs)
+            if self._rng.random() < self.exploration_rate:
+                return self._random_actions(1)
+            # The random action is drawn either way, as below; unused, it needs no array.
+            self._rng.integers(0, int(self.action_space.n))
+            return self._greedy(self._last_obs)
         explore = self._rng.random(self.n_envs) < self.exploration_rate
         if explore.all():
             return self._random_actions(self.n_envs)
