@@ -124,9 +124,10 @@ class EngineVecEnv(VecEnv):
     def _sb3_infos(self, t: Transition) -> list[dict[str, Any]]:
         # SB3 sets TimeLimit.truncated on every info: truncated and not terminated
         # (the gym 0.26 split, openai/gym#3102).
-        if np.count_nonzero(t.truncated):
+        # (SAME_STEP: no final rows means no row ended, so none was truncated.)
+        if t.final_rows is not None and np.count_nonzero(t.truncated):
             time_limit = (t.truncated & ~t.terminated).tolist()
-        else:  # most steps: no row out of time (one call instead of three)
+        else:  # most steps: no row out of time (no call, or one instead of three)
             time_limit = [False] * self.num_envs
         if t.infos is None:
             infos = [{"TimeLimit.truncated": tl} for tl in time_limit]

@@ -112,7 +112,7 @@ def check_actions_batch(space: Space[Any], actions: Any, num_envs: int) -> None:
             f"Invalid actions {actions!r} for action space {space} ({num_envs} envs): not a "
             f"rectangular array of shape {shape}"
         ) from None
-    if arr.dtype == object and not numeric:
+    if arr.dtype.kind == "O" and not numeric:  # object arrays (kind "O": ~0.2 µs cheaper)
         return
     if arr.shape != shape:
         raise error.InvalidAction(
@@ -278,6 +278,23 @@ class LoopEngine:
     def step_recv(self, timeout: float | None = None) -> StepResult:
         """Step each row (or reset it, where the mask says)."""
         actions, reset_mask = self._sent
+        if (
+            self.num_envs == 1
+            and reset_mask is None
+            and self._array_actions
+            and type(actions) is np.ndarray
+            and actions.ndim
+            and len(actions) == 1
+        ):  # one env stepped (DQN, SAC): the loop below for its one row, without the loop
+            (
+                self._env_obs[0],
+                self._rewards[0],
+                self._terminated[0],
+                self._truncated[0],
+                info,
+            ) = self.envs[0].step(actions[0])
+            self._stack_obs()
+            return self._rewards, self._terminated, self._truncated, [info]
         infos: list[dict[str, Any]] = [{}] * self.num_envs
         rows = (
             iter(actions)  # what iterate does for these spaces (a 0-d array raises TypeError)

@@ -139,9 +139,11 @@ class TransitionRing:
         _write(self.next_observations, row, next_obs)
         self.actions[row] = actions
         self.rewards[row] = rewards
-        if self.handle_timeout_termination:
+        if self.handle_timeout_termination and (
+            np.count_nonzero(timeouts) or getattr(dones, "dtype", None) != np.bool_
+        ):
             self.terminated[row] = np.logical_and(dones, np.logical_not(timeouts))
-        else:
+        else:  # bool dones and no time-out (nearly every step): what the line above gives
             self.terminated[row] = dones
         if self.n_steps > 1:
             self.ended[row] = dones

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from palaestra.algos.learners.learner import Backprop, Run
-from palaestra.algos.learners.xp import row_indices
+from palaestra.algos.learners.xp import numpy_ops, row_indices
 
 __all__ = ["DQNObjective", "dqn_loss", "dqn_loss_vjp"]
 
@@ -51,7 +51,9 @@ def dqn_loss_vjp(tape: Any) -> np.ndarray:
     ``|diff| == 1`` both Huber branches have slope 1)."""
     shape, actions, diff = tape
     g = np.zeros(shape, dtype=np.float32)
-    g[row_indices(shape[0]), actions] = np.clip(diff, -1.0, 1.0) / shape[0]
+    # numpy_ops.clip (maximum, then minimum): np.clip's values for every float32 (all 2^32
+    # checked), without its ~1 µs Python wrapper.
+    g[row_indices(shape[0]), actions] = numpy_ops.clip(diff, -1.0, 1.0) / shape[0]
     return g
 
 

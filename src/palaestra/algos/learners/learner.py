@@ -439,6 +439,11 @@ def _flat_input(x: Any) -> np.ndarray:
     critic's observation and action) flattened and side by side; a dict of batches (Dict
     observations) is its entries side by side in sorted key order, CombinedExtractor's order
     for the spaces the numpy learner takes (``policies._numpy_input_problem``)."""
+    if type(x) is np.ndarray and x.ndim == 2 and x.dtype == np.float32 and x.shape[0]:
+        # Already [B, in] float32 (vector observations, every acting step and minibatch):
+        # the values the steps below give, without their three calls. (An empty batch goes
+        # on to the reshape below, which refuses it as before.)
+        return x
     if isinstance(x, tuple):
         parts = [_flat_input(p) for p in x]
         return np.concatenate(parts, axis=1).astype(np.float32, copy=False)
