@@ -231,49 +231,38 @@ class _Squares:
 
     def __call__(self, *xs: np.ndarray) -> None:
         """Square ``xs`` (``k`` arrays of ``n``) into the rows of ``self.p``."""
-        x, p = self.x, self.p
-        for row, v in zip(x, xs):
+        for row, v in zip(self.x, xs):
             if v is not row:
                 np.positive(v, out=row)
+        self._square(self.x, self.p)
+
+    def _square(self, x: np.ndarray, p: np.ndarray) -> None:
         np.multiply(x, x, out=p)
-        near = _near_midpoint(x, p, self._scratch)
-        hard = near.ravel().nonzero()[0]
+        hard = _near_midpoint(x, p, self._scratch).ravel().nonzero()[0]
         if hard.size:
             p.ravel()[hard] = _libm_square(x.ravel()[hard])
 
 
-class _Squares32:
-    """libm ``powf(u, 2)`` of ``k`` ``[n]`` arrays of float32 values held as float64, into
-    buffers: :meth:`ArrayOps.powf2`'s test (the exact square rounded to float32, near-midpoint
-    rows from libm) on one ``[k, n]`` block; ``scratch`` as for :class:`_Squares`."""
+class _Squares32(_Squares):
+    """libm ``powf(u, 2)`` of ``k`` ``[n]`` arrays of float32 values held as float64:
+    :meth:`ArrayOps.powf2`'s test (the exact square rounded to float32, near-midpoint rows
+    from libm), as :class:`_Squares` does for ``pow``."""
 
     def __init__(self, k: int, n: int, scratch: tuple[np.ndarray, ...] | None = None) -> None:
-        self.x = np.empty((k, n))
-        self.p = np.empty((k, n))
+        super().__init__(k, n, scratch)
         self._f = np.empty((k, n), dtype=np.float32)
-        self._scratch = _Squares32.scratch(k, n) if scratch is None else scratch
 
-    @staticmethod
-    def scratch(k: int, n: int) -> tuple[np.ndarray, ...]:
-        """Scratch arrays for kernels of ``k`` rows of ``n``."""
-        return np.empty((k, n)), np.empty((k, n)), np.empty((k, n), dtype=bool)
-
-    def __call__(self, *xs: np.ndarray) -> None:
-        """Square ``xs`` (``k`` arrays of ``n``) into the rows of ``self.p``."""
-        x, d, f = self.x, self.p, self._f
-        for row, v in zip(x, xs):
-            if v is not row:
-                np.positive(v, out=row)
-        np.multiply(x, x, out=d)  # exact: a float32 squared needs 48 bits
-        np.positive(d, out=f)  # rounded to float32 (the cast of ``astype``)
-        near = _near_midpoint32(d, f, self._scratch)
-        hard = near.ravel().nonzero()[0]
+    def _square(self, x: np.ndarray, p: np.ndarray) -> None:
+        f = self._f
+        np.multiply(x, x, out=p)  # exact: a float32 squared needs 48 bits
+        np.positive(p, out=f)  # rounded to float32 (the cast of ``astype``)
+        hard = _near_midpoint32(p, f, self._scratch).ravel().nonzero()[0]
         if hard.size:
             f.ravel()[hard] = _libm_square(x.ravel()[hard].astype(np.float32))
-        np.positive(f, out=d)
+        np.positive(f, out=p)
 
 
-_KERNELS: dict[str, type[_Squares] | type[_Squares32]] = {"pow2s": _Squares, "powf2": _Squares32}
+_KERNELS: dict[str, type[_Squares]] = {"pow2s": _Squares, "powf2": _Squares32}
 
 
 def _f32_into(x: np.ndarray, tmp: np.ndarray, out: np.ndarray) -> None:
@@ -330,12 +319,14 @@ class Program:
             kept.add(ident)
         free: dict[str, list[np.ndarray]] = {_F64: [], _BOOL: []}
         self.n_buffers = 0
-        squares: dict[int, _Squares | _Squares32] = {}
-        scratch: dict[tuple[str, int], tuple[np.ndarray, ...]] = {}  # per kind and rows, shared
+        squares: dict[int, _Squares] = {}
+        scratch: dict[int, tuple[np.ndarray, ...]] = {}  # one per row count, shared
         for i, (op, args, _, _) in enumerate(nodes):
             if op in _KERNELS:
                 k, kind = len(args), _KERNELS[op]
-                squares[i] = kind(k, n, scratch.setdefault((op, k), kind.scratch(k, n)))
+                if k not in scratch:
+                    scratch[k] = _Squares.scratch(k, n)
+                squares[i] = kind(k, n, scratch[k])
                 for a, row in zip(args, squares[i].x):
                     only_here = kernel_args[a] == [i] and args.count(a) == 1
                     if only_here and a not in kept and trace.kinds[a] == "node":
