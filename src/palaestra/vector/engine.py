@@ -286,13 +286,7 @@ class LoopEngine:
             and actions.ndim
             and len(actions) == 1
         ):  # one env stepped (DQN, SAC): the loop below for its one row, without the loop
-            (
-                self._env_obs[0],
-                self._rewards[0],
-                self._terminated[0],
-                self._truncated[0],
-                info,
-            ) = self.envs[0].step(actions[0])
+            info = self._step_row(0, actions[0])
             self._stack_obs()
             return self._rewards, self._terminated, self._truncated, [info]
         infos: list[dict[str, Any]] = [{}] * self.num_envs
@@ -304,19 +298,23 @@ class LoopEngine:
         for i, action in enumerate(rows):
             if i >= self.num_envs:
                 raise error.InvalidAction(f"Got more than {self.num_envs} actions: {actions!r}")
-            env = self.envs[i]
             if reset_mask is not None and reset_mask[i]:
-                self._env_obs[i], infos[i] = env.reset()
+                self._env_obs[i], infos[i] = self.envs[i].reset()
                 continue
-            (
-                self._env_obs[i],
-                self._rewards[i],
-                self._terminated[i],
-                self._truncated[i],
-                infos[i],
-            ) = env.step(action)
+            infos[i] = self._step_row(i, action)
         self._stack_obs()
         return self._rewards, self._terminated, self._truncated, infos
+
+    def _step_row(self, i: int, action: Any) -> dict[str, Any]:
+        """Step sub-env ``i``; its results go into row ``i`` of the arrays, its info is returned."""
+        (
+            self._env_obs[i],
+            self._rewards[i],
+            self._terminated[i],
+            self._truncated[i],
+            info,
+        ) = self.envs[i].step(action)
+        return info
 
     def final_observations(self, rows: np.ndarray) -> list[Any]:
         """Copies of the observations the sub-envs in ``rows`` returned from their last step
