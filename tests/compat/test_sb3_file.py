@@ -47,10 +47,10 @@ def test_crafted_policy_files_are_refused_at_once(
 ) -> None:
     path = _file(tmp_path, sb3_zip(policy))
     assert path.stat().st_size < 4096
-    start = time.perf_counter()
+    start = time.process_time()
     with pytest.raises(TorchFileError, match=message):
         from_sb3(path)
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < 0.5
 
 
 def test_a_nested_deflate_bomb_stops_at_max_bytes(tmp_path: Path) -> None:

@@ -193,10 +193,10 @@ def test_storage_budget_and_view_copies_are_capped() -> None:
 def test_a_memo_bomb_is_refused_at_once_with_a_short_message() -> None:
     import time
 
-    start = time.perf_counter()
+    start = time.process_time()
     with pytest.raises(TorchFileError, match=r"unexpected call collections.OrderedDict") as info:
         read_torch_state_dict(torch_zip(memo_bomb(80)))  # 2**80 nodes if walked
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < 0.5
     assert len(str(info.value)) < 400
     key_bomb = b"\x80\x02}" + shared_tuple(80) + b"K\x01s."  # {t: 1}
     with pytest.raises(TorchFileError, match=r"a dict key is a tuple, not a name"):

@@ -68,7 +68,7 @@ limit = size * 1024 + int(sys.argv[3])
 resource.setrlimit(resource.RLIMIT_AS, (limit, resource.getrlimit(resource.RLIMIT_AS)[1]))
 report = {}
 for name, case in cases.items():
-    start = time.perf_counter()
+    start = time.process_time()
     try:
         call(case["call"], case["path"], case["kwargs"])
         outcome = ("no error", "")
@@ -76,7 +76,7 @@ for name, case in cases.items():
         outcome = ("MemoryError", str(exc))
     except Exception as exc:
         outcome = (type(exc).__name__, str(exc))
-    report[name] = [*outcome, time.perf_counter() - start]
+    report[name] = [*outcome, time.process_time() - start]
 print(json.dumps({"report": report, "torch": "torch" in sys.modules}))
 """
 
@@ -103,7 +103,7 @@ def _run_child(folder: Path, crafted: dict[str, Any], good: dict[str, Path]) -> 
         kind, text, seconds = result["report"][name]
         assert kind in ("ModelFileError", "TorchFileError"), (name, kind, text[:300])
         assert re.search(message, text), (name, text[:300])
-        assert seconds < 0.5, (name, seconds)
+        assert seconds < 0.5, (name, seconds)  # CPU seconds: load stretches wall time, not these
     return result
 
 

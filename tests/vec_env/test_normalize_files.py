@@ -88,11 +88,11 @@ def test_the_original_loads_and_damage_is_refused(
     path = tmp_path / "good.npz"
     path.write_bytes(zip_of(members))
     assert VecNormalize.load(path, _venv()).obs_rms.count == pytest.approx(2.0001)
-    start = time.perf_counter()
+    start = time.process_time()
     path.write_bytes(forge_size(zip_of(members), "obs_var.npy", 3_000_000_000))
     with pytest.raises(ModelFileError, match=r"member 'obs_var.npy' declares 3000000000 bytes"):
         VecNormalize.load(path, _venv())
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < 0.5
     path.write_bytes(zip_of(members)[:-40])
     with pytest.raises(ModelFileError, match=r"is not a palaestra VecNormalize file"):
         VecNormalize.load(path, _venv())
