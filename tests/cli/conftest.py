@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import subprocess
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -36,6 +37,20 @@ def wait_for_file(path: Path, timeout: float = 60.0) -> Path:
         assert time.monotonic() < deadline, f"{path} not written within {timeout} s"
         time.sleep(0.05)
     return path
+
+
+def wait_for_training(proc: subprocess.Popen[str], announcement: str) -> str:
+    """Read ``proc``'s stderr up to the line that starts with ``announcement`` ("training dqn
+    on CartPole-v1", printed once ``learn`` starts); before it only ``note:`` lines (a preset's
+    recorded shortfall) may come. The lines read, for the failure message."""
+    assert proc.stderr is not None
+    lines: list[str] = []
+    while line := proc.stderr.readline():
+        lines.append(line)
+        if line.startswith(announcement):
+            return "".join(lines)
+        assert line.startswith("note: ") or not line.strip(), "".join(lines)
+    raise AssertionError(f"stderr ended before {announcement!r}:\n{''.join(lines)}")
 
 
 @pytest.fixture

@@ -6,12 +6,13 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 from tests.runs.test_lock import SRC, holder
 
-from .conftest import run_cli
+from .conftest import run_cli, wait_for_training
 
 TRAIN = ("train", "a2c", "CartPole-v1", "--progress", "none", "--eval-episodes", 0)
 
@@ -46,6 +47,20 @@ def test_a_second_train_out_and_resume_are_refused_with_the_holders_pid(tmp_path
     assert f"lock left by process {proc.pid}, which is no longer running" in resumed.err
 
 
+def _wait_for_rows(path: Path, past: int, seconds: float = 60.0) -> None:
+    """Wait until ``path`` holds episode rows (past its header) beyond its first ``past`` bytes.
+
+    The refusals come back in well under a second, before a fresh process may have finished
+    and flushed an episode; without rows from both writers the file would show nothing.
+    """
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if path.is_file() and path.stat().st_size > past and path.read_bytes().count(b"\n") > 1:
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"no new episode rows in {path} after {seconds} s")
+
+
 @pytest.mark.slow
 def test_two_train_processes_on_one_folder(tmp_path: Path) -> None:
     """The reported case: a second ``train --out X`` and a second ``--resume X`` while a real
@@ -56,9 +71,7 @@ def test_two_train_processes_on_one_folder(tmp_path: Path) -> None:
     def start(*argv: object) -> subprocess.Popen[str]:
         cmd = [sys.executable, "-m", "palaestra", *map(str, argv)]
         proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, env=env)
-        assert proc.stderr is not None
-        line = proc.stderr.readline()  # "training a2c on CartPole-v1 ..." once learn starts
-        assert line.startswith("training a2c on CartPole-v1"), line
+        wait_for_training(proc, "training a2c on CartPole-v1")
         return proc
 
     first = start(*TRAIN, "--timesteps", 10_000_000, "--out", run)
@@ -66,6 +79,7 @@ def test_two_train_processes_on_one_folder(tmp_path: Path) -> None:
         second = run_cli(*TRAIN, "--timesteps", 64, "--out", run)
         assert second.code == 1
         _refused(second.err, run, first.pid)
+        _wait_for_rows(run / "episodes.csv", 0)
         first.send_signal(signal.SIGTERM)
         assert first.wait(timeout=60) == 143
         resumed = start("train", "--resume", run, "--timesteps", 10_000_000, "--progress", "none")
@@ -73,6 +87,7 @@ def test_two_train_processes_on_one_folder(tmp_path: Path) -> None:
             again = run_cli("train", "--resume", run, "--progress", "none")
             assert again.code == 1
             _refused(again.err, run, resumed.pid)
+            _wait_for_rows(run / "episodes.csv", (run / "episodes.csv").stat().st_size)
         finally:
             resumed.send_signal(signal.SIGTERM)
             assert resumed.wait(timeout=60) == 143

@@ -17,7 +17,7 @@ from palaestra.algos.callbacks import BaseCallback
 from palaestra.cli import train
 from palaestra.cli.progress import GracefulStop
 
-from .conftest import Result, run_cli
+from .conftest import Result, run_cli, wait_for_training
 
 TINY_DQN = ("train", "dqn", "CartPole-v1", "--n-envs", 1, "--set", "learning_starts=50",
             "--set", "train_freq=4", "--set", "gradient_steps=1",
@@ -103,8 +103,7 @@ def test_sigterm_to_a_train_process(tmp_path: Path) -> None:
             "--out", str(run)]  # fmt: skip
     proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True, env=env)
     assert proc.stderr is not None
-    line = proc.stderr.readline()  # "training dqn on CartPole-v1 ..." once learn starts
-    assert line.startswith("training dqn on CartPole-v1"), line
+    wait_for_training(proc, "training dqn on CartPole-v1")
     time.sleep(1.0)
     proc.send_signal(signal.SIGTERM)
     try:
