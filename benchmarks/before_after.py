@@ -20,12 +20,12 @@ two says the machine's load changed during the measurement.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
-import subprocess
 import sys
 from pathlib import Path
+
+from child import last_json_line  # benchmarks/ is on sys.path when run as a script
 
 BENCHMARKS = Path(__file__).resolve().parent
 
@@ -44,15 +44,7 @@ def run_once(tree: Path, case: str, lib: str = "palaestra", scale: int = 1) -> f
     """Env-steps per CPU second of one ``learn`` of ``case`` (its timed steps times
     ``scale``) with ``tree``'s palaestra."""
     env = dict(os.environ, PYTHONPATH=f"{tree / 'src'}{os.pathsep}{BENCHMARKS}")
-    out = subprocess.run(
-        [sys.executable, "-c", _CHILD, case, lib, str(scale)],
-        env=env,
-        check=True,
-        capture_output=True,
-        text=True,
-        cwd=tree,
-    )
-    return float(json.loads(out.stdout.strip().splitlines()[-1]))
+    return float(last_json_line([sys.executable, "-c", _CHILD, case, lib, str(scale)], env, tree))
 
 
 def run_sb3(tree: Path, case: str, scale: int, when: str) -> float:

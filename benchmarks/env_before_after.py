@@ -17,12 +17,12 @@ each pair. Needs ``gymnasium`` and ``box2d`` (a benchmark only).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
-import subprocess
 import sys
 from pathlib import Path
+
+from child import last_json_line  # benchmarks/ is on sys.path when run as a script
 
 BENCHMARKS = Path(__file__).resolve().parent
 IDS = ["LunarLander-v3", "LunarLanderContinuous-v3", "BipedalWalker-v3", "BipedalWalkerHardcore-v3"]
@@ -52,15 +52,8 @@ print(json.dumps(out))
 def run_once(tree: Path, ids: list[str], steps: int, repeats: int) -> dict[str, list[float]]:
     """``{id: [palaestra steps/s, gymnasium steps/s]}`` of one run with ``tree``'s palaestra."""
     env = dict(os.environ, PYTHONPATH=f"{tree / 'src'}{os.pathsep}{BENCHMARKS}")
-    out = subprocess.run(
-        [sys.executable, "-c", _CHILD, ",".join(ids), str(steps), str(repeats)],
-        env=env,
-        check=True,
-        capture_output=True,
-        text=True,
-        cwd=BENCHMARKS.parent,
-    )
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    argv = [sys.executable, "-c", _CHILD, ",".join(ids), str(steps), str(repeats)]
+    return last_json_line(argv, env, BENCHMARKS.parent)
 
 
 def main() -> None:

@@ -21,13 +21,13 @@ Needs stable-baselines3 (a dev dependency).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from child import last_json_line  # benchmarks/ is on sys.path when run as a script
 
 CHILD = r"""
 import json, os, sys, threading, time
@@ -76,14 +76,8 @@ print(json.dumps({"seconds": seconds, "peak": peak, "weights": weights}))
 
 def run(lib: str, op: str, width: int, path: Path, algo: str) -> dict[str, float]:
     """One measurement in a fresh interpreter."""
-    out = subprocess.run(
-        [sys.executable, "-c", CHILD, lib, op, str(width), str(path), algo],
-        capture_output=True,
-        text=True,
-        check=True,
-        env={**os.environ, "OMP_NUM_THREADS": "1"},
-    )
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    argv = [sys.executable, "-c", CHILD, lib, op, str(width), str(path), algo]
+    return last_json_line(argv, {**os.environ, "OMP_NUM_THREADS": "1"})
 
 
 def main() -> None:

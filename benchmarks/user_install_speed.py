@@ -29,6 +29,7 @@ import tempfile
 from pathlib import Path
 
 from before_after import _CHILD as _TRAIN  # benchmarks/ is on sys.path when run as a script
+from child import last_json_line
 from vs_gymnax import _PALAESTRA as _BATCH
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -61,15 +62,7 @@ def run(python: Path, code: str, *args: str, installed: bool = False) -> float:
     from this tree's ``src``."""
     path = str(BENCHMARKS) if installed else f"{ROOT / 'src'}{os.pathsep}{BENCHMARKS}"
     env = dict(os.environ, PYTHONPATH=path)
-    out = subprocess.run(
-        [str(python), "-c", code, *args],
-        env=env,
-        check=True,
-        capture_output=True,
-        text=True,
-        cwd=BENCHMARKS,
-    )
-    return float(json.loads(out.stdout.strip().splitlines()[-1]))
+    return float(last_json_line([str(python), "-c", code, *args], env, BENCHMARKS))
 
 
 def main() -> None:

@@ -25,13 +25,13 @@ less; the load average is printed beside each table.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
-import subprocess
 import sys
 from pathlib import Path
 from typing import Any
+
+from child import last_json_line  # benchmarks/ is on sys.path when run as a script
 
 IDS = ["Pendulum-v1", "Acrobot-v1"]
 SIZES = [1024, 16384]
@@ -92,15 +92,8 @@ def measure(kind: str, tree: Path, env_id: str, n: int, seconds: float) -> float
     """Env-steps per CPU second of one contender in a fresh interpreter."""
     env = dict(os.environ, PYTHONPATH=str(tree / "src"), XLA_FLAGS=XLA_FLAGS)
     code = _GYMNAX if kind == "gymnax" else _PALAESTRA
-    out = subprocess.run(
-        [sys.executable, "-c", code, env_id, str(n), str(seconds)],
-        env=env,
-        check=True,
-        capture_output=True,
-        text=True,
-        cwd=tree,
-    )
-    return float(json.loads(out.stdout.strip().splitlines()[-1]))
+    argv = [sys.executable, "-c", code, env_id, str(n), str(seconds)]
+    return float(last_json_line(argv, env, tree))
 
 
 def _env_and_actions(env_id: str, n: int) -> tuple[Any, list[Any]]:
