@@ -73,7 +73,7 @@ def main() -> None:
     parser.add_argument("--only", choices=["batch", "train"], help="only these cases")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="palaestra-user-speed-") as tmp:
-        user = args.venv / "bin" / "python" if args.venv else build_venv(Path(tmp))
+        user = args.venv.resolve() / "bin" / "python" if args.venv else build_venv(Path(tmp))
         dev = Path(sys.executable)
         found = json.loads(
             subprocess.run(
